@@ -1,0 +1,267 @@
+"""The formulation machinery: a population ``x (P, d)`` → objectives ``F``, constraints ``G``.
+
+A :class:`Formulation` owns one fixed standard-normal sample ``u`` (common random numbers):
+drawn once by :func:`make_formulation` from the caller's Generator, mapped through the random
+vector to ``theta = inputs.from_standard(u)`` and reused for every design and generation, so the
+objectives are deterministic functions of ``x`` and formulations built from equal generators see
+identical θ.
+
+Constraint columns, all feasible where ``<= 0``, in this order:
+
+1. reliability (``rbdo``, ``rbrdo``): ``P_f / P_target − 1`` for the primary limit state, then one
+   column per extra :class:`ReliabilityConstraint` (same ``P_target``);
+2. deterministic: ``g_det`` from :class:`~.deterministic.DeterministicConstraints`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, ClassVar
+
+import numpy as np
+
+from surrogate_rbrdo.core.protocols import Estimate, LimitState, Response
+from surrogate_rbrdo.core.registry import Registry
+from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.formulations.deterministic import DeterministicConstraints
+from surrogate_rbrdo.formulations.options import FormulationOptions
+
+FORMULATIONS = Registry("formulation")
+_NO_FAILURE = LimitState(0.0)  # placeholder when no limit is given; its P_f is discarded
+
+
+@dataclass(frozen=True, eq=False)
+class ReliabilityConstraint:
+    """An extra chance constraint ``P(limit fails on response) <= P_target``."""
+
+    response: Response
+    limit: LimitState
+    name: str = "reliability"
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """Result of evaluating one population.
+
+    Attributes
+    ----------
+    F : ndarray, shape (P, n_obj)
+    G : ndarray, shape (P, n_con)
+        Feasible where every entry is ``<= 0``.
+    estimate : Estimate
+        μ_y, σ_y, P_f of the primary response on the fixed sample (the deterministic
+        formulation records the nominal value as ``mean`` and NaN elsewhere).
+    n_surrogate_calls : int
+        (x, θ) points evaluated by the response(s).
+    n_model_calls : int
+        Designs passed to the deterministic (FE) model.
+    """
+
+    F: np.ndarray
+    G: np.ndarray
+    estimate: Estimate
+    n_surrogate_calls: int
+    n_model_calls: int
+
+
+def _values_to_estimate() -> Callable[..., Estimate]:
+    from surrogate_rbrdo.estimators import mc_from_values
+
+    return mc_from_values
+
+
+@dataclass(frozen=True, eq=False)
+class Formulation:
+    """Base class; concrete strategies are registered in :data:`FORMULATIONS`.
+
+    Build instances with :func:`make_formulation` (it draws the CRN sample); the constructor
+    only stores arguments.
+    """
+
+    response: Response
+    inputs: Any
+    limit: LimitState | None
+    u: np.ndarray
+    options: FormulationOptions = field(default_factory=FormulationOptions)
+    constraints_det: DeterministicConstraints | None = None
+    extra_reliability: tuple[ReliabilityConstraint, ...] = ()
+    estimator: Any = None
+    estimator_seed: int = 0
+
+    name: ClassVar[str] = "base"
+    objective_names: ClassVar[tuple[str, ...]] = ()
+    reliability: ClassVar[bool] = False
+    nominal_only: ClassVar[bool] = False
+
+    # ------------------------------------------------------------------ shape information
+    @property
+    def theta(self) -> np.ndarray:
+        """The fixed θ sample, shape ``(N, m)`` (mapped from ``u`` on each access)."""
+        return self.inputs.from_standard(self.u)
+
+    @property
+    def theta_nominal(self) -> np.ndarray:
+        """Nominal θ, shape ``(1, m)``: the image of ``u = 0`` (the mean for a Gaussian)."""
+        return self.inputs.from_standard(np.zeros((1, self.u.shape[1])))
+
+    @property
+    def constraint_names(self) -> tuple[str, ...]:
+        names: tuple[str, ...] = ()
+        if self.reliability:
+            names += ("pf",) if self.limit is not None else ()
+            names += tuple(f"pf_{c.name}" for c in self.extra_reliability)
+        if self.constraints_det is not None:
+            names += self.constraints_det.names
+        return names
+
+    @property
+    def n_obj(self) -> int:
+        return len(self.objective_names)
+
+    @property
+    def n_con(self) -> int:
+        return len(self.constraint_names)
+
+    # ------------------------------------------------------------------ evaluation
+    def estimate(self, x: np.ndarray, response: Response | None = None,
+                 limit: LimitState | None = None, *, theta: np.ndarray | None = None
+                 ) -> Estimate:
+        """μ_y, σ_y, P_f of ``response`` (default: the primary one) on the fixed sample."""
+        response = self.response if response is None else response
+        limit = self.limit if limit is None else limit
+        no_limit = limit is None
+        limit = _NO_FAILURE if no_limit else limit
+        if self.estimator is None:  # fast path: values on the CRN sample
+            th = self.theta if theta is None else theta
+            y = np.asarray(response(x, th), dtype=float)
+            est = _values_to_estimate()(y, limit, ci_level=self.options.ci_level)
+        else:
+            est = self.estimator.estimate(
+                response, self.inputs, limit, x,
+                rng=np.random.default_rng(self.estimator_seed), u=self.u,
+            )
+        if no_limit:  # no failure definition: P_f is not defined
+            nan = np.full(np.shape(est.mean), np.nan)
+            est = replace(est, pf=nan, pf_se=nan, pf_ci=np.full((nan.size, 2), np.nan))
+        return est
+
+    def _nominal(self, x: np.ndarray) -> Estimate:
+        y = np.asarray(self.response(x, self.theta_nominal), dtype=float)[:, 0]
+        nan = np.full_like(y, np.nan)
+        return Estimate(mean=y, std=nan, pf=nan, mean_se=nan, std_se=nan, pf_se=nan,
+                        pf_ci=np.full((y.size, 2), np.nan), n_calls=int(y.size),
+                        method="nominal", diagnostics={})
+
+    def assess(self, x: np.ndarray) -> Estimate:
+        """Full-sample estimate of the primary response for any formulation (for tables)."""
+        return self.estimate(_as_2d(x))
+
+    def evaluate(self, x: np.ndarray) -> Evaluation:
+        """Evaluate a population ``x`` of shape ``(P, d)``."""
+        x = _as_2d(x)
+        theta = None if self.estimator is not None or self.nominal_only else self.theta
+        est = self._nominal(x) if self.nominal_only else self.estimate(x, theta=theta)
+        n_sur = int(est.n_calls)
+        cols = []
+        if self.reliability:
+            pt = self.options.p_target
+            if self.limit is not None:
+                cols.append(np.asarray(est.pf, dtype=float) / pt - 1.0)
+            for c in self.extra_reliability:
+                e = self.estimate(x, c.response, c.limit, theta=theta)
+                n_sur += int(e.n_calls)
+                cols.append(np.asarray(e.pf, dtype=float) / pt - 1.0)
+        n_model = 0
+        if self.constraints_det is not None and self.constraints_det.names:
+            gd = self.constraints_det(x)
+            n_model = x.shape[0]
+            cols.extend(gd.T)
+        G = np.column_stack(cols) if cols else np.empty((x.shape[0], 0))
+        F = self._objectives(est)
+        return Evaluation(F=F, G=G, estimate=est, n_surrogate_calls=n_sur,
+                          n_model_calls=n_model)
+
+    def _objectives(self, est: Estimate) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def describe(self) -> dict[str, Any]:
+        """Plain description for run metadata."""
+        return {"formulation": self.name, "objectives": list(self.objective_names),
+                "constraints": list(self.constraint_names),
+                "p_target": self.options.p_target if self.reliability else None,
+                "n_theta": int(self.u.shape[0]), "estimator": self.options.estimator}
+
+
+def _as_2d(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 2:
+        raise ValueError(f"x has shape {x.shape}: must be 2-dimensional (P, d)")
+    return x
+
+
+def make_formulation(
+    name: str,
+    *,
+    response: Response,
+    inputs: Any,
+    limit: LimitState | None,
+    rng: np.random.Generator,
+    options: FormulationOptions | None = None,
+    deterministic: Callable[[np.ndarray], Mapping[str, np.ndarray]] | None = None,
+    extra_reliability: tuple[ReliabilityConstraint, ...] = (),
+) -> Formulation:
+    """Build a registered formulation and draw its common-random-number sample.
+
+    All names and options are checked before ``rng`` is touched. Formulations built from
+    generators in the same state see the same θ sample (common random numbers).
+
+    Parameters
+    ----------
+    name : str
+        ``"deterministic"``, ``"rdo"``, ``"rbdo"`` or ``"rbrdo"`` (see :data:`FORMULATIONS`).
+    response : Response
+        ``y(x (P, d), theta (N, m)) -> (P, N)`` (the surrogate, or any analytic model).
+    inputs : random vector
+        Has ``.dim``, ``.standard_sample(n, rng=)`` and ``.from_standard(u)``.
+    limit : LimitState or None
+        Failure definition of the primary response (its P_f is recorded by every formulation
+        and constrained by ``rbdo``/``rbrdo``). ``None``: the primary response only supplies
+        objectives (e.g. a cost), and the chance constraints come from ``extra_reliability``.
+    rng : numpy.random.Generator
+        Source of the fixed sample ``u`` (and of the estimator seed).
+    options : FormulationOptions
+    deterministic : callable, optional
+        ``x -> {"von_mises_pa", "omega_n1", "critical_speeds"}``; required when
+        ``options.deterministic`` imposes any constraint.
+    extra_reliability : tuple of ReliabilityConstraint
+        Further chance constraints (same ``P_target``).
+    """
+    cls = FORMULATIONS.get(name)
+    options = FormulationOptions() if options is None else options
+    if not isinstance(options, FormulationOptions):
+        raise ValueError(f"options = {options!r} is not allowed: must be FormulationOptions")
+    if limit is not None and not isinstance(limit, LimitState):
+        raise ValueError(f"limit = {limit!r} is not allowed: must be a LimitState or None")
+    if cls.reliability and limit is None and not extra_reliability:
+        raise ValueError(f"formulation {name!r} needs a failure definition: give limit or "
+                         "extra_reliability")
+    for c in extra_reliability:
+        if not isinstance(c, ReliabilityConstraint):
+            raise ValueError(f"extra_reliability entry {c!r} is not a ReliabilityConstraint")
+    estimator = None
+    if options.estimator != "mc":
+        from surrogate_rbrdo.estimators import get_estimator
+
+        estimator = get_estimator(options.estimator, **options.estimator_options)
+    else:
+        _values_to_estimate()  # fail now, not in generation 1, if estimators are missing
+    det = DeterministicConstraints(options.deterministic, deterministic)
+    rng = require_rng(rng)
+    u = np.asarray(inputs.standard_sample(options.n_theta, rng=rng), dtype=float)
+    if u.ndim == 1:
+        u = u[:, None]
+    seed = int(rng.integers(0, 2**63 - 1))
+    return cls(response=response, inputs=inputs, limit=limit, u=u, options=options,
+               constraints_det=det, extra_reliability=tuple(extra_reliability),
+               estimator=estimator, estimator_seed=seed)

@@ -1,0 +1,68 @@
+"""Options of a design formulation (frozen, validated on construction).
+
+>>> round(FormulationOptions(p_target=0.05).beta_target, 4)
+1.6449
+>>> FormulationOptions(p_target=1.5)
+Traceback (most recent call last):
+...
+ValueError: p_target = 1.5 is not allowed: must lie in (0.0, 1.0)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from scipy.stats import norm
+
+from surrogate_rbrdo.core.validate import check_int, check_range
+from surrogate_rbrdo.formulations.deterministic import DeterministicOptions
+
+
+@dataclass(frozen=True)
+class FormulationOptions:
+    """Shared options of every formulation.
+
+    Parameters
+    ----------
+    p_target : float
+        Target probability of failure, in (0, 1). Used by ``rbdo`` and ``rbrdo``.
+    n_theta : int
+        Size of the common-random-number θ sample (paper: N_mc = 1000), >= 1.
+    estimator : str
+        Registry name of the estimator. ``"mc"`` takes the fast path (response values on the
+        fixed sample → ``mc_from_values``); any other name calls ``estimator.estimate(...)``
+        with the same fixed standard-normal sample ``u``.
+    estimator_options : mapping
+        Keyword options for ``get_estimator(estimator, **estimator_options)``.
+    ci_level : float
+        Confidence level of the P_f interval, in (0, 1).
+    deterministic : DeterministicOptions
+        The g_det constraints (stress ratio and resonance guard).
+    """
+
+    p_target: float = 0.05
+    n_theta: int = 1000
+    estimator: str = "mc"
+    estimator_options: Mapping[str, Any] = field(default_factory=dict)
+    ci_level: float = 0.95
+    deterministic: DeterministicOptions = field(default_factory=DeterministicOptions)
+
+    def __post_init__(self) -> None:
+        check_range("p_target", self.p_target, 0.0, 1.0, inclusive=False)
+        check_int("n_theta", self.n_theta, minimum=1)
+        if not isinstance(self.estimator, str):
+            raise ValueError(f"estimator = {self.estimator!r} is not allowed: must be a name")
+        check_range("ci_level", self.ci_level, 0.0, 1.0, inclusive=False)
+        if not isinstance(self.deterministic, DeterministicOptions):
+            raise ValueError(f"deterministic = {self.deterministic!r} is not allowed: must be "
+                             "a DeterministicOptions")
+        object.__setattr__(self, "estimator_options",
+                           MappingProxyType(dict(self.estimator_options)))
+
+    @property
+    def beta_target(self) -> float:
+        """Target reliability index β_t = Φ⁻¹(1 − P_target)."""
+        return float(norm.isf(self.p_target))

@@ -1,0 +1,26 @@
+"""Optimisers (pymoo NSGA-II, optuna NSGA-II), archives, Pareto post-processing.
+
+pymoo and optuna are imported only inside this sub-package, and only when a run starts.
+"""
+
+from surrogate_rbrdo.optimization.nsga2 import OPTIMIZERS, NSGA2Options, check_bounds, run_nsga2
+from surrogate_rbrdo.optimization.pareto import (
+    asf_compromise,
+    feasible_mask,
+    feasible_pareto,
+    nondominated,
+)
+from surrogate_rbrdo.optimization.result import Archive, OptimizationResult
+
+__all__ = [
+    "OPTIMIZERS",
+    "Archive",
+    "NSGA2Options",
+    "OptimizationResult",
+    "asf_compromise",
+    "check_bounds",
+    "feasible_mask",
+    "feasible_pareto",
+    "nondominated",
+    "run_nsga2",
+]
