@@ -1,0 +1,25 @@
+"""Estimators of μ_y, σ_y and P_f, in the registry :data:`ESTIMATORS`.
+
+Every estimator is a frozen dataclass of its options with
+``estimate(response, inputs, limit, x, *, rng, u=None) -> Estimate``:
+
+========== ==========================================================================
+``mc``     crude Monte Carlo (Eqs. 12-14), Clopper-Pearson interval
+``is``     importance sampling centred at the FORM design point
+``ais``    adaptive importance sampling (cross-entropy, Gaussian, defensive mixture)
+``form``   FORM by iHL-RF with finite-difference gradients
+``sorm``   SORM (Breitung / Hohenbichler-Rackwitz) from the FORM design point
+``subset`` subset simulation (Au & Beck) with conditional sampling in u space
+``fosm``   first-order second-moment: μ, σ and the Cornell index
+========== ==========================================================================
+
+>>> {'mc', 'form'} <= set(ESTIMATORS)
+True
+"""
+
+from surrogate_rbrdo.estimators.registry import ESTIMATORS, get_estimator  # noqa: I001
+from surrogate_rbrdo.estimators.mc import MonteCarlo, mc_from_values
+from surrogate_rbrdo.estimators.form import FORM
+from surrogate_rbrdo.estimators.fosm import FOSM
+
+__all__ = ["ESTIMATORS", "FORM", "FOSM", "MonteCarlo", "get_estimator", "mc_from_values"]

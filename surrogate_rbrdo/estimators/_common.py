@@ -1,0 +1,124 @@
+"""Helpers shared by the estimators: argument checks, checked model evaluation, intervals."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from scipy import special
+
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.protocols import Estimate, LimitState
+from surrogate_rbrdo.core.rng import require_rng
+
+
+def check_args(
+    inputs: Any, limit: LimitState, x: Any, rng: Any, u: Any = None
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Validate the common ``estimate`` arguments; return ``x`` as ``(P, d)`` and ``u``."""
+    require_rng(rng)
+    if not isinstance(limit, LimitState):
+        raise ValueError(f"limit = {limit!r} is not allowed: must be a core LimitState")
+    for attr in ("dim", "from_standard"):
+        if not hasattr(inputs, attr):
+            raise ValueError(f"inputs = {inputs!r} is not allowed: must be a RandomVector")
+    xa = np.asarray(x, dtype=float)
+    if xa.ndim != 2 or xa.shape[0] < 1:
+        raise ValueError(f"x has shape {xa.shape}: must be (P, d) with P >= 1 (use (1, 0) "
+                         "for a problem without design variables)")
+    if not np.all(np.isfinite(xa)):
+        raise ValueError("x contains a non-finite value: designs must be finite")
+    if u is None:
+        return xa, None
+    ua = np.asarray(u, dtype=float)
+    if ua.ndim != 2 or ua.shape[1] != inputs.dim or ua.shape[0] < 1:
+        raise ValueError(f"u has shape {ua.shape}: must be (N, {inputs.dim}) with N >= 1")
+    if not np.all(np.isfinite(ua)):
+        raise ValueError("u contains a non-finite value: must be a finite standard-normal sample")
+    return xa, ua
+
+
+def check_finite_y(y: np.ndarray, what: str = "response") -> None:
+    """Raise :class:`ModelError` naming the first non-finite entry of a ``(P, N)`` array."""
+    if not np.all(np.isfinite(y)):
+        i, j = np.argwhere(~np.isfinite(y))[0]
+        raise ModelError(f"{what} returned {y[i, j]} for design {i}, theta sample {j}: "
+                         "responses must be finite")
+
+
+def evaluate(response: Callable, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Call ``response(x, theta)`` and check the ``(P, N)`` shape and finiteness."""
+    y = np.asarray(response(x, theta), dtype=float)
+    expected = (x.shape[0], theta.shape[0])
+    if y.shape != expected:
+        raise ModelError(f"response returned shape {y.shape}, expected {expected}")
+    if not np.all(np.isfinite(y)):
+        i, j = np.argwhere(~np.isfinite(y))[0]
+        raise ModelError(f"response returned {y[i, j]} at design x={x[i].tolist()}, "
+                         f"theta={theta[j].tolist()}: responses must be finite")
+    return y
+
+
+class LimitStateU:
+    """``G(u) = limit.g(response(x_p, T(u)))`` for one design, counting model calls."""
+
+    def __init__(self, response: Callable, inputs: Any, limit: LimitState,
+                 x_row: np.ndarray) -> None:
+        self.response, self.inputs, self.limit = response, inputs, limit
+        self.x_row = x_row.reshape(1, -1)
+        self.calls = 0
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        u = np.atleast_2d(u)
+        y = evaluate(self.response, self.x_row, self.inputs.from_standard(u))[0]
+        self.calls += u.shape[0]
+        return self.limit.g(y)
+
+
+def z_of(level: float) -> float:
+    """Two-sided normal quantile for a confidence ``level``."""
+    return float(special.ndtri(0.5 + 0.5 * level))
+
+
+def clopper_pearson(k: np.ndarray, n: int, level: float) -> np.ndarray:
+    """Exact binomial (Clopper-Pearson) interval for ``k`` failures out of ``n``: ``(P, 2)``.
+
+    Valid at ``k = 0`` (lower bound 0) and ``k = n`` (upper bound 1).
+
+    >>> clopper_pearson(np.array([0]), 1000, 0.95).round(5).tolist()
+    [[0.0, 0.00368]]
+    """
+    k = np.asarray(k, dtype=float)
+    a = 0.5 * (1.0 - level)
+    lo = np.where(k > 0, special.betaincinv(np.maximum(k, 1e-300), n - k + 1, a), 0.0)
+    hi = np.where(k < n, special.betaincinv(k + 1, np.maximum(n - k, 1e-300), 1 - a), 1.0)
+    return np.column_stack([lo, hi])
+
+
+def normal_ci(pf: np.ndarray, se: np.ndarray, level: float) -> np.ndarray:
+    """Normal-approximation interval ``pf ± z se`` clipped to ``[0, 1]``; ``[0, 1]`` if no hit."""
+    z = z_of(level)
+    lo = np.clip(pf - z * se, 0.0, 1.0)
+    hi = np.clip(pf + z * se, 0.0, 1.0)
+    none = pf <= 0
+    return np.column_stack([np.where(none, 0.0, lo), np.where(none, 1.0, hi)])
+
+
+def nan_p(p: int) -> np.ndarray:
+    """A ``(P,)`` array of NaN."""
+    return np.full(p, np.nan)
+
+
+def make_estimate(method: str, n_calls: int, p: int, **kw: Any) -> Estimate:
+    """Build an :class:`Estimate`, filling missing quantities with NaN."""
+    fields = {k: np.asarray(kw.pop(k, nan_p(p)), dtype=float)
+              for k in ("mean", "std", "pf", "mean_se", "std_se", "pf_se")}
+    ci = np.asarray(kw.pop("pf_ci", np.full((p, 2), np.nan)), dtype=float)
+    diagnostics = kw.pop("diagnostics", {})
+    if kw:
+        raise TypeError(f"unexpected fields {sorted(kw)}")
+    for a in (*fields.values(), ci):
+        a.setflags(write=False)
+    return Estimate(pf_ci=ci, n_calls=int(n_calls), method=method, diagnostics=diagnostics,
+                    **fields)

@@ -1,0 +1,106 @@
+"""FORM and FOSM against closed-form answers, and FORM's failure modes."""
+
+import numpy as np
+import pytest
+from scipy import special
+
+from surrogate_rbrdo.core import LimitState, ModelError
+from surrogate_rbrdo.estimators import FORM, FOSM
+from surrogate_rbrdo.estimators.problems import (
+    correlated_normal,
+    linear_standard,
+    lognormal_nataf,
+    paraboloid,
+    series_four_branch,
+)
+from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+pytestmark = pytest.mark.known_answer
+RNG = np.random.default_rng(0)
+
+
+def form(prob, **kw):
+    return FORM(**kw).estimate(prob.response, prob.inputs, prob.limit, prob.x, rng=RNG)
+
+
+@pytest.mark.parametrize("prob", [
+    linear_standard(beta=3.0, dim=3, shifts=(0.0, 1.0, -2.0)),
+    linear_standard(beta=5.0, dim=10),
+    linear_standard(beta=-1.0, dim=2),                      # mean point fails: P_f = 0.84
+    correlated_normal(),
+    lognormal_nataf(),
+], ids=lambda p: p.name)
+def test_form_exact_on_linear_limit_states(prob):
+    est = form(prob)
+    assert est.diagnostics["converged"].all()
+    beta_exact = -special.ndtri(prob.pf_exact)
+    np.testing.assert_allclose(est.diagnostics["beta"], beta_exact, atol=1e-6)
+    np.testing.assert_allclose(est.pf, prob.pf_exact, rtol=1e-5)
+    np.testing.assert_allclose(est.diagnostics["importance_factors"].sum(1), 1.0, atol=1e-9)
+    # design point lies on the limit state, in both spaces
+    th = est.diagnostics["theta_star"]
+    for i in range(prob.x.shape[0]):
+        y = prob.response(prob.x[i:i + 1], th[i:i + 1])[0, 0]
+        assert y == pytest.approx(prob.limit.threshold, abs=1e-6)
+    np.testing.assert_allclose(prob.inputs.to_standard(th), est.diagnostics["u_star"],
+                               atol=1e-9)
+
+
+def test_form_linear_alpha_is_the_normal_vector():
+    prob = linear_standard(beta=3.0, dim=3)
+    alpha = np.arange(1.0, 4.0) / np.linalg.norm(np.arange(1.0, 4.0))
+    np.testing.assert_allclose(form(prob).diagnostics["alpha"][0], alpha, atol=1e-7)
+
+
+def test_form_error_visible_on_curved_limit_state():
+    prob = paraboloid(beta=3.0, kappa=0.3, dim=5)
+    est = form(prob, fd_scheme="central")
+    assert est.diagnostics["beta"][0] == pytest.approx(3.0, abs=1e-6)
+    assert est.pf[0] > 3 * prob.pf_exact[0]          # FORM ignores curvature: 4x too large
+
+
+def test_form_misses_branches_of_series_system():
+    prob = series_four_branch(6.0)
+    est = form(prob)
+    assert est.diagnostics["beta"][0] == pytest.approx(3.0, abs=1e-5)
+    assert est.pf[0] < 0.5 * prob.pf_exact[0]
+
+
+def test_form_non_convergence_raises_or_returns_nan():
+    # y = -(u1^2 + u2^2): failure y > 1 never happens, and grad G(0) = 0
+    inputs = MultivariateNormal(np.zeros(2), cov=np.eye(2))
+
+    def resp(x, t):
+        return -np.sum(t**2, axis=1)[None, :]
+
+    with pytest.raises(ModelError, match="FORM did not converge for design 0"):
+        FORM().estimate(resp, inputs, LimitState(1.0), np.zeros((1, 0)), rng=RNG)
+    est = FORM(on_failure="nan").estimate(resp, inputs, LimitState(1.0), np.zeros((1, 0)),
+                                          rng=RNG)
+    assert np.isnan(est.pf[0]) and not est.diagnostics["converged"][0]
+    assert est.diagnostics["message"][0] != "converged"
+
+
+def test_form_iteration_limit_reported():
+    prob = paraboloid(beta=3.0, kappa=0.3, dim=3)
+    with pytest.raises(ModelError, match="maximum number of iterations"):
+        form(prob, max_iter=1)
+
+
+def test_fosm_exact_on_linear_normal():
+    prob = correlated_normal()
+    est = FOSM().estimate(prob.response, prob.inputs, prob.limit, prob.x, rng=RNG)
+    np.testing.assert_allclose(est.mean, prob.mean_exact, rtol=1e-12)
+    np.testing.assert_allclose(est.std, prob.std_exact, rtol=1e-8)
+    np.testing.assert_allclose(est.pf, prob.pf_exact, rtol=1e-6)
+    assert est.n_calls == 3 * 7
+    assert np.isnan(est.pf_se).all() and np.isnan(est.pf_ci).all()
+
+
+def test_fosm_quadratic_misses_second_order_mean():
+    # y = theta^2, theta ~ N(1, 0.1^2): E[y] = 1.01 exactly, FOSM gives 1
+    inputs = MultivariateNormal([1.0], cov=[[0.01]])
+    est = FOSM().estimate(lambda x, t: (t[:, 0] ** 2)[None, :], inputs, LimitState(2.0),
+                          np.zeros((1, 0)), rng=RNG)
+    assert est.mean[0] == pytest.approx(1.0, abs=1e-12)
+    assert est.std[0] == pytest.approx(0.2, rel=1e-6)
