@@ -4,8 +4,12 @@
 ['gpr', 'krg_matern52', 'krg_se']
 """
 
+from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor, ThetaBlock
 from surrogate_rbrdo.surrogates.gpr import GPR, GPROptions
 from surrogate_rbrdo.surrogates.kriging import KrgMatern52, KrgSE, KrigingOptions
 from surrogate_rbrdo.surrogates.registry import SURROGATES
 
-__all__ = ["GPR", "GPROptions", "KrgMatern52", "KrgSE", "KrigingOptions", "SURROGATES"]
+__all__ = [
+    "GPR", "GPROptions", "KrgMatern52", "KrgSE", "KrigingOptions", "ProductKernelPredictor",
+    "SURROGATES", "ThetaBlock",
+]

@@ -213,16 +213,17 @@ class ProductKernelPredictor:
         """Predict every design ``x`` (P, d) with every θ sample (N, m): arrays of shape (P, N).
 
         ``theta`` may be a :class:`ThetaBlock` from :meth:`prepare_theta` (reused across calls).
-        Without ``return_std`` the returned ``std`` is an all-NaN array of the same shape (the
-        return type never changes; the variance costs ``O(P N M²)`` and is skipped).
+        Without ``return_std`` the returned ``std`` is a read-only all-NaN array of the same shape
+        (a broadcast view: the return type never changes; the variance costs ``O(P N M²)`` and is
+        skipped).
         """
         block = theta if isinstance(theta, ThetaBlock) else self.prepare_theta(theta)
         with blas_threads(self.blas_threads or None):
             Kx = self.design_block(x)
-            mean = self.beta0 + (Kx * self.alpha) @ block.Kt.T
-            mean = self.y_mean + self.y_std * mean
+            mean = (Kx * (self.y_std * self.alpha)) @ block.Kt.T
+            mean += self.y_mean + self.y_std * self.beta0
             if not return_std:
-                return Prediction(mean=mean, std=np.full_like(mean, np.nan))
+                return Prediction(mean=mean, std=np.broadcast_to(np.nan, mean.shape))
             var = self._variance(Kx, block.Kt)
         return Prediction(mean=mean, std=np.sqrt(var))
 
