@@ -1,0 +1,320 @@
+"""Assembly of the spindle FE model from a geometry and a list of effects.
+
+The model keeps the rotor matrices in two forms: dense ``(n, n)`` (modal analysis) and as
+node blocks of a block-tridiagonal matrix (``(nn, 4, 4)`` diagonal and ``(nn-1, 4, 4)``
+off-diagonal blocks), which the harmonic solver uses to treat many speeds at once.
+
+>>> from surrogate_rbrdo.spindle.geometry import SpindleGeometry
+>>> g = SpindleGeometry.from_dict({
+...     "sections": [{"length_mm": 500, "outer_diameter_mm": 50, "elements": 10}],
+...     "bearings": [{"name": "a", "position_mm": 0, "law": {"type": "constant",
+...                   "k_N_per_m": 1e8}},
+...                  {"name": "b", "position_mm": 500, "law": {"type": "constant",
+...                   "k_N_per_m": 1e8}}]})
+>>> m = build_model(g)
+>>> m.n_nodes, m.n_dof, round(m.rotor_mass_kg, 3)
+(11, 44, 7.707)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, Support
+from surrogate_rbrdo.spindle.element import BeamSection, element_matrices
+from surrogate_rbrdo.spindle.geometry import ConstantLaw, PreloadLaw, SpindleGeometry
+
+MM = 1e-3
+RPM = np.pi / 30.0  # rpm -> rad/s
+
+
+def _mesh(geometry: SpindleGeometry) -> tuple[np.ndarray, np.ndarray]:
+    """Node positions (m) and, per element, the index of its shaft section."""
+    edges = np.concatenate([[0.0], np.cumsum([s.length_mm for s in geometry.sections])])
+    pts = []
+    for i, s in enumerate(geometry.sections):
+        n = s.elements
+        if geometry.max_element_length_mm is not None:
+            n = max(n, int(np.ceil(s.length_mm / geometry.max_element_length_mm - 1e-9)))
+        pts.append(np.linspace(edges[i], edges[i + 1], n + 1))
+    items = [b.position_mm for b in geometry.bearings] + [d.position_mm for d in geometry.disks]
+    items += [u.position_mm for u in geometry.unbalances] + [geometry.tool_tip_mm]
+    z = np.unique(np.round(np.concatenate(pts + [np.asarray(items, float)]), 9))
+    # merge nodes closer than 1 µm (an item sitting on a mesh node)
+    keep = np.concatenate([[True], np.diff(z) > 1e-3])
+    z = z[keep]
+    mid = 0.5 * (z[:-1] + z[1:])
+    sec = np.clip(np.searchsorted(edges, mid, side="right") - 1, 0, len(geometry.sections) - 1)
+    return z * MM, sec
+
+
+def _node_of(z: np.ndarray, position_mm: float) -> int:
+    return int(np.argmin(np.abs(z - position_mm * MM)))
+
+
+@dataclass(frozen=True, eq=False)
+class SpindleModel:
+    """An assembled rotor–bearing model (SI units). Build it with :func:`build_model`.
+
+    Attributes
+    ----------
+    z : ndarray (nn,)
+        Node positions along the axis (m).
+    M, K, G : ndarray (n, n)
+        Rotor mass, structural stiffness and gyroscopic (skew, per unit spin) matrices,
+        ``n = 4 nn``, DOFs ``[x, y, a, b]`` per node; disks included, bearings excluded.
+    blocks : dict
+        Block-tridiagonal parts ``{"M": (diag, upper), "K": ..., "G": ...}``.
+    bearing_nodes : ndarray (nb,)
+        Node index of each bearing (in the geometry's bearing order).
+    theta_bearings : tuple of str
+        Bearings whose stiffness the columns of θ multiply (θ = 1 is nominal).
+    """
+
+    geometry: SpindleGeometry
+    effects: tuple[Effect, ...]
+    theta_bearings: tuple[str, ...]
+    z: np.ndarray
+    element_section: np.ndarray
+    M: np.ndarray
+    K: np.ndarray
+    G: np.ndarray
+    blocks: dict[str, tuple[np.ndarray, np.ndarray]]
+    bearing_nodes: np.ndarray
+    supports: tuple[Support | None, ...]
+    unbalance_nodes: np.ndarray
+    unbalance: np.ndarray
+    tool_node: int
+    rotor_mass_kg: float
+    sections: tuple[BeamSection, ...] = field(repr=False, default=())
+
+    @property
+    def n_nodes(self) -> int:
+        return self.z.size
+
+    @property
+    def n_dof(self) -> int:
+        return 4 * self.z.size
+
+    @property
+    def speed_range_rad_s(self) -> tuple[float, float]:
+        g = self.geometry
+        return g.speed_min_rpm * RPM, g.speed_max_rpm * RPM
+
+    @property
+    def alpha(self) -> float:
+        return self.geometry.rayleigh_alpha_per_s
+
+    @property
+    def beta(self) -> float:
+        return self.geometry.rayleigh_beta_s
+
+    @property
+    def gyro_scale(self) -> float:
+        s = 1.0
+        for e in self.effects:
+            s *= e.gyroscopic_scale()
+        return s
+
+    # ------------------------------------------------------------------ bearings
+    def check_theta(self, theta: np.ndarray | None, batch: int | None = None) -> np.ndarray:
+        """Return θ as an array of shape (B, m); ``None`` means nominal (all ones)."""
+        m = len(self.theta_bearings)
+        if theta is None:
+            return np.ones((batch or 1, m))
+        th = np.asarray(theta, dtype=float)
+        if th.ndim == 1:
+            th = th[None, :]
+        if th.ndim != 2 or th.shape[1] != m:
+            raise ValueError(
+                f"theta has shape {np.shape(theta)}: must be ({m},) or (B, {m}) — stiffness "
+                f"factors of bearings {list(self.theta_bearings)}"
+            )
+        if not np.all(np.isfinite(th)) or np.any(th <= 0):
+            raise ValueError(
+                f"theta = {th[~np.all(np.isfinite(th) & (th > 0), axis=1)][0].tolist()} is not "
+                "allowed: stiffness factors must be finite and > 0"
+            )
+        return th
+
+    def bearing_coefficients(
+        self, omega: np.ndarray, theta: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Stiffness and damping of every bearing at spin speeds ``omega`` (rad/s).
+
+        ``omega`` has shape ``(B, S)`` and ``theta`` ``(B, m)``; returns ``K`` and ``C`` of
+        shape ``(B, S, nb, 2, 2)``. Damping is ``C = η K_sym`` (the paper's Eq. 2) unless the
+        law gives a damping matrix; cross-coupled stiffness adds no damping.
+        """
+        omega = np.asarray(omega, dtype=float)
+        th = self.check_theta(theta, omega.shape[0])
+        Ks, Cs = [], []
+        for b in self.geometry.bearings:
+            law = b.law
+            if isinstance(law, PreloadLaw):
+                F = np.full(omega.shape, law.preload_N)
+                for e in self.effects:
+                    F = e.preload(b.name, omega, F)
+                K = law.stiffness(F)[..., None, None] * np.eye(2)
+            else:
+                K = np.broadcast_to(law.stiffness_matrix(), omega.shape + (2, 2))
+            for e in self.effects:
+                K = e.bearing(b.name, omega, K)
+            if b.name in self.theta_bearings:
+                j = self.theta_bearings.index(b.name)
+                K = K * th[:, j][:, None, None, None]
+            if isinstance(law, ConstantLaw) and law.c_matrix_Ns_per_m is not None:
+                C = np.broadcast_to(np.asarray(law.c_matrix_Ns_per_m, float), K.shape)
+            else:
+                C = law.damping_eta_s * 0.5 * (K + np.swapaxes(K, -1, -2))
+            Ks.append(np.broadcast_to(K, omega.shape + (2, 2)))
+            Cs.append(np.broadcast_to(C, omega.shape + (2, 2)))
+        return np.stack(Ks, axis=-3), np.stack(Cs, axis=-3)
+
+    # ------------------------------------------------------------------ full matrices
+    def system_matrices(
+        self, omega: float, theta: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Dense ``M``, ``C + Ω G`` and ``K`` of the whole system at one speed.
+
+        Housing stages add two DOFs each, appended after the rotor DOFs.
+        """
+        th = self.check_theta(theta)[:1]
+        Kb, Cb = self.bearing_coefficients(np.array([[omega]]), th)
+        Kb, Cb = Kb[0, 0], Cb[0, 0]
+        n_extra = 2 * sum(s is not None for s in self.supports)
+        n = self.n_dof + n_extra
+        M = np.zeros((n, n))
+        K = np.zeros((n, n))
+        C = np.zeros((n, n))
+        r = self.n_dof
+        M[:r, :r] = self.M
+        K[:r, :r] = self.K
+        C[:r, :r] = self.alpha * self.M + self.beta * self.K + omega * self.gyro_scale * self.G
+        h = r
+        for j, node in enumerate(self.bearing_nodes):
+            dofs = np.array([4 * node, 4 * node + 1])
+            sup = self.supports[j]
+            if sup is None:
+                K[np.ix_(dofs, dofs)] += Kb[j]
+                C[np.ix_(dofs, dofs)] += Cb[j]
+                continue
+            hd = np.array([h, h + 1])
+            h += 2
+            for A, B, extra in ((K, Kb[j], sup.k_N_per_m), (C, Cb[j], sup.c_Ns_per_m)):
+                A[np.ix_(dofs, dofs)] += B
+                A[np.ix_(dofs, hd)] -= B
+                A[np.ix_(hd, dofs)] -= B
+                A[np.ix_(hd, hd)] += B + extra * np.eye(2)
+            M[np.ix_(hd, hd)] += sup.m_kg * np.eye(2)
+        return M, C, K
+
+
+def build_model(
+    geometry: SpindleGeometry,
+    effects: Sequence[Effect] = (),
+    *,
+    theta_bearings: Sequence[str] | None = None,
+    shear: bool = True,
+    rotary: bool = True,
+) -> SpindleModel:
+    """Assemble the FE model of ``geometry`` with the given physical ``effects``.
+
+    Parameters
+    ----------
+    geometry : SpindleGeometry
+    effects : sequence of Effect
+        Switchable physical effects (see :mod:`surrogate_rbrdo.spindle.effects`). Gyroscopics
+        are on unless a :class:`~surrogate_rbrdo.spindle.effects.Gyroscopics` effect says
+        otherwise.
+    theta_bearings : sequence of str, optional
+        Bearings whose stiffness the uncertain factors θ multiply; default all bearings.
+    shear, rotary : bool
+        Timoshenko shear deformation and rotary inertia (switch off only for verification).
+    """
+    effects = tuple(effects)
+    for e in effects:
+        if not isinstance(e, Effect):
+            raise ValueError(f"effects: {e!r} is not an Effect")
+    if sum(isinstance(e, Gyroscopics) for e in effects) > 1:
+        raise ValueError("effects: at most one 'gyroscopics' effect is allowed")
+    names = [b.name for b in geometry.bearings]
+    theta_bearings = tuple(names if theta_bearings is None else theta_bearings)
+    for t in theta_bearings:
+        if t not in names:
+            raise ValueError(f"theta_bearings: {t!r} is not a bearing; bearings are {names}")
+
+    z, sec_idx = _mesh(geometry)
+    nn = z.size
+    n = 4 * nn
+    sections = tuple(
+        BeamSection(s.outer_diameter_mm * MM, s.inner_diameter_mm * MM,
+                    geometry.materials[s.material].E_Pa, geometry.materials[s.material].nu,
+                    geometry.materials[s.material].rho_kg_m3)
+        for s in geometry.sections
+    )
+    M = np.zeros((n, n))
+    K = np.zeros((n, n))
+    G = np.zeros((n, n))
+    mass = 0.0
+    for e in range(nn - 1):
+        L = z[e + 1] - z[e]
+        sec = sections[sec_idx[e]]
+        Me, Ke, Ge = element_matrices(sec, L, shear=shear, rotary=rotary)
+        sl = slice(4 * e, 4 * e + 8)
+        M[sl, sl] += Me
+        K[sl, sl] += Ke
+        G[sl, sl] += Ge
+        mass += sec.rho * sec.area * L
+    for d in geometry.disks:
+        i = _node_of(z, d.position_mm)
+        M[4 * i, 4 * i] += d.mass_kg
+        M[4 * i + 1, 4 * i + 1] += d.mass_kg
+        M[4 * i + 2, 4 * i + 2] += d.diametral_inertia_kgm2
+        M[4 * i + 3, 4 * i + 3] += d.diametral_inertia_kgm2
+        G[4 * i + 2, 4 * i + 3] += d.polar_inertia_kgm2
+        G[4 * i + 3, 4 * i + 2] -= d.polar_inertia_kgm2
+        mass += d.mass_kg
+
+    def split(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        idx = np.arange(nn)
+        diag = np.stack([A[4 * i:4 * i + 4, 4 * i:4 * i + 4] for i in idx])
+        up = np.stack([A[4 * i:4 * i + 4, 4 * i + 4:4 * i + 8] for i in idx[:-1]])
+        low = np.stack([A[4 * i + 4:4 * i + 8, 4 * i:4 * i + 4] for i in idx[:-1]])
+        return diag, up, low
+
+    bearing_nodes = np.array([_node_of(z, b.position_mm) for b in geometry.bearings])
+    if len(set(bearing_nodes.tolist())) != len(bearing_nodes):
+        raise ValueError("bearings: two bearings share one node; place them apart")
+    supports = []
+    for b in geometry.bearings:
+        sup = [s for e in effects if (s := e.support(b.name)) is not None]
+        if len(sup) > 1:
+            raise ValueError(f"bearing {b.name!r}: more than one effect adds a support stage")
+        supports.append(sup[0] if sup else None)
+    U = np.array([u.magnitude_kgm * np.exp(1j * np.deg2rad(u.phase_deg))
+                  for u in geometry.unbalances], dtype=complex)
+    for e in effects:
+        U = e.unbalance(U)
+    return SpindleModel(
+        geometry=geometry,
+        effects=effects,
+        theta_bearings=theta_bearings,
+        z=z,
+        element_section=sec_idx,
+        M=M,
+        K=K,
+        G=G,
+        blocks={"M": split(M), "K": split(K), "G": split(G)},
+        bearing_nodes=bearing_nodes,
+        supports=tuple(supports),
+        unbalance_nodes=np.array([_node_of(z, u.position_mm) for u in geometry.unbalances],
+                                 dtype=int),
+        unbalance=U,
+        tool_node=_node_of(z, geometry.tool_tip_mm),
+        rotor_mass_kg=float(mass),
+        sections=sections,
+    )

@@ -1,0 +1,256 @@
+"""Named, switchable physical effects the spindle model is assembled from.
+
+An effect is a frozen dataclass with a registry name, a few parameters with documented bounds,
+and an *off* state (:meth:`Effect.off`). The assembly calls a fixed set of hooks on every effect
+in the model's list; an effect overrides the hooks it needs, so adding an effect never means
+editing the assembly:
+
+* ``preload(bearing, omega, F)``: the operating preload (N) of a preload-law bearing;
+* ``bearing(bearing, omega, K)``: the 2x2 stiffness (N/m) of a bearing, shape ``(..., 2, 2)``;
+* ``support(bearing)``: a :class:`Support` in series between the bearing and ground (housing);
+* ``gyroscopic_scale()``: a factor on the rotor's polar inertia (gyroscopic matrix);
+* ``unbalance(U)``: the complex unbalance vector (kg m).
+
+``omega`` is the spin speed in rad/s, any shape; the hooks broadcast over it.
+
+>>> import numpy as np
+>>> eff = SpeedSoftening(a=0.2, exponent=2.0, omega_ref=100.0)
+>>> K = np.broadcast_to(np.eye(2), (3, 2, 2)) * 1e8
+>>> Kw = eff.bearing("front", np.array([0.0, 50.0, 100.0]), K)
+>>> (Kw[:, 0, 0] / 1e8).round(3).tolist()
+[1.0, 0.95, 0.8]
+>>> SpeedSoftening.off().bearing("front", np.array([100.0]), K[:1])[0, 0, 0] == 1e8
+np.True_
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from surrogate_rbrdo.core.registry import Registry
+from surrogate_rbrdo.core.validate import check_keys, check_positive, check_range
+
+EFFECTS = Registry("effect")
+
+
+@dataclass(frozen=True)
+class Support:
+    """Isotropic housing stage in series with a bearing: stiffness, damping and mass."""
+
+    k_N_per_m: float
+    c_Ns_per_m: float = 0.0
+    m_kg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Effect:
+    """Base class: every hook is the identity; ``bearings=()`` means all bearings."""
+
+    name: ClassVar[str] = "effect"
+    #: parameter name -> (lower, upper) physically plausible bounds
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {}
+    #: parameter values of the off state
+    off_params: ClassVar[dict[str, float]] = {}
+    bearings: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "bearings", tuple(self.bearings))
+        for p, (lo, hi) in self.bounds.items():
+            if p in self.off_params and getattr(self, p) == self.off_params[p]:
+                continue  # the off state may sit on an open bound (e.g. k_h = inf)
+            check_range(f"effects.{self.name}.{p}", getattr(self, p), lo, hi)
+
+    def applies_to(self, bearing: str) -> bool:
+        return not self.bearings or bearing in self.bearings
+
+    @classmethod
+    def off(cls, **kwargs: Any) -> Effect:
+        """The effect switched off (it leaves the model unchanged)."""
+        return cls(**{**cls.off_params, **kwargs})
+
+    @property
+    def is_off(self) -> bool:
+        return all(getattr(self, k) == v for k, v in self.off_params.items())
+
+    def params(self) -> dict[str, Any]:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    # hooks -----------------------------------------------------------------
+    def preload(self, bearing: str, omega: np.ndarray, F: np.ndarray) -> np.ndarray:
+        return F
+
+    def bearing(self, bearing: str, omega: np.ndarray, K: np.ndarray) -> np.ndarray:
+        return K
+
+    def support(self, bearing: str) -> Support | None:
+        return None
+
+    def gyroscopic_scale(self) -> float:
+        return 1.0
+
+    def unbalance(self, U: np.ndarray) -> np.ndarray:
+        return U
+
+
+def effect_from_dict(data: dict[str, Any]) -> Effect:
+    """Build an effect from ``{"name": ..., <params>}`` (TOML/JSON)."""
+    data = dict(data)
+    cls = EFFECTS.get(data.pop("name", None))
+    check_keys(f"effects.{cls.name}", data, {f.name for f in dataclasses.fields(cls)})
+    if "bearings" in data:
+        data["bearings"] = tuple(data["bearings"])
+    return cls(**data)
+
+
+@EFFECTS.register("speed_softening")
+@dataclass(frozen=True)
+class SpeedSoftening(Effect):
+    """Centrifugal softening: ``k(Ω) = k₀ (1 − a (Ω/Ω_ref)^p)``.
+
+    Signature: identified stiffness and critical speeds fall with speed.
+    """
+
+    name: ClassVar[str] = "speed_softening"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"a": (0.0, 0.9), "exponent": (0.5, 4.0)}
+    off_params: ClassVar[dict[str, float]] = {"a": 0.0}
+    a: float = 0.0
+    exponent: float = 2.0
+    omega_ref: float = 24000 * np.pi / 30
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_positive(f"effects.{self.name}.omega_ref", self.omega_ref)
+
+    def bearing(self, bearing: str, omega: np.ndarray, K: np.ndarray) -> np.ndarray:
+        if not self.applies_to(bearing) or self.a == 0.0:
+            return K
+        f = 1.0 - self.a * (np.abs(omega) / self.omega_ref) ** self.exponent
+        return K * f[..., None, None]
+
+
+@EFFECTS.register("thermal_preload")
+@dataclass(frozen=True)
+class ThermalPreload(Effect):
+    """Thermal preload growth ``F(Ω) = F₀ (1 + b (Ω/Ω_ref)^q)``; with ``k ∝ F^{1/3}``.
+
+    Signature: the opposite trend to softening (stiffness rises with speed).
+    """
+
+    name: ClassVar[str] = "thermal_preload"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"b": (0.0, 3.0), "q": (0.5, 4.0)}
+    off_params: ClassVar[dict[str, float]] = {"b": 0.0}
+    b: float = 0.0
+    q: float = 2.0
+    omega_ref: float = 24000 * np.pi / 30
+
+    def preload(self, bearing: str, omega: np.ndarray, F: np.ndarray) -> np.ndarray:
+        if not self.applies_to(bearing) or self.b == 0.0:
+            return F
+        return F * (1.0 + self.b * (np.abs(omega) / self.omega_ref) ** self.q)
+
+
+@EFFECTS.register("cross_coupling")
+@dataclass(frozen=True)
+class CrossCoupling(Effect):
+    """Skew-symmetric bearing cross-coupling ``k_xy = −k_yx = κ k``.
+
+    Signature: a phase shift; acts like lost (κ > 0, forward) damping.
+    """
+
+    name: ClassVar[str] = "cross_coupling"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"kappa": (-0.5, 0.5)}
+    off_params: ClassVar[dict[str, float]] = {"kappa": 0.0}
+    kappa: float = 0.0
+
+    def bearing(self, bearing: str, omega: np.ndarray, K: np.ndarray) -> np.ndarray:
+        if not self.applies_to(bearing) or self.kappa == 0.0:
+            return K
+        k = 0.5 * (K[..., 0, 0] + K[..., 1, 1])
+        out = np.array(K, dtype=float, copy=True)
+        out[..., 0, 1] += self.kappa * k
+        out[..., 1, 0] -= self.kappa * k
+        return out
+
+
+@EFFECTS.register("anisotropy")
+@dataclass(frozen=True)
+class Anisotropy(Effect):
+    """Bearing anisotropy ``k_x = k (1 + s)``, ``k_y = k (1 − s)``.
+
+    Signature: elliptical orbits; forward/backward split already at Ω = 0.
+    """
+
+    name: ClassVar[str] = "anisotropy"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"s": (-0.5, 0.5)}
+    off_params: ClassVar[dict[str, float]] = {"s": 0.0}
+    s: float = 0.0
+
+    def bearing(self, bearing: str, omega: np.ndarray, K: np.ndarray) -> np.ndarray:
+        if not self.applies_to(bearing) or self.s == 0.0:
+            return K
+        out = np.array(K, dtype=float, copy=True)
+        out[..., 0, 0] *= 1.0 + self.s
+        out[..., 1, 1] *= 1.0 - self.s
+        return out
+
+
+@EFFECTS.register("housing")
+@dataclass(frozen=True)
+class HousingFlexibility(Effect):
+    """Housing/foundation stage in series with each bearing: spring ``k_h``, mass ``m_h``.
+
+    ``k_h = inf`` is off. Signature: all bearing-dominated modes lower; an extra housing mode.
+    """
+
+    name: ClassVar[str] = "housing"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {
+        "k_N_per_m": (1e6, np.inf), "m_kg": (0.0, 1e3), "c_Ns_per_m": (0.0, 1e6)}
+    off_params: ClassVar[dict[str, float]] = {"k_N_per_m": np.inf}
+    k_N_per_m: float = np.inf
+    m_kg: float = 0.0
+    c_Ns_per_m: float = 0.0
+
+    def support(self, bearing: str) -> Support | None:
+        if not self.applies_to(bearing) or np.isinf(self.k_N_per_m):
+            return None
+        return Support(self.k_N_per_m, self.c_Ns_per_m, self.m_kg)
+
+
+@EFFECTS.register("gyroscopics")
+@dataclass(frozen=True)
+class Gyroscopics(Effect):
+    """Gyroscopic coupling with polar inertia scaled by ``1 + g``; ``g = −1`` switches it off.
+
+    Signature: forward/backward split ∝ Ω J_p / J_d.
+    """
+
+    name: ClassVar[str] = "gyroscopics"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"g": (-1.0, 1.0)}
+    off_params: ClassVar[dict[str, float]] = {"g": -1.0}
+    g: float = 0.0
+
+    def gyroscopic_scale(self) -> float:
+        return 1.0 + self.g
+
+
+@EFFECTS.register("unbalance_error")
+@dataclass(frozen=True)
+class UnbalanceError(Effect):
+    """Unbalance magnitude/phase error ``U → (1 + ε) U e^{iδ}`` (δ in degrees).
+
+    Signature: a uniform complex ratio of the 1x response at every speed.
+    """
+
+    name: ClassVar[str] = "unbalance_error"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {
+        "epsilon": (-0.9, 5.0), "delta_deg": (-180.0, 180.0)}
+    off_params: ClassVar[dict[str, float]] = {"epsilon": 0.0, "delta_deg": 0.0}
+    epsilon: float = 0.0
+    delta_deg: float = 0.0
+
+    def unbalance(self, U: np.ndarray) -> np.ndarray:
+        return U * (1.0 + self.epsilon) * np.exp(1j * np.deg2rad(self.delta_deg))

@@ -1,0 +1,171 @@
+"""Damped modal analysis, Campbell diagram, critical speeds and the first natural frequency.
+
+Modes come from the state-space form of ``M q'' + (C + Ω G) q' + K q = 0``. An eigenvalue
+``λ = −ζ ω_n + i ω_d`` with ``ω_d > 0`` is kept; its whirl is *forward* when the orbit of the
+mode shape turns with the spin: ``Σ |X + iY|² > Σ |X − iY|²`` over the rotor nodes.
+Critical speeds are the 1x crossings ``ω_d(Ω) = Ω`` of forward modes, located on the Campbell
+grid and refined by Brent's method.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.optimize import brentq
+
+from surrogate_rbrdo.core.errors import ModelError, SingularSystemError
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+
+
+@dataclass(frozen=True)
+class ModalResult:
+    """Modes at one speed, sorted by damped natural frequency."""
+
+    speed_rpm: float
+    frequency_hz: np.ndarray  # damped natural frequency ω_d / 2π
+    damping_ratio: np.ndarray
+    whirl: np.ndarray  # "forward" / "backward"
+    eigenvalues: np.ndarray
+
+    def forward(self) -> np.ndarray:
+        """Damped frequencies (Hz) of the forward-whirl modes."""
+        return self.frequency_hz[self.whirl == "forward"]
+
+
+def modal_analysis(
+    model: SpindleModel, speed_rpm: float, theta: np.ndarray | None = None,
+    *, n_modes: int | None = None,
+) -> ModalResult:
+    """Damped complex modes at one spin speed.
+
+    Parameters
+    ----------
+    model : SpindleModel
+    speed_rpm : float
+        Spin speed (rpm), >= 0.
+    theta : array (m,), optional
+        Bearing stiffness factors.
+    n_modes : int, optional
+        Keep only the lowest ``n_modes`` (by damped frequency).
+    """
+    if not (np.isfinite(speed_rpm) and speed_rpm >= 0):
+        raise ValueError(f"speed_rpm = {speed_rpm} is not allowed: must be finite and >= 0")
+    omega = speed_rpm * RPM
+    M, C, K = model.system_matrices(omega, theta)
+    n = M.shape[0]
+    try:
+        Minv_K = np.linalg.solve(M, K)
+        Minv_C = np.linalg.solve(M, C)
+    except np.linalg.LinAlgError as exc:
+        raise SingularSystemError("singular mass matrix: every DOF needs mass") from exc
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_C]])
+    lam, vec = sla.eig(A)
+    if not np.all(np.isfinite(lam)):
+        raise ModelError(f"non-finite eigenvalues at {speed_rpm} rpm")
+    scale = max(np.max(np.abs(lam)), 1.0)
+    keep = lam.imag > 1e-9 * scale
+    lam, vec = lam[keep], vec[:n, keep]
+    order = np.argsort(lam.imag)
+    lam, vec = lam[order], vec[:, order]
+    if n_modes is not None:
+        lam, vec = lam[:n_modes], vec[:, :n_modes]
+    r = model.n_dof
+    X = vec[0:r:4]
+    Y = vec[1:r:4]
+    fw = np.sum(np.abs(X + 1j * Y) ** 2, axis=0)
+    bw = np.sum(np.abs(X - 1j * Y) ** 2, axis=0)
+    whirl = np.where(fw >= bw, "forward", "backward")
+    wn = np.abs(lam)
+    return ModalResult(
+        speed_rpm=float(speed_rpm),
+        frequency_hz=lam.imag / (2 * np.pi),
+        damping_ratio=-lam.real / wn,
+        whirl=whirl,
+        eigenvalues=lam,
+    )
+
+
+@dataclass(frozen=True)
+class Campbell:
+    """Damped natural frequencies over a speed grid (NaN-padded to ``n_modes``)."""
+
+    speeds_rpm: np.ndarray
+    frequency_hz: np.ndarray  # (S, n_modes)
+    damping_ratio: np.ndarray
+    whirl: np.ndarray  # (S, n_modes) of "forward"/"backward"/""
+    critical_speeds_rpm: np.ndarray
+
+
+def campbell(
+    model: SpindleModel, speeds_rpm: np.ndarray, theta: np.ndarray | None = None,
+    *, n_modes: int = 8, refine: bool = True,
+) -> Campbell:
+    """Campbell diagram over ``speeds_rpm`` and the 1x critical speeds inside that range."""
+    sp = np.asarray(speeds_rpm, dtype=float)
+    if sp.ndim != 1 or sp.size < 2 or np.any(np.diff(sp) <= 0) or sp[0] < 0:
+        raise ValueError(
+            "speeds_rpm is not allowed: need at least two strictly increasing speeds >= 0"
+        )
+    S = sp.size
+    f = np.full((S, n_modes), np.nan)
+    z = np.full((S, n_modes), np.nan)
+    wh = np.full((S, n_modes), "", dtype=object)
+    for i, s in enumerate(sp):
+        m = modal_analysis(model, s, theta, n_modes=n_modes)
+        k = m.frequency_hz.size
+        f[i, :k], z[i, :k], wh[i, :k] = m.frequency_hz, m.damping_ratio, m.whirl
+    crit = critical_speeds(model, sp, theta, refine=refine, _campbell=(f, wh))
+    return Campbell(sp, f, z, wh.astype(str), crit)
+
+
+def _forward_k(model, speed_rpm, theta, k) -> float:
+    fw = modal_analysis(model, speed_rpm, theta).forward()
+    return fw[k] if k < fw.size else np.inf
+
+
+def critical_speeds(
+    model: SpindleModel, speeds_rpm: np.ndarray, theta: np.ndarray | None = None,
+    *, refine: bool = True, _campbell=None,
+) -> np.ndarray:
+    """Forward 1x critical speeds (rpm) inside ``[speeds_rpm[0], speeds_rpm[-1]]``.
+
+    The k-th forward mode crosses the 1x line where ``f_k(n) − n/60`` changes sign; the
+    crossing is refined with Brent's method to 1e-6 relative.
+    """
+    sp = np.asarray(speeds_rpm, dtype=float)
+    if _campbell is None:
+        fw_list = [modal_analysis(model, s, theta).forward() for s in sp]
+    else:
+        f, wh = _campbell
+        fw_list = [f[i][wh[i] == "forward"] for i in range(sp.size)]
+    n_fw = min(len(v) for v in fw_list)
+    out = []
+    for k in range(n_fw):
+        g = np.array([v[k] for v in fw_list]) - sp / 60.0
+        for i in np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]:
+            if refine:
+                root = brentq(lambda s, k=k: _forward_k(model, s, theta, k) - s / 60.0,
+                              sp[i], sp[i + 1], rtol=1e-6)
+            else:
+                root = sp[i] - g[i] * (sp[i + 1] - sp[i]) / (g[i + 1] - g[i])
+            out.append(root)
+    return np.sort(np.asarray(out))
+
+
+def first_natural_frequency(
+    model: SpindleModel, speed_rpm: float = 0.0, theta: np.ndarray | None = None
+) -> float:
+    """Lowest undamped, non-rotating natural frequency (Hz), bearings at ``speed_rpm``.
+
+    Solves ``(K + K_b,sym) φ = ω² M φ`` (symmetric part of the bearing stiffness, no
+    gyroscopics, no damping): the quantity of the paper's resonance constraint.
+    """
+    M, _, K = model.system_matrices(speed_rpm * RPM, theta)
+    Ks = 0.5 * (K + K.T)
+    try:
+        w2 = sla.eigh(Ks, M, eigvals_only=True, subset_by_index=[0, 0])[0]
+    except np.linalg.LinAlgError as exc:
+        raise SingularSystemError("mass matrix not positive definite") from exc
+    return float(np.sqrt(max(w2, 0.0)) / (2 * np.pi))

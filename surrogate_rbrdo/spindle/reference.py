@@ -1,0 +1,90 @@
+"""The reference spindle: geometry, default effects, design map and θ definition.
+
+Every number and its reason is in ``docs/reference-spindle.md``.
+
+>>> sp = reference_spindle()
+>>> sp.design_map.bounds.tolist()
+[[1000.0, 3000.0], [300.0, 750.0], [50.0, 80.0]]
+>>> m = sp.model(sp.baseline)
+>>> m.theta_bearings
+('front', 'rear')
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from importlib import resources
+
+import numpy as np
+
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel, build_model
+from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, SpeedSoftening
+from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry, Unbalance
+
+#: speed-softening laws k(n) = k0 (1 - a (n / 24000 rpm)^p) least-squares fitted to the paper's
+#: Table 3 (max residual 0.39 % front, 0.21 % rear); k0 goes into the bearings' k_ref.
+TABLE3_FIT = {"front": (3.1998e8, 0.19225, 1.2462), "rear": (2.7668e8, 0.18402, 1.5221)}
+
+#: ISO 21940-11 balance quality grade (mm/s) and the speed it refers to
+BALANCE_GRADE_MM_S = 2.5
+BALANCE_SPEED_RPM = 24000.0
+
+
+def default_effects() -> tuple[Effect, ...]:
+    """Speed softening per Table 3 (front and rear) and gyroscopics on."""
+    out: list[Effect] = [
+        SpeedSoftening(bearings=(name,), a=a, exponent=p)
+        for name, (_, a, p) in TABLE3_FIT.items()
+    ]
+    out.append(Gyroscopics(g=0.0))
+    return tuple(out)
+
+
+def iso_unbalance_kgm(mass_kg: float, grade_mm_s: float = BALANCE_GRADE_MM_S,
+                      speed_rpm: float = BALANCE_SPEED_RPM) -> float:
+    """Permissible residual unbalance ``U = m G / Ω`` (kg m) of ISO 21940-11.
+
+    >>> round(iso_unbalance_kgm(10.0) * 1e6, 3)   # g mm
+    9.947
+    """
+    return mass_kg * grade_mm_s * 1e-3 / (speed_rpm * RPM)
+
+
+@dataclass(frozen=True)
+class ReferenceSpindle:
+    """A parametric spindle: base geometry + effects + the map of x = [F_f, L, D] onto it."""
+
+    geometry: SpindleGeometry
+    effects: tuple[Effect, ...]
+    design_map: DesignMap
+    baseline: np.ndarray
+    theta_bearings: tuple[str, ...] = ("front", "rear")
+
+    def geometry_for(self, x: np.ndarray) -> SpindleGeometry:
+        return self.design_map.apply(self.geometry, np.asarray(x, dtype=float))
+
+    def model(self, x: np.ndarray, effects: tuple[Effect, ...] | None = None) -> SpindleModel:
+        """The FE model of design ``x`` (with the default effects unless given)."""
+        return build_model(self.geometry_for(x), self.effects if effects is None else effects,
+                           theta_bearings=self.theta_bearings)
+
+
+def reference_spindle(*, balance_grade_mm_s: float = BALANCE_GRADE_MM_S) -> ReferenceSpindle:
+    """The project's reference motorized spindle (see ``docs/reference-spindle.md``).
+
+    The residual unbalance is fixed for the spindle family: ISO 21940-11 grade
+    ``balance_grade_mm_s`` at 24 000 rpm for the *baseline* rotor mass, split equally between
+    the tool-holder and motor-rotor planes, in phase — so every design sees the same excitation.
+    """
+    text = resources.files("surrogate_rbrdo.data").joinpath("reference_spindle.toml").read_text()
+    import tomllib
+
+    geom = SpindleGeometry.from_dict(tomllib.loads(text))
+    dmap = DesignMap()
+    baseline = np.array([2000.0, 500.0, 65.0])
+    base_model = build_model(dmap.apply(geom, baseline), ())
+    U = iso_unbalance_kgm(base_model.rotor_mass_kg, balance_grade_mm_s)
+    geom = replace(geom, unbalances=tuple(
+        Unbalance(u.position_mm, U / len(geom.unbalances), u.phase_deg) for u in geom.unbalances
+    ))
+    return ReferenceSpindle(geom, default_effects(), dmap, baseline)
