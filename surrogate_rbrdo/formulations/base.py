@@ -88,17 +88,25 @@ class Formulation:
     extra_reliability: tuple[ReliabilityConstraint, ...] = ()
     estimator: Any = None
     estimator_seed: int = 0
+    _theta: np.ndarray = field(init=False, repr=False)
 
     name: ClassVar[str] = "base"
     objective_names: ClassVar[tuple[str, ...]] = ()
     reliability: ClassVar[bool] = False
     nominal_only: ClassVar[bool] = False
 
+    def __post_init__(self) -> None:
+        # map the CRN sample once; the same read-only array object is passed to the response on
+        # every call, so a response may cache work keyed on it (e.g. a surrogate's θ block)
+        theta = np.array(self.inputs.from_standard(self.u), dtype=float)
+        theta.flags.writeable = False
+        object.__setattr__(self, "_theta", theta)
+
     # ------------------------------------------------------------------ shape information
     @property
     def theta(self) -> np.ndarray:
-        """The fixed θ sample, shape ``(N, m)`` (mapped from ``u`` on each access)."""
-        return self.inputs.from_standard(self.u)
+        """The fixed θ sample, shape ``(N, m)``, read-only; the same object on every access."""
+        return self._theta
 
     @property
     def theta_nominal(self) -> np.ndarray:

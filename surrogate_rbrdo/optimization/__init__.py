@@ -3,6 +3,7 @@
 pymoo and optuna are imported only inside this sub-package, and only when a run starts.
 """
 
+from surrogate_rbrdo.optimization.batch import run_many
 from surrogate_rbrdo.optimization.nsga2 import OPTIMIZERS, NSGA2Options, check_bounds, run_nsga2
 from surrogate_rbrdo.optimization.pareto import (
     asf_compromise,
@@ -10,11 +11,28 @@ from surrogate_rbrdo.optimization.pareto import (
     feasible_pareto,
     nondominated,
 )
+from surrogate_rbrdo.optimization.postprocess import (
+    Compromise,
+    archive_front,
+    front_table,
+    mbr_table,
+    select_compromise,
+    strategy_table,
+    write_csv,
+)
 from surrogate_rbrdo.optimization.result import Archive, OptimizationResult
 
 __all__ = [
     "OPTIMIZERS",
     "Archive",
+    "Compromise",
+    "archive_front",
+    "front_table",
+    "mbr_table",
+    "run_many",
+    "select_compromise",
+    "strategy_table",
+    "write_csv",
     "NSGA2Options",
     "OptimizationResult",
     "asf_compromise",

@@ -36,7 +36,7 @@ class LinearMixToy:
 
     mu: tuple[float, float] = (1.0, 3.0)
     sigma: tuple[float, float] = (2.0, 1.0)
-    delta: float = 3.65
+    delta: float = 3.5
 
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         a = x[:, :1]
