@@ -1,0 +1,241 @@
+"""Evaluate ``func(point) -> float`` on every row of a point set.
+
+* **Parallel**: joblib, processes (``"loky"``) by default; ``"threading"`` and ``"sequential"``
+  are accepted too; ``"dask"`` runs joblib's Dask backend against a ``distributed.Client``
+  passed by the caller (or a temporary ``LocalCluster`` when ``client="local"``).
+* **Cached / resumable**: pass a ``joblib.Memory`` (the caller chooses its location). A point
+  whose result is already stored is loaded, not recomputed, so a rerun or an interrupted run
+  picks up where it stopped: every finished point is written as soon as it is computed.
+* **Counted**: points that are actually computed (cache misses) are added to a
+  :class:`~surrogate_rbrdo.core.CallCounter`, once per point (one ``add`` per call).
+
+Cache key: joblib hashes the pickled ``func`` and the point. A module-level function is pickled
+by reference (module and name), so after changing its *code* point the cache at a new location;
+a model object (e.g. an FE model instance) is pickled with its parameters, so changing a
+parameter changes the key. With Dask workers on other machines the cache location must be on a
+shared file system.
+* **Non-finite output**: ``on_nonfinite="raise"`` raises
+  :class:`~surrogate_rbrdo.core.ModelError` naming the first offending point;
+  ``"exclude"`` keeps going and flags the points in ``ok_mask``.
+
+>>> import numpy as np
+>>> from surrogate_rbrdo.core import CallCounter
+>>> c = CallCounter()
+>>> f = lambda p: np.nan if p[0] < 0 else float(p[0] ** 2)
+>>> res = evaluate_points(f, [[-1.0], [2.0]], counter=c, on_nonfinite="exclude")
+>>> res.ok_mask.tolist(), res.points_ok.tolist(), res.y_ok.tolist(), c.calls
+([False, True], [[2.0]], [4.0], 2)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.counting import CallCounter
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.validate import check_choice, check_finite_array
+
+BACKENDS = ("loky", "threading", "sequential", "dask")
+
+
+@dataclass(frozen=True)
+class SampleResult:
+    """Outcome of :func:`evaluate_points`.
+
+    Attributes
+    ----------
+    points : ndarray, shape (n, D)
+        All requested points, in order.
+    y : ndarray, shape (n,)
+        Function values (NaN/inf kept as returned where ``ok_mask`` is False).
+    ok_mask : ndarray of bool, shape (n,)
+        True where ``y`` is finite.
+    from_cache : ndarray of bool, shape (n,)
+        True where the value was loaded from the cache instead of computed.
+    n_evaluated : int
+        Number of points actually computed in this call (= what was added to the counter).
+    backend : str
+    wall_time_s : float
+    """
+
+    points: np.ndarray
+    y: np.ndarray
+    ok_mask: np.ndarray
+    from_cache: np.ndarray
+    n_evaluated: int
+    backend: str
+    wall_time_s: float
+
+    @property
+    def points_ok(self) -> np.ndarray:
+        """Points with a finite value."""
+        return self.points[self.ok_mask]
+
+    @property
+    def y_ok(self) -> np.ndarray:
+        """Finite values."""
+        return self.y[self.ok_mask]
+
+    @property
+    def bad_points(self) -> np.ndarray:
+        """Points whose value was NaN or infinite."""
+        return self.points[~self.ok_mask]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-python view."""
+        return {
+            "points": self.points.tolist(), "y": self.y.tolist(),
+            "ok_mask": self.ok_mask.tolist(), "from_cache": self.from_cache.tolist(),
+            "n_evaluated": self.n_evaluated, "backend": self.backend,
+            "wall_time_s": self.wall_time_s,
+        }
+
+
+def _call(func: Callable[[np.ndarray], float], point: np.ndarray) -> float:
+    return float(func(point))
+
+
+def _parallel_config(backend: str, n_jobs: int, client: Any) -> tuple[Any, Any]:
+    """Return (context manager, cluster-to-close)."""
+    import joblib
+
+    if backend != "dask":
+        return joblib.parallel_config(backend=backend, n_jobs=n_jobs), None
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:  # pragma: no cover - optional dependency
+        raise ValueError(
+            "backend = 'dask' is not allowed: the 'distributed' package is not installed "
+            "(pip install surrogate_rbrdo[dask])"
+        ) from exc
+    cluster = None
+    if isinstance(client, str) and client == "local":
+        cluster = LocalCluster(n_workers=max(1, n_jobs), threads_per_worker=1,
+                               processes=False, dashboard_address=":0")
+        client = Client(cluster, set_as_default=False)
+    elif not isinstance(client, Client):
+        raise ValueError(
+            f"client = {client!r} is not allowed: backend 'dask' needs a distributed.Client "
+            "or 'local' (temporary LocalCluster)"
+        )
+    # n_jobs=-1: as many tasks in flight as the cluster has worker threads
+    return joblib.parallel_config(backend="dask", client=client, n_jobs=-1), (cluster, client)
+
+
+def evaluate_points(
+    func: Callable[[np.ndarray], float],
+    points: np.ndarray,
+    *,
+    n_jobs: int = 1,
+    backend: str = "loky",
+    cache: Any = None,
+    counter: CallCounter | None = None,
+    on_nonfinite: str = "raise",
+    progress: bool = False,
+    client: Any = None,
+) -> SampleResult:
+    """Evaluate ``func`` on every row of ``points``.
+
+    Parameters
+    ----------
+    func : callable
+        ``func(point: ndarray (D,)) -> float``. For processes or Dask it must be picklable
+        (a module-level function or a picklable object); for caching its code is hashed.
+    points : array_like, shape (n, D)
+    n_jobs : int
+        Parallel workers (``-1``: all cores; ``1``: serial in this process). Ignored by
+        ``"dask"`` (the cluster's workers decide) and ``"sequential"``.
+    backend : {"loky", "threading", "sequential", "dask"}
+    cache : joblib.Memory, optional
+        On-disk store; the caller chooses its location. ``None``: no caching.
+    counter : CallCounter, optional
+        Receives the number of points actually computed.
+    on_nonfinite : {"raise", "exclude"}
+    progress : bool
+        Show a tqdm progress bar over computed points.
+    client : distributed.Client or "local", optional
+        Required by ``backend="dask"``; ``"local"`` starts (and closes) a temporary in-process
+        ``LocalCluster`` with ``n_jobs`` workers.
+
+    Returns
+    -------
+    SampleResult
+
+    Raises
+    ------
+    ModelError
+        With ``on_nonfinite="raise"``, if ``func`` returns NaN or inf (message names the point).
+    """
+    import time
+
+    import joblib
+
+    t0 = time.perf_counter()
+    X = check_finite_array("points", np.atleast_2d(np.asarray(points, dtype=float)), ndim=2)
+    check_choice("backend", backend, BACKENDS)
+    check_choice("on_nonfinite", on_nonfinite, ("raise", "exclude"))
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 \
+            or n_jobs < -1:
+        raise ValueError(f"n_jobs = {n_jobs!r} is not allowed: must be -1 or an integer >= 1")
+    if cache is not None and not isinstance(cache, joblib.Memory):
+        raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
+    if not callable(func):
+        raise ValueError(f"func = {func!r} is not allowed: must be callable")
+
+    n = X.shape[0]
+    y = np.full(n, np.nan)
+    from_cache = np.zeros(n, dtype=bool)
+    target: Callable[..., float] = _call
+    if cache is not None:
+        target = cache.cache(_call)
+        for i in range(n):
+            if target.check_call_in_cache(func, X[i]):
+                y[i] = target(func, X[i])
+                from_cache[i] = True
+    todo = np.flatnonzero(~from_cache)
+
+    if todo.size:
+        done: list[float] = []
+        try:
+            if backend == "sequential" or (backend != "dask" and n_jobs == 1):
+                _collect((target(func, X[i]) for i in todo), todo.size, progress, done)
+            else:
+                ctx, closer = _parallel_config(backend, int(n_jobs), client)
+                try:
+                    with ctx:
+                        par = joblib.Parallel(return_as="generator")
+                        it = par(joblib.delayed(target)(func, X[i]) for i in todo)
+                        _collect(it, todo.size, progress, done)
+                finally:
+                    if closer is not None and closer[0] is not None:
+                        closer[1].close()
+                        closer[0].close()
+        finally:
+            # count what was computed even if a later point raised (it is cached already)
+            if counter is not None and done:
+                counter.add(len(done))
+        y[todo] = done
+
+    ok = np.isfinite(y)
+    if on_nonfinite == "raise" and not ok.all():
+        i = int(np.flatnonzero(~ok)[0])
+        raise ModelError(
+            f"func returned {y[i]} at point index {i}: {X[i].tolist()} "
+            f"({int((~ok).sum())} non-finite of {n}; pass on_nonfinite='exclude' to drop them)"
+        )
+    return SampleResult(points=X, y=y, ok_mask=ok, from_cache=from_cache,
+                        n_evaluated=int(todo.size), backend=backend,
+                        wall_time_s=time.perf_counter() - t0)
+
+
+def _collect(it: Any, total: int, progress: bool, out: list[float]) -> None:
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(it, total=total, desc="evaluating", unit="pt")
+    for v in it:
+        out.append(v)
