@@ -5,6 +5,7 @@ pymoo and optuna are imported only inside this sub-package, and only when a run 
 
 from surrogate_rbrdo.optimization.batch import run_many
 from surrogate_rbrdo.optimization.nsga2 import OPTIMIZERS, NSGA2Options, check_bounds, run_nsga2
+from surrogate_rbrdo.optimization.optuna_backend import OptunaOptions, run_optuna
 from surrogate_rbrdo.optimization.pareto import (
     asf_compromise,
     feasible_mask,
@@ -35,10 +36,12 @@ __all__ = [
     "write_csv",
     "NSGA2Options",
     "OptimizationResult",
+    "OptunaOptions",
     "asf_compromise",
     "check_bounds",
     "feasible_mask",
     "feasible_pareto",
     "nondominated",
     "run_nsga2",
+    "run_optuna",
 ]
