@@ -1,0 +1,1 @@
+"""Configs -> objects, run folders, and the ``rbrdo`` command line."""
