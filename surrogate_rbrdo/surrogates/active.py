@@ -177,6 +177,7 @@ def ak_mcs(
     history: list[dict[str, Any]] = []
     pf_hist: list[float] = []
     thr = limit.threshold
+    used = np.zeros(pool.shape[0], dtype=bool)  # pool points already in the design
     reason = "max_added reached"
     converged = False
     while True:
@@ -184,6 +185,7 @@ def ak_mcs(
         mu, sd = _predict(model, pool, o.predict_chunk)
         with np.errstate(divide="ignore"):
             U = np.where(sd > 0, np.abs(mu - thr) / sd, np.inf)
+        U[used] = np.inf  # known exactly: never re-added (round-off can leave σ > 0 there)
         pf = float(np.mean(limit.failed(mu)))
         pf_hist.append(pf)
         history.append({"n_points": int(y.size), "pf": pf, "min_u": float(U.min()),
@@ -204,6 +206,7 @@ def ak_mcs(
             break
         k = min(o.batch_size, o.max_added - n_added)
         pick = np.argsort(U, kind="stable")[:k]
+        used[pick] = True
         Xn, yn = run(pool[pick])
         added.append(pool[pick])
         X, y = np.vstack([X, Xn]), np.concatenate([y, yn])
