@@ -13,13 +13,20 @@ Every estimator is a frozen dataclass of its options with
 ``fosm``   first-order second-moment: μ, σ and the Cornell index
 ========== ==========================================================================
 
->>> {'mc', 'form'} <= set(ESTIMATORS)
-True
+>>> sorted(ESTIMATORS)
+['ais', 'form', 'fosm', 'is', 'mc', 'sorm', 'subset']
 """
 
 from surrogate_rbrdo.estimators.registry import ESTIMATORS, get_estimator  # noqa: I001
 from surrogate_rbrdo.estimators.mc import MonteCarlo, mc_from_values
 from surrogate_rbrdo.estimators.form import FORM
 from surrogate_rbrdo.estimators.fosm import FOSM
+from surrogate_rbrdo.estimators.importance import ImportanceSampling
+from surrogate_rbrdo.estimators.adaptive import CrossEntropyIS
+from surrogate_rbrdo.estimators.sorm import SORM
+from surrogate_rbrdo.estimators.subset import SubsetSimulation
 
-__all__ = ["ESTIMATORS", "FORM", "FOSM", "MonteCarlo", "get_estimator", "mc_from_values"]
+__all__ = [
+    "ESTIMATORS", "FORM", "FOSM", "SORM", "CrossEntropyIS", "ImportanceSampling", "MonteCarlo",
+    "SubsetSimulation", "get_estimator", "mc_from_values",
+]

@@ -68,12 +68,20 @@ class LimitStateU:
         self.response, self.inputs, self.limit = response, inputs, limit
         self.x_row = x_row.reshape(1, -1)
         self.calls = 0
+        self.last_y = np.empty(0)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = np.atleast_2d(u)
         y = evaluate(self.response, self.x_row, self.inputs.from_standard(u))[0]
         self.calls += u.shape[0]
+        self.last_y = y
         return self.limit.g(y)
+
+
+def log_std_normal(v: np.ndarray) -> np.ndarray:
+    """Log density of the standard normal ``N(0, I)`` at the rows of ``v``."""
+    m = v.shape[1]
+    return -0.5 * np.einsum("ij,ij->i", v, v) - 0.5 * m * np.log(2.0 * np.pi)
 
 
 def z_of(level: float) -> float:

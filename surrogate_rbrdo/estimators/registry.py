@@ -6,7 +6,7 @@
 >>> get_estimator("nope")
 Traceback (most recent call last):
 ...
-ValueError: unknown estimator 'nope'; known: ...
+ValueError: unknown estimator 'nope'; known: ais, form, fosm, is, mc, sorm, subset
 """
 
 from __future__ import annotations

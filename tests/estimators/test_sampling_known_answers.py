@@ -1,0 +1,116 @@
+"""Known-answer tests of the sampling estimators (IS, adaptive IS, subset simulation, MC).
+
+References: closed forms (linear, correlated normal, Nataf lognormal) and 1-D quadratures of the
+parabolic limit state (Breitung 1984) and the four-branch series system (Waarts 2000), see
+:mod:`surrogate_rbrdo.estimators.problems`.
+"""
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.estimators import get_estimator
+from surrogate_rbrdo.estimators.problems import (
+    correlated_normal,
+    linear_standard,
+    lognormal_nataf,
+    paraboloid,
+    series_four_branch,
+)
+
+pytestmark = pytest.mark.known_answer
+
+PF_1E6 = linear_standard(beta=4.753424, dim=5)       # P_f = 1.0000e-6
+
+
+def run(name, prob, seed=0, **opts):
+    return get_estimator(name, **opts).estimate(prob.response, prob.inputs, prob.limit, prob.x,
+                                                rng=np.random.default_rng(seed))
+
+
+def within(est, prob, k=4.0):
+    return np.all(np.abs(est.pf - prob.pf_exact) <= k * est.pf_se)
+
+
+@pytest.mark.parametrize("prob", [
+    linear_standard(beta=3.0, dim=3, shifts=(0.0, 1.0, -1.0)),
+    correlated_normal(),
+    lognormal_nataf(),
+    paraboloid(),
+    PF_1E6,
+    linear_standard(beta=-1.0, dim=2),
+], ids=lambda p: p.name)
+@pytest.mark.parametrize("name", ["is", "ais"])
+def test_is_and_ais_within_4_se(name, prob):
+    est = run(name, prob, seed=1)
+    assert within(est, prob)
+    assert np.all(est.pf_cov < 0.2)
+
+
+def test_is_target_10d_3e7():
+    """Issue target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 3000 calls incl. FORM."""
+    prob = linear_standard(beta=5.0, dim=10)
+    est = run("is", prob, seed=2, n_samples=2900)
+    assert within(est, prob)
+    assert est.pf_cov[0] <= 0.05
+    assert est.n_calls <= 3000
+
+
+def test_is_unreliable_on_branches_but_ais_is_not():
+    prob = series_four_branch(6.0)
+    # IS at one design point of four: its standard error is not trustworthy on some seeds
+    assert not all(within(run("is", prob, seed=s), prob) for s in range(5))
+    for seed in range(3):
+        assert within(run("ais", prob, seed=seed), prob)
+
+
+@pytest.mark.parametrize("k", [6.0, 7.0])
+def test_ais_unbiased_on_series_system(k):
+    """Mean of 20 independent runs within 4 standard errors of the mean, and honest SEs."""
+    prob = series_four_branch(k)
+    res = [run("ais", prob, seed=s) for s in range(20)]
+    pf = np.array([r.pf[0] for r in res])
+    se = np.array([r.pf_se[0] for r in res])
+    assert abs(pf.mean() - prob.pf_exact[0]) <= 4 * pf.std(ddof=1) / np.sqrt(20)
+    assert np.all(np.abs(pf - prob.pf_exact[0]) <= 4 * se)
+    assert 0.5 < pf.std(ddof=1) / se.mean() < 2.0        # reported SE matches the scatter
+
+
+def test_is_common_random_numbers():
+    prob = linear_standard(beta=3.5, dim=3, shifts=(0.0, 0.5))
+    u = np.random.default_rng(4).standard_normal((1000, 3))
+    est = get_estimator("is")
+    a = est.estimate(prob.response, prob.inputs, prob.limit, prob.x,
+                     rng=np.random.default_rng(1), u=u)
+    b = est.estimate(prob.response, prob.inputs, prob.limit, prob.x,
+                     rng=np.random.default_rng(2), u=u)
+    np.testing.assert_array_equal(a.pf, b.pf)
+    assert a.diagnostics["n_samples"] == 1000
+
+
+def test_crude_mc_cannot_reach_1e6_but_is_can():
+    mc = run("mc", PF_1E6, n_samples=100_000)
+    assert mc.pf[0] == 0.0 and mc.pf_ci[0, 1] > PF_1E6.pf_exact[0]
+    est = run("is", PF_1E6)
+    assert within(est, PF_1E6) and est.pf_cov[0] < 0.07 and est.n_calls < 2100
+
+
+@pytest.mark.parametrize("prob", [series_four_branch(6.0), series_four_branch(7.0),
+                                  paraboloid(), linear_standard(beta=-1.0, dim=2)],
+                         ids=lambda p: p.name)
+def test_subset_within_4_se(prob):
+    assert within(run("subset", prob, seed=5), prob)
+
+
+def test_subset_unbiased_at_1e6():
+    res = [run("subset", PF_1E6, seed=s) for s in range(25)]
+    pf = np.array([r.pf[0] for r in res])
+    assert abs(pf.mean() - PF_1E6.pf_exact[0]) <= 4 * pf.std(ddof=1) / 5
+    assert 0.1 < np.mean([r.pf_cov[0] for r in res]) < 0.8
+
+
+def test_ais_and_subset_moments_from_first_level():
+    prob = correlated_normal()
+    for name in ("ais", "subset"):
+        est = run(name, prob, seed=3)
+        assert np.all(np.abs(est.mean - prob.mean_exact) <= 4 * est.mean_se)
+        assert np.all(np.abs(est.std - prob.std_exact) <= 4 * est.std_se)
