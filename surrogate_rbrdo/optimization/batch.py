@@ -2,8 +2,10 @@
 
 Each task is a zero-argument callable returning an :class:`~.result.OptimizationResult`
 (``functools.partial(run_nsga2, form, lower, upper, rng=child, options=opts)``). Tasks carry
-their own Generators, so the results do not depend on ``n_jobs``. Workers pin BLAS to
-``blas_threads`` threads (threadpoolctl) so that processes do not oversubscribe the cores.
+their own Generators, so the results do not depend on ``n_jobs``. A run consumes its Generator
+(in this process; a worker consumes a pickled copy), so build fresh tasks to repeat a study.
+Workers pin BLAS to ``blas_threads`` threads (threadpoolctl) so that processes do not
+oversubscribe the cores.
 
 >>> from functools import partial
 >>> run_many([partial(pow, 2, 3), partial(pow, 3, 2)], n_jobs=1)

@@ -85,3 +85,21 @@ def test_bad_bounds_and_rng():
         run_nsga2(form, [1.0], [0.0], rng=np.random.default_rng(0), options=SMALL)
     with pytest.raises(ValueError, match="rng"):
         run_nsga2(form, [0.0], [1.0], rng=0, options=SMALL)
+
+
+def test_run_many_in_processes_matches_sequential():
+    from functools import partial
+
+    from surrogate_rbrdo.optimization import run_many
+
+    def tasks():  # fresh tasks: a run consumes its Generator
+        return [partial(run_nsga2, toy_formulation(seed=s), [0.0], [1.0],
+                        rng=np.random.default_rng(s),
+                        options=NSGA2Options(pop_size=10, n_gen=3)) for s in (0, 1)]
+
+    seq = run_many(tasks(), n_jobs=1)
+    par = run_many(tasks(), n_jobs=2)
+    assert not np.array_equal(seq[0].archive.X, seq[1].archive.X)
+    for a, b in zip(seq, par, strict=True):
+        np.testing.assert_array_equal(a.archive.X, b.archive.X)
+        np.testing.assert_array_equal(a.archive.F, b.archive.F)
