@@ -72,6 +72,7 @@ def modal_analysis(
     if n_modes is not None:
         lam, vec = lam[:n_modes], vec[:, :n_modes]
     r = model.n_dof
+    vec = _circular_basis(lam, vec, r)
     X = vec[0:r:4]
     Y = vec[1:r:4]
     fw = np.sum(np.abs(X + 1j * Y) ** 2, axis=0)
@@ -85,6 +86,30 @@ def modal_analysis(
         whirl=whirl,
         eigenvalues=lam,
     )
+
+
+def _circular_basis(lam: np.ndarray, vec: np.ndarray, r: int, rtol: float = 1e-6) -> np.ndarray:
+    """Split each cluster of (numerically) repeated eigenvalues into pure forward/backward modes.
+
+    Any combination of a repeated pair is an eigenvector (an isotropic mode untouched by
+    gyroscopics), so the solver returns an arbitrary one and the whirl label would be random.
+    The eigenvectors of the Hermitian form ``Σ|X + iY|² − Σ|X − iY|²`` on the cluster's span
+    give one forward and one backward circular mode.
+    """
+    vec = vec.copy()
+    i = 0
+    while i < lam.size:
+        j = i + 1
+        while j < lam.size and abs(lam[j] - lam[i]) <= rtol * abs(lam[i]):
+            j += 1
+        if j - i > 1:
+            V = vec[:, i:j]
+            Zf = V[0:r:4] + 1j * V[1:r:4]
+            Zb = V[0:r:4] - 1j * V[1:r:4]
+            _, c = np.linalg.eigh(Zf.conj().T @ Zf - Zb.conj().T @ Zb)
+            vec[:, i:j] = V @ c
+        i = j
+    return vec
 
 
 @dataclass(frozen=True)
