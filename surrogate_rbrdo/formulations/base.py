@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState, Response
 from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.core.rng import require_rng
@@ -171,6 +172,15 @@ class Formulation:
         theta = None if self.estimator is not None or self.nominal_only else self.theta
         est = self._nominal(x) if self.nominal_only else self.estimate(x, theta=theta)
         n_sur = int(est.n_calls)
+        if not self.nominal_only and self.estimator is not None and (
+                not np.all(np.isfinite(est.mean)) or not np.all(np.isfinite(est.std))):
+            # reliability-only estimators (FORM, SORM, IS) give no moments: take μ_y, σ_y from
+            # the CRN sample and keep the estimator's P_f
+            mc = _values_to_estimate()(np.asarray(self.response(x, self.theta), dtype=float),
+                                       _NO_FAILURE, ci_level=self.options.ci_level)
+            n_sur += int(mc.n_calls)
+            est = replace(est, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,
+                          diagnostics={**est.diagnostics, "moments_from": "mc"})
         cols = []
         if self.reliability:
             pt = self.options.p_target
@@ -187,6 +197,11 @@ class Formulation:
             cols.extend(gd.T)
         G = np.column_stack(cols) if cols else np.empty((x.shape[0], 0))
         F = self._objectives(est)
+        bad = ~(np.all(np.isfinite(F), axis=1) & np.all(np.isfinite(G), axis=1))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ModelError(f"formulation {self.name!r} ({est.method}) gave non-finite "
+                             f"F={F[i].tolist()}, G={G[i].tolist()} at x={x[i].tolist()}")
         return Evaluation(F=F, G=G, estimate=est, n_surrogate_calls=n_sur,
                           n_model_calls=n_model)
 
