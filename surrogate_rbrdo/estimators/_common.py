@@ -97,11 +97,12 @@ def clopper_pearson(k: np.ndarray, n: int, level: float) -> np.ndarray:
     >>> clopper_pearson(np.array([0]), 1000, 0.95).round(5).tolist()
     [[0.0, 0.00368]]
     """
-    k = np.asarray(k, dtype=float)
+    k_all = np.asarray(k, dtype=float)
+    k, back = np.unique(k_all, return_inverse=True)   # designs often share failure counts
     a = 0.5 * (1.0 - level)
     lo = np.where(k > 0, special.betaincinv(np.maximum(k, 1e-300), n - k + 1, a), 0.0)
     hi = np.where(k < n, special.betaincinv(k + 1, np.maximum(n - k, 1e-300), 1 - a), 1.0)
-    return np.column_stack([lo, hi])
+    return np.column_stack([lo, hi])[back.reshape(-1)]
 
 
 def normal_ci(pf: np.ndarray, se: np.ndarray, level: float) -> np.ndarray:

@@ -73,7 +73,7 @@ def _chol(cov: np.ndarray) -> np.ndarray:
 
 
 def fit_mixture(x: np.ndarray, logw: np.ndarray, n_components: int, rng: np.random.Generator,
-                n_iter: int = 100) -> GaussianMixture:
+                n_iter: int = 30) -> GaussianMixture:
     """Weighted EM fit to points ``x`` with log-weights ``logw``; ``K ≤ n_components`` by BIC.
 
     The BIC uses the effective sample size of the weights, so a single lump is fitted by one
@@ -130,7 +130,7 @@ def _em(x: np.ndarray, w: np.ndarray, k_eff: int, gcov: np.ndarray, rng: np.rand
         ll = logsumexp(lp, axis=1)
         resp = np.exp(lp - ll[:, None])
         obj = float(w @ ll)
-        if obj - prev < 1e-8 * max(1.0, abs(obj)):
+        if obj - prev < 1e-5 * max(1.0, abs(obj)):
             break
         prev = obj
     return gm

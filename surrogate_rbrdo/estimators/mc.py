@@ -62,11 +62,11 @@ def mc_from_values(
     nfail = np.count_nonzero(limit.failed(y), axis=1)
     pf = nfail / n
     if n > 1:
-        dev = y - mean[:, None]
-        m2 = np.einsum("ij,ij->i", dev, dev) / n
+        d2 = y - mean[:, None]
+        np.square(d2, out=d2)
+        m2 = d2.sum(axis=1) / n
         var = m2 * (n / (n - 1))
         std = np.sqrt(var)
-        d2 = dev * dev
         m4 = np.einsum("ij,ij->i", d2, d2) / n
         var_s2 = np.maximum(m4 - (n - 3) / (n - 1) * var**2, 0.0) / n
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -106,7 +106,7 @@ class SORM:
 
     formula: str = "hohenbichler"
     hessian_step: float = 1e-3
-    form: FORM = field(default_factory=lambda: FORM(fd_scheme="central"))
+    form: FORM = field(default_factory=FORM)
 
     def __post_init__(self) -> None:
         check_choice("formula", self.formula, ("hohenbichler", "breitung"))

@@ -44,9 +44,12 @@ def test_linear_sorm_equals_form():
 
 
 def test_not_applicable_is_an_error():
-    prob = paraboloid(beta=3.0, kappa=-0.5, dim=3)     # 1 + beta*kappa < 0
+    # 1 + beta*kappa = 0.04 > 0 (u* is a design point) but 1 + psi*kappa < 0 for psi = 3.28
+    prob = paraboloid(beta=3.0, kappa=-0.32, dim=2)
     with pytest.raises(ModelError, match="SORM is not applicable for design 0"):
-        run(prob, formula="breitung")
+        run(prob)
+    est = run(prob, formula="breitung")
+    assert est.pf[0] == pytest.approx(special.ndtr(-3.0) / np.sqrt(1 - 0.96), rel=1e-3)
 
 
 def test_helpers():
