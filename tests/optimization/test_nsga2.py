@@ -103,3 +103,10 @@ def test_run_many_in_processes_matches_sequential():
     for a, b in zip(seq, par, strict=True):
         np.testing.assert_array_equal(a.archive.X, b.archive.X)
         np.testing.assert_array_equal(a.archive.F, b.archive.F)
+
+
+def test_progress_bar_optional(capsys):
+    res = run_nsga2(toy_formulation(n_theta=50), [0.0], [1.0], rng=np.random.default_rng(0),
+                    options=NSGA2Options(pop_size=6, n_gen=3), progress=True)
+    assert len(res.history) == 3
+    assert "NSGA-II rbrdo" in capsys.readouterr().err
