@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import SingularSystemError
 from surrogate_rbrdo.spindle.assembly import MM, RPM, SpindleModel
 from surrogate_rbrdo.spindle.element import XPLANE, YPLANE, element_matrices
 from surrogate_rbrdo.spindle.geometry import PreloadLaw
@@ -61,7 +62,12 @@ def _static_weight(model: SpindleModel, speed_rpm: float, theta) -> np.ndarray:
     M, _, K = model.system_matrices(speed_rpm * RPM, theta)
     f = np.zeros(M.shape[0])
     f[: model.n_dof] = -GRAVITY * (M[: model.n_dof, : model.n_dof] @ _y_rigid(model))
-    return np.linalg.solve(K, f)[: model.n_dof]
+    try:
+        return np.linalg.solve(K, f)[: model.n_dof]
+    except np.linalg.LinAlgError as exc:
+        raise SingularSystemError(
+            "singular static stiffness: the rotor is not supported against rigid-body motion"
+        ) from exc
 
 
 def _y_rigid(model: SpindleModel) -> np.ndarray:
