@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
+from scipy.linalg import solve_triangular
 
 
 @dataclass(frozen=True)
@@ -32,20 +32,27 @@ class GaussianMixture:
         m = v.shape[1]
         out = np.empty((v.shape[0], self.weights.size))
         for k in range(self.weights.size):
-            z = np.linalg.solve(self.chols[k], (v - self.means[k]).T)
+            z = solve_triangular(self.chols[k], (v - self.means[k]).T, lower=True,
+                                 check_finite=False)
             out[:, k] = (np.log(self.weights[k]) - 0.5 * np.sum(z * z, axis=0)
                          - np.log(np.diag(self.chols[k])).sum() - 0.5 * m * np.log(2 * np.pi))
         return out
 
     def logpdf(self, v: np.ndarray) -> np.ndarray:
         """Log-density at the rows of ``v``."""
-        return logsumexp(self.component_logpdf(v), axis=1)
+        return _lse(self.component_logpdf(v))
 
     def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """Draw ``n`` points."""
         comp = rng.choice(self.weights.size, size=n, p=self.weights)
         z = rng.standard_normal((n, self.means.shape[1]))
         return self.means[comp] + np.einsum("nij,nj->ni", self.chols[comp], z)
+
+
+def _lse(a: np.ndarray) -> np.ndarray:
+    """Row-wise log-sum-exp of a finite ``(n, K)`` array."""
+    mx = a.max(axis=1)
+    return mx + np.log(np.exp(a - mx[:, None]).sum(axis=1))
 
 
 def _ess(w: np.ndarray) -> float:
@@ -96,8 +103,9 @@ def fit_mixture(x: np.ndarray, logw: np.ndarray, n_components: int, rng: np.rand
     for k in range(2, min(n_components, n) + 1):
         gm = _em(x, w, k, gcov, rng, n_iter)
         b = bic(gm)
-        if b < best_bic:
-            best, best_bic = gm, b
+        if b >= best_bic:
+            break          # more components stopped paying for themselves
+        best, best_bic = gm, b
     return best
 
 
@@ -127,7 +135,7 @@ def _em(x: np.ndarray, w: np.ndarray, k_eff: int, gcov: np.ndarray, rng: np.rand
                           for k in range(nk.size)])
         gm = GaussianMixture(nk / nk.sum(), means, chols)
         lp = gm.component_logpdf(x)
-        ll = logsumexp(lp, axis=1)
+        ll = _lse(lp)
         resp = np.exp(lp - ll[:, None])
         obj = float(w @ ll)
         if obj - prev < 1e-5 * max(1.0, abs(obj)):

@@ -108,7 +108,7 @@ class FORM:
     Gives ``pf = Φ(−β)``; ``mean``, ``std`` and all standard errors are NaN (use ``"fosm"`` or
     ``"mc"`` for moments). Diagnostics: ``beta``, ``u_star`` and ``theta_star`` ``(P, m)``,
     ``alpha`` (unit vector towards failure), ``importance_factors`` ``α²``, ``converged``,
-    ``n_iter``, ``message``.
+    ``n_iter``, ``calls`` (model calls per design), ``message``.
 
     Parameters
     ----------
@@ -173,11 +173,12 @@ class FORM:
         p, m = x.shape[0], inputs.dim
         beta, conv, nit = np.full(p, np.nan), np.zeros(p, bool), np.zeros(p, int)
         ustar, alpha = np.full((p, m), np.nan), np.full((p, m), np.nan)
-        calls, msgs = 0, []
+        calls, msgs, per = 0, [], np.zeros(p, int)
         for i in range(p):
             dp = self.search(response, inputs, limit, x[i])
             self.check(dp, i)
             calls += dp.calls
+            per[i] = dp.calls
             conv[i], nit[i] = dp.converged, dp.n_iter
             msgs.append(dp.message)
             if dp.converged:
@@ -190,5 +191,5 @@ class FORM:
             "form", calls, p, pf=special.ndtr(-beta),
             diagnostics={"beta": beta, "u_star": ustar, "theta_star": theta, "alpha": alpha,
                          "importance_factors": alpha**2, "converged": conv, "n_iter": nit,
-                         "message": msgs},
+                         "calls": per, "message": msgs},
         )
