@@ -123,8 +123,9 @@ class Estimate:
 class Estimator(Protocol):
     """Estimates μ_y, σ_y and P_f of a response for a batch of designs.
 
-    ``estimate(response, inputs, limit, x, *, rng) -> Estimate`` where ``inputs`` is a random
-    vector from :mod:`surrogate_rbrdo.uncertainty` and ``x`` has shape ``(P, d)``.
+    ``estimate(response, inputs, limit, x, *, rng, u=None) -> Estimate`` where ``inputs`` is a
+    random vector from :mod:`surrogate_rbrdo.uncertainty`, ``x`` has shape ``(P, d)`` and ``u``
+    is an optional fixed standard-normal sample (common random numbers) used instead of draws.
     """
 
     def estimate(
@@ -135,6 +136,7 @@ class Estimator(Protocol):
         x: np.ndarray,
         *,
         rng: np.random.Generator,
+        u: np.ndarray | None = None,
     ) -> Estimate: ...
 
 

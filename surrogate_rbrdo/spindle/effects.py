@@ -69,7 +69,7 @@ class Effect:
 
     @classmethod
     def off(cls, **kwargs: Any) -> Effect:
-        """The effect switched off (it leaves the model unchanged)."""
+        """The effect switched off: it leaves the model exactly unchanged."""
         return cls(**{**cls.off_params, **kwargs})
 
     @property
@@ -223,15 +223,22 @@ class HousingFlexibility(Effect):
 @EFFECTS.register("gyroscopics")
 @dataclass(frozen=True)
 class Gyroscopics(Effect):
-    """Gyroscopic coupling with polar inertia scaled by ``1 + g``; ``g = −1`` switches it off.
+    """Gyroscopic error: polar inertia scaled by ``1 + g`` in the gyroscopic matrix.
 
+    The off state ``g = 0`` leaves the model unchanged (gyroscopics as the geometry gives
+    them); :meth:`disabled` (``g = −1``) removes gyroscopic coupling altogether.
     Signature: forward/backward split ∝ Ω J_p / J_d.
     """
 
     name: ClassVar[str] = "gyroscopics"
     bounds: ClassVar[dict[str, tuple[float, float]]] = {"g": (-1.0, 1.0)}
-    off_params: ClassVar[dict[str, float]] = {"g": -1.0}
+    off_params: ClassVar[dict[str, float]] = {"g": 0.0}
     g: float = 0.0
+
+    @classmethod
+    def disabled(cls) -> Gyroscopics:
+        """Gyroscopics switched off entirely (``g = −1``)."""
+        return cls(g=-1.0)
 
     def gyroscopic_scale(self) -> float:
         return 1.0 + self.g

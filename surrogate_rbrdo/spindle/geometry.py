@@ -383,7 +383,8 @@ class DesignMap:
                 return z
             if z <= z1:
                 return z0 + (z - z0) * scale
-            return z + (z1 - z0) * (scale - 1.0)
+            # clamp: rounding must not push an item at the shaft end off the shaft
+            return min(z + (z1 - z0) * (scale - 1.0), new_total[0])
 
         sections = []
         for i, s in enumerate(geometry.sections):
@@ -395,6 +396,7 @@ class DesignMap:
                     )
                 s = replace(s, length_mm=s.length_mm * scale, outer_diameter_mm=diam)
             sections.append(s)
+        new_total = [float(sum(s.length_mm for s in sections))]  # as total_length_mm sums
         bearings = []
         for b in geometry.bearings:
             law = b.law

@@ -55,15 +55,25 @@ def modal_analysis(
     omega = speed_rpm * RPM
     M, C, K = model.system_matrices(omega, theta)
     n = M.shape[0]
-    try:
-        Minv_K = np.linalg.solve(M, K)
-        Minv_C = np.linalg.solve(M, C)
-    except np.linalg.LinAlgError as exc:
-        raise SingularSystemError("singular mass matrix: every DOF needs mass") from exc
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_C]])
-    lam, vec = sla.eig(A)
-    if not np.all(np.isfinite(lam)):
-        raise ModelError(f"non-finite eigenvalues at {speed_rpm} rpm")
+    massless = ~np.any(M != 0, axis=1)
+    if massless.any():
+        # massless DOFs (e.g. a housing stage without mass): the pencil form
+        # [[I, 0], [0, M]] z' = [[0, I], [-K, -C]] z has infinite eigenvalues there; drop them
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -C]])
+        Bm = np.block([[np.eye(n), np.zeros((n, n))], [np.zeros((n, n)), M]])
+        lam, vec = sla.eig(A, Bm)
+        ok = np.isfinite(lam)
+        lam, vec = lam[ok], vec[:, ok]
+    else:
+        try:
+            Minv_K = np.linalg.solve(M, K)
+            Minv_C = np.linalg.solve(M, C)
+        except np.linalg.LinAlgError as exc:
+            raise SingularSystemError("singular mass matrix") from exc
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv_K, -Minv_C]])
+        lam, vec = sla.eig(A)
+    if lam.size == 0 or not np.all(np.isfinite(lam)):
+        raise ModelError(f"no finite eigenvalues at {speed_rpm} rpm")
     scale = max(np.max(np.abs(lam)), 1.0)
     keep = lam.imag > 1e-9 * scale
     lam, vec = lam[keep], vec[:n, keep]
@@ -185,10 +195,20 @@ def first_natural_frequency(
     """Lowest undamped, non-rotating natural frequency (Hz), bearings at ``speed_rpm``.
 
     Solves ``(K + K_b,sym) φ = ω² M φ`` (symmetric part of the bearing stiffness, no
-    gyroscopics, no damping): the quantity of the paper's resonance constraint.
+    gyroscopics, no damping): the quantity of the paper's resonance constraint. Massless
+    DOFs (a housing stage without mass) are condensed out statically, which is exact.
     """
     M, _, K = model.system_matrices(speed_rpm * RPM, theta)
     Ks = 0.5 * (K + K.T)
+    massless = ~np.any(M != 0, axis=1)
+    if massless.any():  # static (Guyan) condensation of massless DOFs is exact here
+        m, z = ~massless, massless
+        try:
+            Ks = Ks[np.ix_(m, m)] - Ks[np.ix_(m, z)] @ np.linalg.solve(Ks[np.ix_(z, z)],
+                                                                     Ks[np.ix_(z, m)])
+        except np.linalg.LinAlgError as exc:
+            raise SingularSystemError("massless DOFs without stiffness") from exc
+        M = M[np.ix_(m, m)]
     try:
         w2 = sla.eigh(Ks, M, eigvals_only=True, subset_by_index=[0, 0])[0]
     except np.linalg.LinAlgError as exc:

@@ -12,7 +12,8 @@ Loads combined (each can be switched off):
   (Timoshenko & Goodier, plane stress) at the outer and inner surfaces;
 * **torque** (optional): a rated motor torque carried between the motor rotor and the tool.
 
-Element bending moments come from the elastic end forces ``K_e q_e`` at both element ends.
+Element bending moments come from the element end forces (elastic, minus the element's own
+distributed weight or plus its inertia; see :func:`_element_moments`) at both element ends.
 With ``σ_z = ±(|M| r / I + |N| / A)`` and the hoop stress ``σ_θ`` the von Mises stress is
 ``sqrt(σ_z² − σ_z σ_θ + σ_θ² + 3 τ²)``; the sign giving the larger value is taken.
 """
@@ -77,14 +78,26 @@ def _y_rigid(model: SpindleModel) -> np.ndarray:
     return v
 
 
-def _element_moments(model: SpindleModel, q: np.ndarray) -> np.ndarray:
-    """Bending-moment components at both ends of every element: (ne, 2 ends, 2 planes)."""
+def _element_moments(model: SpindleModel, q: np.ndarray, *, omega: float = 0.0,
+                     weight: bool = False) -> np.ndarray:
+    """Bending-moment components at both ends of every element: (ne, 2 ends, 2 planes).
+
+    The element end forces are ``(K_e − Ω² M_e + iΩ² G_e) q_e`` (elastic plus the element's
+    own distributed inertia and gyroscopic moments; damping forces, < 1 % here, are left out)
+    minus the element's consistent weight load when ``weight`` is set — so distributed loads
+    give their fixed-end moments instead of being lumped at the nodes.
+    """
     ne = model.n_nodes - 1
     out = np.zeros((ne, 2, 2), dtype=q.dtype)
+    uy = np.zeros(8)
+    uy[[1, 5]] = 1.0
     for e in range(ne):
         L = model.z[e + 1] - model.z[e]
-        _, Ke, _ = element_matrices(model.sections[model.element_section[e]], L)
-        fe = Ke @ q[4 * e: 4 * e + 8]
+        Me, Ke, Ge = element_matrices(model.sections[model.element_section[e]], L)
+        A = Ke if omega == 0.0 else Ke - omega**2 * Me + 1j * model.gyro_scale * omega**2 * Ge
+        fe = A @ q[4 * e: 4 * e + 8]
+        if weight:
+            fe = fe + GRAVITY * (Me @ uy)  # minus the consistent load −g M_e u_y
         for p, plane in enumerate((XPLANE, YPLANE)):
             out[e, 0, p] = fe[plane[1]]
             out[e, 1, p] = fe[plane[3]]
@@ -106,11 +119,11 @@ def max_von_mises(
     ne = model.n_nodes - 1
     Ms = np.zeros((ne, 2, 2))
     if weight:
-        Ms = _element_moments(model, _static_weight(model, speed_rpm, theta))
+        Ms = _element_moments(model, _static_weight(model, speed_rpm, theta), weight=True)
     Md = np.zeros((ne, 2))
     if unbalance:
         q = unbalance_response(model, np.array([speed_rpm]), theta)[0, 0].reshape(-1)
-        m = _element_moments(model, q)
+        m = _element_moments(model, q, omega=speed_rpm * RPM)
         Md = orbit_amplitude(m[..., 0], m[..., 1])
     bending_M = np.hypot(Ms[..., 0], Ms[..., 1]) + Md  # (ne, 2)
 

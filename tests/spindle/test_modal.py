@@ -22,7 +22,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.core.errors import SingularSystemError
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.effects import Gyroscopics, HousingFlexibility
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -196,15 +195,21 @@ def test_gyroscopics_off_removes_the_split():
 
 
 # --------------------------------------------------------------------------- errors
-def test_massless_housing_dof_raises_a_clear_error():
-    """A housing stage without mass leaves DOFs with zero mass: modal analysis and the first
-    natural frequency raise SingularSystemError (never NaN). NB: this is a limitation, see the
-    report — the harmonic solver condenses such stages and works."""
-    mod = build(rigid_rotor_geometry(K_B), [HousingFlexibility(k_N_per_m=1e7)])
-    with pytest.raises(SingularSystemError, match="mass"):
-        modal_analysis(mod, 0.0)
-    with pytest.raises(SingularSystemError, match="mass"):
-        first_natural_frequency(mod)
+@pytest.mark.known_answer
+def test_massless_housing_stage_gives_the_series_spring_frequencies():
+    """A housing stage without mass leaves DOFs with zero mass. Modal analysis (pencil form) and
+    the first natural frequency (static condensation) must then give the rigid-rotor result
+    with the series stiffness k k_h / (k + k_h): translation sqrt(2 k_s / m) and, at standstill,
+    tilt sqrt(2 k_s a^2 / J_t)."""
+    k_h = 1e7
+    mod = build(rigid_rotor_geometry(K_B), [HousingFlexibility(k_N_per_m=k_h)])
+    m, Jt, _, a = rigid_rotor_properties()
+    ks = K_B * k_h / (K_B + k_h)
+    w = np.sort(modal_analysis(mod, 0.0, n_modes=4).frequency_hz) * 2 * np.pi
+    assert np.allclose(w[:2], np.sqrt(2 * ks / m), rtol=1e-6)
+    assert np.allclose(w[2:], np.sqrt(2 * ks * a**2 / Jt), rtol=1e-6)
+    f1 = first_natural_frequency(mod) * 2 * np.pi
+    assert f1 == pytest.approx(np.sqrt(2 * ks / m), rel=1e-6)
 
 
 def test_bad_speed_raises():

@@ -34,8 +34,9 @@ def test_simply_supported_beam_under_its_weight():
         assert r.position_m == pytest.approx(0.5)
         errs.append(r.max_von_mises_Pa / sigma - 1)
     errs = np.array(errs)
-    assert np.all(np.abs(errs) <= (2 / 3) / np.array([16, 32]) ** 2 * 1.05), errs
-    assert abs(errs[1]) < abs(errs[0]) / 3.5  # O(h²) convergence of the moment
+    # element end forces include the fixed-end moments of the distributed weight, so the
+    # nodal moments of a uniformly loaded beam are exact at any mesh (wL²/8 at mid-span)
+    assert np.all(np.abs(errs) < 1e-9), errs
 
 
 @pytest.mark.known_answer
