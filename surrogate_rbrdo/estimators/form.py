@@ -118,7 +118,7 @@ class FORM:
     tol_u : float
         Convergence on the distance of ``u`` from the line through ``α`` (alignment).
     fd_step : float
-        Finite-difference step in standard space.
+        Finite-difference step in standard space (raise it for noisy models, e.g. FE solves).
     fd_scheme : {"forward", "central"}
     on_failure : {"raise", "nan"}
         Non-convergence raises ``ModelError`` or returns NaN for that design.

@@ -84,7 +84,7 @@ def sorm_pf(beta: float, kappa: np.ndarray, formula: str) -> float:
 class SORM:
     """Second-order reliability method from the FORM design point.
 
-    Diagnostics: ``beta``, ``beta_sorm = −Φ⁻¹(P_f)``, ``curvatures`` (list of arrays),
+    Diagnostics: ``beta``, ``beta_sorm = −Φ⁻¹(P_f)``, ``curvatures`` ``(P, m − 1)``,
     ``pf_form``, ``converged``. ``mean``/``std`` and errors are NaN.
 
     Parameters
@@ -119,19 +119,19 @@ class SORM:
         x, _ = check_args(inputs, limit, x, rng, u)
         p = x.shape[0]
         pf, beta, pf_form = nan_p(p), nan_p(p), nan_p(p)
-        conv, kappas, calls = np.zeros(p, bool), [], 0
+        conv, calls = np.zeros(p, bool), 0
+        kappas = np.full((p, max(inputs.dim - 1, 0)), np.nan)
         for i in range(p):
             dp = self.form.search(response, inputs, limit, x[i])
             self.form.check(dp, i)
             calls += dp.calls
             if not dp.converged:
-                kappas.append(np.full(inputs.dim - 1, np.nan))
                 continue
             G = LimitStateU(response, inputs, limit, x[i])
             kap = curvatures(G, dp.u_star, dp.alpha, float(np.linalg.norm(dp.grad)),
                              self.hessian_step)
             calls += G.calls
-            kappas.append(kap)
+            kappas[i] = kap
             beta[i], pf_form[i] = dp.beta, special.ndtr(-dp.beta)
             pf[i] = sorm_pf(dp.beta, kap, self.formula)
             conv[i] = np.isfinite(pf[i])

@@ -46,7 +46,7 @@ def cholesky_pd(name: str, mat: np.ndarray) -> np.ndarray:
         ) from None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MultivariateNormal(_SampleMixin):
     """Normal random vector ``θ ~ N(mean, cov)``; transform ``θ = mean + L u`` (``cov = L Lᵀ``).
 

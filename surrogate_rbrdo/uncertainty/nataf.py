@@ -105,7 +105,7 @@ class Independent(_SampleMixin):
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Nataf(_SampleMixin):
     """Marginals coupled by a Gaussian copula with target Pearson correlation ``corr``.
 

@@ -1,6 +1,7 @@
 """Contract tests run over every registered estimator: a new one is tested for free."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -42,6 +43,12 @@ def test_pf_valid_and_accurate_on_linear(name):
     err = np.abs(res.pf - PROB.pf_exact)
     # sampling methods: within 4.5 standard errors; deterministic ones are exact on a linear g
     assert np.all(np.where(sampled, err <= 4.5 * res.pf_se, err <= 1e-4 * PROB.pf_exact))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_to_dict_is_json_serialisable(name):
+    d = json.loads(json.dumps(run(name).to_dict()))
+    assert d["method"] == name and len(d["pf"]) == 2
 
 
 @pytest.mark.parametrize("name", NAMES)

@@ -150,6 +150,12 @@ def test_nataf_normal_marginals_equal_mvn():
     np.testing.assert_allclose(nat.from_standard(u), mvn.from_standard(u))
 
 
+def test_hashable_and_identity_equality():
+    a = MultivariateNormal([0.0], cov=[[1.0]])
+    assert a == a and hash(a) == hash(a)
+    assert len({a, MultivariateNormal([0.0], cov=[[1.0]])}) == 2
+
+
 def test_frozen():
     mvn = MultivariateNormal([0.0], cov=[[1.0]])
     with pytest.raises(AttributeError):
