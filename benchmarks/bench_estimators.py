@@ -28,6 +28,7 @@ from surrogate_rbrdo.estimators.problems import (
     lognormal_nataf,
     paraboloid,
     series_four_branch,
+    uniform_sum,
 )
 
 DETERMINISTIC = {"form", "sorm", "fosm"}
@@ -51,6 +52,7 @@ def problems():
         linear_standard(beta=4.753424, dim=5),
         cn,
         lognormal_nataf(),
+        uniform_sum(),
         paraboloid(beta=3.0, kappa=0.3, dim=5),
         series_four_branch(6.0),
         series_four_branch(7.0),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -129,5 +130,8 @@ def make_estimate(method: str, n_calls: int, p: int, **kw: Any) -> Estimate:
         raise TypeError(f"unexpected fields {sorted(kw)}")
     for a in (*fields.values(), ci):
         a.setflags(write=False)
-    return Estimate(pf_ci=ci, n_calls=int(n_calls), method=method, diagnostics=diagnostics,
-                    **fields)
+    for v in diagnostics.values():
+        if isinstance(v, np.ndarray):
+            v.setflags(write=False)
+    return Estimate(pf_ci=ci, n_calls=int(n_calls), method=method,
+                    diagnostics=MappingProxyType(dict(diagnostics)), **fields)

@@ -18,7 +18,7 @@ import numpy as np
 from scipy import integrate, special, stats
 
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.uncertainty import LogNormal, MultivariateNormal, Nataf
+from surrogate_rbrdo.uncertainty import Independent, LogNormal, MultivariateNormal, Nataf, Uniform
 
 
 @dataclass(frozen=True)
@@ -143,3 +143,17 @@ def series_four_branch(k: float = 6.0) -> Problem:
     return Problem(f"series4_k{k:g}", resp, MultivariateNormal(np.zeros(2), cov=np.eye(2)),
                    LimitState(0.0), np.zeros((1, 0)), np.array([pf]),
                    source="4-branch series system (Waarts 2000); exact by 1-D quadrature")
+
+
+def uniform_sum(threshold: float = 1.8) -> Problem:
+    """``y = θ₁ + θ₂`` with independent ``U(0, 1)`` inputs; failure ``y > t`` (``1 ≤ t ≤ 2``).
+
+    Exact: ``P_f = (2 − t)² / 2`` (a corner triangle of the unit square), 0.02 for t = 1.8. The
+    limit state is non-linear in ``u`` (through ``Φ``), so FORM is only approximate.
+    """
+    return Problem(f"uniform_sum_t{threshold:g}",
+                   lambda x, t: (t[:, 0] + t[:, 1])[None, :] + 0 * _shift(x),
+                   Independent([Uniform(0.0, 1.0), Uniform(0.0, 1.0)]), LimitState(threshold),
+                   np.zeros((1, 0)), np.array([(2.0 - threshold) ** 2 / 2.0]),
+                   mean_exact=np.array([1.0]), std_exact=np.array([np.sqrt(1 / 6)]),
+                   source="closed form (triangle area)")

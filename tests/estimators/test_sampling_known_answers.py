@@ -15,6 +15,7 @@ from surrogate_rbrdo.estimators.problems import (
     lognormal_nataf,
     paraboloid,
     series_four_branch,
+    uniform_sum,
 )
 
 pytestmark = pytest.mark.known_answer
@@ -38,6 +39,7 @@ def within(est, prob, k=4.0):
     paraboloid(),
     PF_1E6,
     linear_standard(beta=-1.0, dim=2),
+    uniform_sum(),
 ], ids=lambda p: p.name)
 @pytest.mark.parametrize("name", ["is", "ais"])
 def test_is_and_ais_within_4_se(name, prob):
@@ -114,3 +116,21 @@ def test_ais_and_subset_moments_from_first_level():
         est = run(name, prob, seed=3)
         assert np.all(np.abs(est.mean - prob.mean_exact) <= 4 * est.mean_se)
         assert np.all(np.abs(est.std - prob.std_exact) <= 4 * est.std_se)
+
+
+@pytest.mark.parametrize("name", ["mc", "is", "ais", "subset"])
+def test_non_normal_inputs_uniform_sum(name):
+    prob = uniform_sum()
+    est = run(name, prob, seed=7)
+    assert within(est, prob)
+    if name == "mc":
+        assert abs(est.mean[0] - 1.0) <= 4 * est.mean_se[0]
+        assert abs(est.std[0] - prob.std_exact[0]) <= 4 * est.std_se[0]
+
+
+def test_diagnostics_are_read_only():
+    est = run("is", uniform_sum())
+    with pytest.raises(TypeError):
+        est.diagnostics["ess"] = 0
+    with pytest.raises(ValueError):
+        est.diagnostics["u_star"][0, 0] = 1.0
