@@ -99,7 +99,7 @@ class CrossEntropyIS:
         h = GaussianMixture(np.ones(1), np.zeros((1, m)), np.eye(m)[None])
         v = u0 if u0 is not None else rng.standard_normal((self.n_per_level, m))
         y0 = None
-        level = 0
+        level, prev_gamma, stalled, scale = 0, np.inf, 0, 1.0
         for level in range(1, self.max_levels + 1):
             if level > 1:
                 v = h.sample(self.n_per_level, rng)
@@ -114,6 +114,13 @@ class CrossEntropyIS:
             h = fit_mixture(v[elite], logw[elite], self.n_components, rng)
             if gamma == 0.0:
                 break
+            if level == 1:
+                scale = gamma
+            # thresholds stopped decreasing (by 0.1 % of the first one): no failure in reach
+            stalled = stalled + 1 if prev_gamma - gamma < 1e-3 * scale else 0
+            prev_gamma = min(prev_gamma, gamma)
+            if stalled >= 3:
+                return np.nan, np.nan, np.nan, level, False, y0
         else:
             return np.nan, np.nan, np.nan, level, False, y0
         n, a = self.n_final, self.defensive
@@ -146,9 +153,10 @@ class CrossEntropyIS:
             y0s.append(y0)
             if not conv[i] and self.on_failure == "raise":
                 raise ModelError(
-                    f"cross-entropy IS did not reach the failure domain for design {i} in "
-                    f"{self.max_levels} levels; increase max_levels or n_per_level, or pass "
-                    "on_failure='nan'")
+                    f"cross-entropy IS did not reach the failure domain for design {i} after "
+                    f"{levels[i]} levels (max_levels={self.max_levels}; the thresholds stop "
+                    "decreasing when the response never fails); increase max_levels or "
+                    "n_per_level, or pass on_failure='nan'")
         mc = mc_from_values(np.vstack(y0s), limit)
         return make_estimate(
             "ais", calls, p, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,

@@ -104,6 +104,7 @@ class SubsetSimulation:
         y0 = G.last_y.copy()
         pf, delta2 = 1.0, 0.0
         chains = None      # (nc, ns) values of G along the chains of the previous level
+        prev_gam, stalled, scale = np.inf, 0, 1.0
         s = np.sqrt(1.0 - self.rho**2)
         for level in range(1, self.max_levels + 1):
             nf = int(np.count_nonzero(g < 0))
@@ -114,6 +115,13 @@ class SubsetSimulation:
                 order = np.argsort(g, kind="stable")
                 gam = 0.5 * (g[order[nc - 1]] + g[order[nc]])
                 p_k = nc / g.size
+                if level == 1:
+                    scale = abs(gam)
+                # thresholds stopped decreasing (by 0.1 % of the first one): no failure in reach
+                stalled = stalled + 1 if prev_gam - gam < 1e-3 * scale else 0
+                prev_gam = min(prev_gam, gam)
+                if stalled >= 3:
+                    return np.nan, np.nan, level, False, y0
             # chain correlation of the indicator of this level's event (Au & Beck 2001, Eq. 27)
             corr = 0.0
             if chains is not None:
@@ -152,8 +160,9 @@ class SubsetSimulation:
             y0s.append(y0)
             if not conv[i] and self.on_failure == "raise":
                 raise ModelError(
-                    f"subset simulation did not reach the failure domain for design {i} in "
-                    f"{self.max_levels} levels (P_f < p0^max_levels or the chains stalled); "
+                    f"subset simulation did not reach the failure domain for design {i} after "
+                    f"{levels[i]} levels (max_levels={self.max_levels}; P_f < p0^max_levels, "
+                    "or the thresholds stopped decreasing because the response never fails); "
                     "increase max_levels or pass on_failure='nan'")
         mc = mc_from_values(np.vstack(y0s), limit)
         return make_estimate(

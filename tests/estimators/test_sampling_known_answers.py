@@ -134,3 +134,23 @@ def test_diagnostics_are_read_only():
         est.diagnostics["ess"] = 0
     with pytest.raises(ValueError):
         est.diagnostics["u_star"][0, 0] = 1.0
+
+
+@pytest.mark.parametrize("name", ["ais", "subset"])
+def test_adaptive_methods_stop_when_nothing_fails(name):
+    from surrogate_rbrdo.core import LimitState, ModelError
+    from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+    inputs = MultivariateNormal(np.zeros(2), cov=np.eye(2))
+
+    def resp(x, t):                       # bounded response that never exceeds the limit
+        return np.tanh(t[:, :1].T)
+
+    est = get_estimator(name)
+    with pytest.raises(ModelError, match="did not reach the failure domain for design 0"):
+        est.estimate(resp, inputs, LimitState(2.0), np.zeros((1, 0)),
+                     rng=np.random.default_rng(0))
+    quiet = get_estimator(name, on_failure="nan").estimate(
+        resp, inputs, LimitState(2.0), np.zeros((1, 0)), rng=np.random.default_rng(0))
+    assert np.isnan(quiet.pf[0])
+    assert quiet.n_calls <= 10 * est.n_per_level      # stopped early, not after max_levels
