@@ -1,0 +1,95 @@
+"""The rbrdo command line and run folders: bad input gives one line naming the field."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from surrogate_rbrdo.runner.cli import main
+from surrogate_rbrdo.runner.runfolder import RunFolder, atomic_write_text
+
+
+def write(tmp_path, text, name="exp.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+SPINDLE_CFG = """
+[experiment]
+name = "t"
+kind = "spindle_report"
+[report]
+designs = { a = [3000.0, 300.0, 80.0] }
+n_speeds = 20
+campbell_speeds = 3
+n_modes = 2
+"""
+
+
+def test_spindle_report_runs_and_writes_a_run_folder(tmp_path, capsys):
+    cfg = write(tmp_path, SPINDLE_CFG)
+    assert main(["run", str(cfg), "--results", str(tmp_path / "res"), "--no-progress"]) == 0
+    (run,) = (tmp_path / "res" / "t").iterdir()
+    for f in ("summary.csv", "campbell.png", "unbalance_response.png", "meta.json",
+              "config.json", "unbalance_response.csv"):
+        assert (run / f).is_file(), f
+    meta = json.loads((run / "meta.json").read_text())
+    assert meta["packages"]["numpy"] and "timings_s" in meta
+    rows = list(csv.DictReader((run / "summary.csv").open()))
+    assert rows[0]["design"] == "a" and float(rows[0]["preload_N"]) == 3000.0
+    # a second run goes into another folder
+    assert main(["run", str(cfg), "--results", str(tmp_path / "res"), "--no-progress"]) == 0
+    assert len(list((tmp_path / "res" / "t").iterdir())) == 2
+
+
+HEAD = "[experiment]\nname='t'\nkind='spindle_report'\n"
+BAD_CONFIGS = [
+    ("[experiment]\nname='t'\nkind='nope'\n",
+     r"unknown experiment kind 'nope'; known: .*spindle_report"),
+    (HEAD + "colour=1\n", r"unknown key\(s\) \['colour'\] in \[experiment\]"),
+    (HEAD + "[report]\nn_speeds=1\n", r"report.n_speeds = 1 is not allowed"),
+    (HEAD + "[report]\ndesigns={a=[9000.0, 300.0, 60.0]}\n",
+     r"preload_N = 9000.0 is not allowed: must lie in \[1000.0, 3000.0\]"),
+    (HEAD + "[spindle]\nbalance_grade_mm_s=-1\n", r"spindle.balance_grade_mm_s = -1"),
+    (HEAD + "[spindle]\neffects=[{name='warp', a=1}]\n",
+     r"unknown effect 'warp'; known: .*speed_softening"),
+    ("[experiment]\nname='t'\n", r"experiment.kind = None is not allowed"),
+    ("[experiment\n", r"not valid TOML"),
+]
+
+
+@pytest.mark.parametrize(("text", "pattern"), BAD_CONFIGS)
+def test_bad_config_gives_one_line_naming_the_field(tmp_path, capsys, text, pattern):
+    cfg = write(tmp_path, text)
+    assert main(["run", str(cfg), "--results", str(tmp_path / "res"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("rbrdo: error: ") and "\n" not in err
+    assert __import__("re").search(pattern, err), err
+
+
+def test_missing_config_file(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "none.toml")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_help_exits_cleanly(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    assert "run" in capsys.readouterr().out
+
+
+def test_atomic_write_leaves_no_temporary_files(tmp_path):
+    atomic_write_text(tmp_path / "a.txt", "x")
+    atomic_write_text(tmp_path / "a.txt", "y")
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+    assert (tmp_path / "a.txt").read_text() == "y"
+
+
+def test_run_ids_never_collide(tmp_path):
+    a = RunFolder.create(tmp_path, "e")
+    b = RunFolder.create(tmp_path, "e")
+    assert a.path != b.path
