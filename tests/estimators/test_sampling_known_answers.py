@@ -108,6 +108,8 @@ def test_subset_unbiased_at_1e6():
     pf = np.array([r.pf[0] for r in res])
     assert abs(pf.mean() - PF_1E6.pf_exact[0]) <= 4 * pf.std(ddof=1) / 5
     assert 0.1 < np.mean([r.pf_cov[0] for r in res]) < 0.8
+    # the fully-correlated bound is an upper bound of the uncorrelated CoV by construction
+    assert all(r.diagnostics["pf_cov_upper"][0] >= r.pf_cov[0] for r in res)
 
 
 def test_ais_and_subset_moments_from_first_level():
