@@ -6,7 +6,7 @@ Every estimator is a frozen dataclass of its options with
 ========== ==========================================================================
 ``mc``     crude Monte Carlo (Eqs. 12-14), Clopper-Pearson interval
 ``is``     importance sampling centred at the FORM design point
-``ais``    adaptive importance sampling (cross-entropy, Gaussian, defensive mixture)
+``ais``    adaptive IS: cross-entropy with a Gaussian mixture and a defensive component
 ``form``   FORM by iHL-RF with finite-difference gradients
 ``sorm``   SORM (Breitung / Hohenbichler-Rackwitz) from the FORM design point
 ``subset`` subset simulation (Au & Beck) with conditional sampling in u space
