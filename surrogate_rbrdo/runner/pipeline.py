@@ -1,0 +1,426 @@
+"""The reusable surrogate pipeline: DOE → FE sampling (counted, cached, parallel) → Kriging fit
+(optionally with AK-MCS-style enrichment near ``y = δ_lim``) → a fast ``Response``.
+
+``train_peak_surrogate(spindle, inputs, limit, cfg, *, rng, ...)`` returns a fitted
+:class:`PeakSurrogate` (the core ``Response``: ``(P, 3), (N, 2) -> (P, N)`` metres) and an info
+dict (DOE size, FE calls, fit time, hyperparameters, AL history).
+
+Response definition and transform
+---------------------------------
+``y`` is the peak tool-tip amplitude (m) over the speed range (``PeakAmplitudeResponse``).
+With ``transform = "log"`` (default) the Kriging model is fitted to ``log y`` and the response
+returns ``exp(μ_log)`` (the median of the lognormal predictive distribution; a monotone map, so
+``P[y > δ_lim]`` from the surrogate equals ``P[μ_log > log δ_lim]``). ``predict(Z)`` returns the
+lognormal moments ``mean = exp(μ + s²/2)``, ``std = mean·sqrt(exp(s²) - 1)``. Why log: ``y``
+spans 0.4–55 µm with a 10–50× jump where the first critical speed crosses the top of the speed
+range; in log space the jump is a step of ~3–4 units on a smooth background of ~±1, and the
+subcritical plateau (the designs that matter) is not swamped by the resonant region's variance
+(numbers in ``docs/surrogates.md``).
+
+θ box: ``"sigma"`` = ``mean ± theta_sigmas·std`` of ``inputs`` (default ±4σ: the MC samples
+live there, P(outside) ≈ 6e-5 per component) or ``"bounds"`` = ``theta_bounds`` per component.
+
+Active learning (``active_learning = true``): start from ``al_n_initial`` LHS points, candidate
+pool = ``al_pool_designs`` LHS designs × ``al_pool_theta`` θ samples of ``inputs`` (a grid, so
+the prediction with variance uses the separable predictor); each iteration adds ``al_batch_size``
+pool points with the smallest ``U = |μ_t - t(δ_lim)| / σ_t`` (transformed space; at most one per
+pool design, for diversity), evaluated by the FE model; stops when the fraction of pool points
+with ``U < al_u_stop`` is ≤ ``al_uncertain_frac`` or after ``al_max_added`` points.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.counting import CallCounter
+from surrogate_rbrdo.core.protocols import LimitState, Prediction
+from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.core.validate import (
+    check_choice,
+    check_finite_array,
+    check_int,
+    check_positive,
+    check_range,
+)
+from surrogate_rbrdo.doe import lhs
+from surrogate_rbrdo.sampling import evaluate_points
+from surrogate_rbrdo.sampling.evaluate import BACKENDS
+from surrogate_rbrdo.spindle.evaluate import PointwisePeak
+from surrogate_rbrdo.surrogates import SURROGATES, GPROptions, KrigingOptions
+from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
+
+TRANSFORMS = ("log", "none")
+THETA_BOXES = ("sigma", "bounds")
+
+
+@dataclass(frozen=True)
+class SurrogateConfig:
+    """Options of the surrogate pipeline (also the TOML ``[surrogate]`` table).
+
+    Attributes
+    ----------
+    n_doe : int
+        Size of the static space-filling DOE (maximin LHS in the joint (x, θ) box).
+    surrogate : str
+        Name in ``SURROGATES`` (``krg_se``, ``krg_matern52``, ``gpr``).
+    transform : {"log", "none"}
+        Fit ``log y`` (default) or ``y``; see the module docstring.
+    theta_box : {"sigma", "bounds"}
+        θ part of the DOE box: ``mean ± theta_sigmas·std`` or ``theta_bounds``.
+    theta_sigmas : float
+    theta_bounds : (float, float)
+    n_jobs : int
+        Worker processes of the FE sampling.
+    backend : str
+        ``evaluate_points`` backend (``loky``, ``threading``, ``sequential``, ``dask``: a
+        temporary local cluster with ``n_jobs`` workers).
+    active_learning : bool
+        Replace the static DOE by AK-MCS-style enrichment (``al_*`` options).
+    n_start : int
+        Multistarts of the hyperparameter optimisation (smt ``n_start`` / sklearn restarts + 1).
+    al_n_initial, al_max_added, al_batch_size : int
+        Initial LHS size, budget of added points, points added per iteration.
+    al_pool_designs, al_pool_theta : int
+        Candidate pool: LHS designs × θ samples of ``inputs``.
+    al_u_stop : float
+        U threshold of "uncertain" candidates (2: misclassification probability ≤ 2.3 %).
+    al_uncertain_frac : float
+        Stop when at most this fraction of the pool has ``U < al_u_stop``.
+    al_n_start : int
+        Multistarts during the AL refits (the final fit uses ``n_start``).
+    """
+
+    n_doe: int = 200
+    surrogate: str = "krg_se"
+    transform: str = "log"
+    theta_box: str = "sigma"
+    theta_sigmas: float = 4.0
+    theta_bounds: tuple[float, float] = (0.5, 1.5)
+    n_jobs: int = 2
+    backend: str = "loky"
+    active_learning: bool = False
+    n_start: int = 5
+    al_n_initial: int = 60
+    al_max_added: int = 140
+    al_batch_size: int = 10
+    al_pool_designs: int = 400
+    al_pool_theta: int = 100
+    al_u_stop: float = 2.0
+    al_uncertain_frac: float = 0.002
+    al_n_start: int = 2
+
+    def __post_init__(self) -> None:
+        check_int("n_doe", self.n_doe, minimum=7)
+        check_choice("surrogate", self.surrogate, sorted(SURROGATES))
+        check_choice("transform", self.transform, TRANSFORMS)
+        check_choice("theta_box", self.theta_box, THETA_BOXES)
+        check_positive("theta_sigmas", self.theta_sigmas)
+        tb = tuple(self.theta_bounds) if isinstance(self.theta_bounds, (list, tuple)) else None
+        if tb is None or len(tb) != 2 or not all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in tb) \
+                or not 0 < tb[0] < tb[1] or not np.isfinite(tb[1]):
+            raise ValueError(f"theta_bounds = {self.theta_bounds!r} is not allowed: must be "
+                             "(lower, upper) with 0 < lower < upper")
+        object.__setattr__(self, "theta_bounds", (float(tb[0]), float(tb[1])))
+        check_int("n_jobs", self.n_jobs, minimum=1)
+        check_choice("backend", self.backend, BACKENDS)
+        if not isinstance(self.active_learning, bool):
+            raise ValueError(f"active_learning = {self.active_learning!r} is not allowed: "
+                             "must be true or false")
+        check_int("n_start", self.n_start, minimum=1)
+        check_int("al_n_initial", self.al_n_initial, minimum=7)
+        check_int("al_max_added", self.al_max_added, minimum=0)
+        check_int("al_batch_size", self.al_batch_size, minimum=1)
+        check_int("al_pool_designs", self.al_pool_designs, minimum=1)
+        check_int("al_pool_theta", self.al_pool_theta, minimum=1)
+        check_positive("al_u_stop", self.al_u_stop)
+        check_range("al_uncertain_frac", self.al_uncertain_frac, 0.0, 1.0)
+        check_int("al_n_start", self.al_n_start, minimum=1)
+
+    @classmethod
+    def from_dict(cls, table: dict[str, Any]) -> SurrogateConfig:
+        """From a TOML ``[surrogate]`` table; unknown keys raise, listing the allowed ones."""
+        from dataclasses import fields
+
+        from surrogate_rbrdo.core.validate import check_keys
+
+        check_keys("[surrogate]", table, [f.name for f in fields(cls)])
+        kw = dict(table)
+        if "theta_bounds" in kw and isinstance(kw["theta_bounds"], list):
+            kw["theta_bounds"] = tuple(kw["theta_bounds"])
+        return cls(**kw)
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return asdict(self)
+
+
+# ---------------------------------------------------------------------- transforms
+def forward(y: np.ndarray, transform: str) -> np.ndarray:
+    """``t(y)``: ``log y`` or ``y``."""
+    y = np.asarray(y, dtype=float)
+    return np.log(y) if transform == "log" else y
+
+
+def inverse(t: np.ndarray, transform: str) -> np.ndarray:
+    """``y = t⁻¹(t)``: ``exp t`` or ``t``."""
+    return np.exp(t) if transform == "log" else np.asarray(t, dtype=float)
+
+
+# ---------------------------------------------------------------------- the fitted surrogate
+@dataclass(eq=False)
+class PeakSurrogate:
+    """Fitted surrogate of the peak amplitude; ``y`` in metres at the interface.
+
+    Calling it (or :meth:`response`) is the core ``Response``. The θ block of the separable
+    predictor is cached keyed on the identity of the θ array (``id`` and shape; the array is
+    kept referenced so the id cannot be reused): pass the same CRN sample object each time and
+    every call costs one design block and one matrix product. Do not modify a θ array in place
+    between calls (copy it instead).
+
+    Attributes
+    ----------
+    model : Surrogate
+        The fitted wrapper (``KrgSE``, ...), trained on ``(Z, t(y))``.
+    fast : ProductKernelPredictor
+    transform : {"log", "none"}
+    n_design : int
+    info : dict
+    theta_block_builds : int
+        How many θ blocks were computed (cache misses).
+    """
+
+    model: Any
+    fast: ProductKernelPredictor
+    transform: str
+    n_design: int = 3
+    info: dict[str, Any] = field(default_factory=dict)
+    theta_block_builds: int = 0
+    _blocks: dict[tuple[int, tuple[int, ...]], tuple[np.ndarray, Any]] = field(
+        default_factory=dict, repr=False)
+    max_cached_blocks: int = 4
+
+    @property
+    def n_train(self) -> int:
+        return int(self.model.y_train_.size)
+
+    def theta_block(self, theta: np.ndarray) -> Any:
+        """The (cached) θ block of ``theta``."""
+        key = (id(theta), np.shape(theta))
+        hit = self._blocks.get(key)
+        if hit is not None and hit[0] is theta:
+            return hit[1]
+        block = self.fast.prepare_theta(theta)
+        self.theta_block_builds += 1
+        if len(self._blocks) >= self.max_cached_blocks:
+            self._blocks.pop(next(iter(self._blocks)))
+        self._blocks[key] = (theta, block)
+        return block
+
+    def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Predicted ``y`` (m) for designs ``x`` (P, 3) × θ ``(N, 2)`` → ``(P, N)``.
+
+        With the log transform this is ``exp(μ_log)`` (the predictive median).
+        """
+        t = self.fast.predict_grid(x, self.theta_block(theta)).mean
+        return inverse(t, self.transform)
+
+    __call__ = response
+
+    def predict_transformed(self, x: np.ndarray, theta: np.ndarray, *,
+                            return_std: bool = True) -> Prediction:
+        """Mean and std of ``t(y)`` on the grid (no inverse transform)."""
+        return self.fast.predict_grid(x, self.theta_block(theta), return_std=return_std)
+
+    def predict(self, Z: np.ndarray) -> Prediction:
+        """Mean and std (m) at joint points ``Z = [x, θ]`` (n, 5).
+
+        ``transform = "log"``: lognormal moments of ``exp(N(μ, s²))``; ``"none"``: the Kriging
+        mean and std themselves.
+        """
+        p = self.model.predict(np.atleast_2d(np.asarray(Z, dtype=float)))
+        if self.transform == "none":
+            return p
+        mean = np.exp(p.mean + 0.5 * p.std**2)
+        return Prediction(mean=mean, std=mean * np.sqrt(np.expm1(p.std**2)))
+
+
+# ---------------------------------------------------------------------- building blocks
+def joint_bounds(spindle: Any, inputs: Any, cfg: SurrogateConfig) -> np.ndarray:
+    """The (3 + m, 2) joint DOE box: the design box and the θ box of ``cfg``."""
+    xb = np.asarray(spindle.design_map.bounds, dtype=float)
+    mean = np.asarray(inputs.mean, dtype=float)
+    if cfg.theta_box == "sigma":
+        std = np.sqrt(np.diag(np.asarray(inputs.cov, dtype=float)))
+        tb = np.column_stack([mean - cfg.theta_sigmas * std, mean + cfg.theta_sigmas * std])
+    else:
+        tb = np.tile(np.asarray(cfg.theta_bounds, dtype=float), (mean.size, 1))
+    return np.vstack([xb, tb])
+
+
+def build_doe(n: int, bounds: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+    """Maximin LHS of ``n`` points in ``bounds``."""
+    return lhs(n, bounds, rng=require_rng(rng))
+
+
+def fe_cache(cache_dir: str | Path | None) -> Any:
+    """A ``joblib.Memory`` under ``cache_dir/fe_points`` (``None``: no cache)."""
+    if cache_dir is None:
+        return None
+    import joblib
+
+    return joblib.Memory(location=str(Path(cache_dir) / "fe_points"), verbose=0)
+
+
+def sample_fe(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache: Any = None,
+              counter: CallCounter | None = None, progress: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """FE peak amplitude (m) at joint points ``Z`` via ``evaluate_points`` (counted, cached).
+
+    Returns the points with a finite positive value and their values.
+    """
+    Z = check_finite_array("Z", Z, ndim=2)
+    res = evaluate_points(
+        PointwisePeak(spindle), Z, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache,
+        counter=counter, on_nonfinite="exclude", progress=progress,
+        client="local" if cfg.backend == "dask" else None)
+    ok = res.y > 0
+    ok &= res.ok_mask
+    return Z[ok], res.y[ok]
+
+
+def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
+                  rng: np.random.Generator, n_start: int | None = None,
+                  n_design: int = 3) -> PeakSurrogate:
+    """Fit ``cfg.surrogate`` to ``(Z, t(y))`` and wrap it (``y`` in metres, > 0)."""
+    n_start = cfg.n_start if n_start is None else n_start
+    cls = SURROGATES[cfg.surrogate]
+    opts = (GPROptions(n_restarts=n_start - 1) if cfg.surrogate == "gpr"
+            else KrigingOptions(n_start=n_start))
+    t0 = time.perf_counter()
+    model = cls(opts, rng=require_rng(rng)).fit(Z, forward(y, cfg.transform))
+    fit_s = time.perf_counter() - t0
+    fast = ProductKernelPredictor.from_model(model, n_design=n_design)
+    info = {"n_train": int(y.size), "fit_time_s": fit_s,
+            "hyperparameters": np.asarray(fast.weights).tolist(),
+            "surrogate": cfg.surrogate, "transform": cfg.transform}
+    return PeakSurrogate(model=model, fast=fast, transform=cfg.transform,
+                         n_design=n_design, info=info)
+
+
+# ---------------------------------------------------------------------- active learning
+def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: SurrogateConfig, *,
+                    rng: np.random.Generator, cache: Any = None,
+                    counter: CallCounter | None = None, progress: bool = False
+                    ) -> tuple[np.ndarray, np.ndarray, list[dict[str, Any]], str]:
+    """AK-MCS-style enrichment (see the module docstring). Returns ``Z, y, history, reason``."""
+    rng = require_rng(rng)
+    r_doe, r_pool_x, r_pool_t, r_fit = rng.spawn(4)
+    bounds = joint_bounds(spindle, inputs, cfg)
+    d = spindle.design_map.bounds.shape[0]
+    Z, y = sample_fe(spindle, build_doe(cfg.al_n_initial, bounds, rng=r_doe), cfg,
+                     cache=cache, counter=counter, progress=progress)
+    pool_x = lhs(cfg.al_pool_designs, bounds[:d], rng=r_pool_x, criterion="random")
+    pool_t = inputs.sample(cfg.al_pool_theta, rng=r_pool_t)
+    used = np.zeros((pool_x.shape[0], pool_t.shape[0]), dtype=bool)
+    thr = float(forward(limit.threshold, cfg.transform))
+    history: list[dict[str, Any]] = []
+    n_added, reason = 0, "al_max_added reached"
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=cfg.al_max_added, desc="active learning", unit="pt")
+    try:
+        while True:
+            sur = fit_surrogate(Z, y, cfg, rng=r_fit.spawn(1)[0], n_start=cfg.al_n_start,
+                                n_design=d)
+            p = sur.predict_transformed(pool_x, pool_t)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                U = np.where(p.std > 0, np.abs(p.mean - thr) / p.std, np.inf)
+            U[used] = np.inf
+            frac = float(np.mean(U < cfg.al_u_stop))
+            pf = float(np.mean(limit.failed(inverse(p.mean, cfg.transform))))
+            history.append({"n_points": int(y.size), "pf_pool": pf, "min_u": float(U.min()),
+                            "uncertain_frac": frac})
+            if frac <= cfg.al_uncertain_frac:
+                reason = f"uncertain fraction {frac:.4f} <= {cfg.al_uncertain_frac}"
+                break
+            if n_added >= cfg.al_max_added:
+                break
+            k = min(cfg.al_batch_size, cfg.al_max_added - n_added)
+            best_t = np.argmin(U, axis=1)                  # best θ per pool design
+            best_u = U[np.arange(U.shape[0]), best_t]
+            rows = np.argsort(best_u, kind="stable")[:k]
+            rows = rows[np.isfinite(best_u[rows])]
+            if rows.size == 0:
+                reason = "pool exhausted"
+                break
+            used[rows, best_t[rows]] = True
+            new = np.column_stack([pool_x[rows], pool_t[best_t[rows]]])
+            Zn, yn = sample_fe(spindle, new, cfg, cache=cache, counter=counter)
+            Z, y = np.vstack([Z, Zn]), np.concatenate([y, yn])
+            n_added += rows.size
+            if bar is not None:
+                bar.update(rows.size)
+    finally:
+        if bar is not None:
+            bar.close()
+    return Z, y, history, reason
+
+
+# ---------------------------------------------------------------------- entry point
+def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: SurrogateConfig,
+                         *, rng: np.random.Generator, cache_dir: str | Path | None = None,
+                         progress: bool = False, counter: CallCounter | None = None
+                         ) -> tuple[PeakSurrogate, dict[str, Any]]:
+    """DOE (static or active) → FE sampling → fit; returns the surrogate and an info dict.
+
+    Parameters
+    ----------
+    spindle : ReferenceSpindle
+    inputs : RandomVector
+        θ distribution (``mean``, ``cov``, ``sample``): sets the θ box and the AL pool.
+    limit : LimitState
+        ``δ_lim`` (used by active learning).
+    cfg : SurrogateConfig
+    rng : numpy.random.Generator
+    cache_dir : path, optional
+        FE results are cached (resumable) under ``cache_dir/fe_points``.
+    progress : bool
+    counter : CallCounter, optional
+        Receives every FE call (a new one is made if omitted; its total is in the info).
+    """
+    if not isinstance(cfg, SurrogateConfig):
+        raise ValueError(f"cfg = {cfg!r} is not allowed: must be a SurrogateConfig")
+    rng = require_rng(rng)
+    r_doe, r_fit = rng.spawn(2)
+    counter = counter if counter is not None else CallCounter()
+    start = counter.calls
+    cache = fe_cache(cache_dir)
+    d = spindle.design_map.bounds.shape[0]
+    t0 = time.perf_counter()
+    history: list[dict[str, Any]] = []
+    reason = ""
+    if cfg.active_learning:
+        Z, y, history, reason = active_learning(spindle, inputs, limit, cfg, rng=r_doe,
+                                                cache=cache, counter=counter,
+                                                progress=progress)
+    else:
+        Z = build_doe(cfg.n_doe, joint_bounds(spindle, inputs, cfg), rng=r_doe)
+        Z, y = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress)
+    sample_s = time.perf_counter() - t0
+    sur = fit_surrogate(Z, y, cfg, rng=r_fit, n_design=d)
+    info = {**sur.info, "fe_calls": counter.calls - start, "sampling_time_s": sample_s,
+            "bounds": joint_bounds(spindle, inputs, cfg).tolist(),
+            "active_learning": cfg.active_learning, "config": cfg.to_dict()}
+    if cfg.active_learning:
+        info.update(al_history=history, al_stop_reason=reason)
+    sur.info = info
+    return sur, info

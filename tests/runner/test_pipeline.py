@@ -1,0 +1,127 @@
+"""Surrogate pipeline: tiny DOE end to end, independent prediction path, θ-block cache,
+config validation, FE-call accounting and the on-disk cache."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.core.counting import CallCounter
+from surrogate_rbrdo.core.protocols import LimitState
+from surrogate_rbrdo.runner.pipeline import (
+    PeakSurrogate,
+    SurrogateConfig,
+    joint_bounds,
+    train_peak_surrogate,
+)
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+INPUTS = MultivariateNormal([1.0, 1.0], std=[0.0605, 0.0641])
+LIMIT = LimitState(19.5e-6)
+TINY = SurrogateConfig(n_doe=14, n_start=1, n_jobs=1, backend="sequential")
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    cache = tmp_path_factory.mktemp("fe_cache")
+    counter = CallCounter()
+    sur, info = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, TINY,
+                                     rng=np.random.default_rng(3), cache_dir=cache,
+                                     counter=counter)
+    return sur, info, counter, cache
+
+
+def _joint(x, t):
+    return np.column_stack([np.repeat(x, len(t), axis=0), np.tile(t, (len(x), 1))])
+
+
+def test_tiny_pipeline_response_matches_smt_predict_values(trained):
+    sur, info, counter, _ = trained
+    assert isinstance(sur, PeakSurrogate)
+    assert sur.n_train == 14 and info["n_train"] == 14
+    assert info["fe_calls"] == 14 == counter.calls
+    rng = np.random.default_rng(0)
+    x = joint_bounds(reference_spindle(), INPUTS, TINY)[:3]
+    x = x[:, 0] + rng.random((4, 3)) * (x[:, 1] - x[:, 0])
+    t = INPUTS.sample(7, rng=rng)
+    y = sur.response(x, t)
+    assert y.shape == (4, 7)
+    # independent path: smt's own predict_values on the joint points, then exp (log transform)
+    ref = np.exp(sur.model.model_.predict_values(_joint(x, t)).reshape(4, 7))
+    np.testing.assert_allclose(y, ref, rtol=1e-8, atol=0)
+    assert np.all((y > 1e-8) & (y < 1e-3))  # metres, physically plausible range
+
+
+def test_training_points_are_interpolated(trained):
+    sur, *_ = trained
+    Z, logy = sur.model.X_train_, sur.model.y_train_
+    y = np.array([sur.response(z[None, :3], z[None, 3:])[0, 0] for z in Z])
+    np.testing.assert_allclose(np.log(y), logy, atol=1e-6)
+
+
+def test_theta_block_cache_keyed_on_identity(trained):
+    sur, *_ = trained
+    t = INPUTS.sample(5, rng=np.random.default_rng(1))
+    x = np.array([[2000.0, 500.0, 65.0]])
+    before = sur.theta_block_builds
+    a = sur.response(x, t)
+    b = sur.response(x + [[10.0, 0.0, 0.0]], t)
+    assert sur.theta_block_builds == before + 1          # second call reused the block
+    c = sur(x, t.copy())                                 # equal values, new object: rebuilt
+    assert sur.theta_block_builds == before + 2
+    np.testing.assert_array_equal(a, c)
+    assert not np.array_equal(a, b)
+
+
+def test_predict_lognormal_moments(trained):
+    sur, *_ = trained
+    Z = _joint(np.array([[1500.0, 600.0, 60.0]]), INPUTS.sample(3, rng=np.random.default_rng(2)))
+    p = sur.predict(Z)
+    mu = sur.model.model_.predict_values(Z).ravel()
+    s2 = np.maximum(sur.model.model_.predict_variances(Z).ravel(), 0.0)
+    np.testing.assert_allclose(p.mean, np.exp(mu + s2 / 2), rtol=1e-10)
+    np.testing.assert_allclose(p.std, np.exp(mu + s2 / 2) * np.sqrt(np.expm1(s2)), rtol=1e-10)
+
+
+def test_cache_makes_rerun_free(trained):
+    _, info, _, cache = trained
+    c2 = CallCounter()
+    sur2, info2 = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, TINY,
+                                       rng=np.random.default_rng(3), cache_dir=cache,
+                                       counter=c2)
+    assert c2.calls == 0 and info2["fe_calls"] == 0
+    np.testing.assert_array_equal(sur2.model.y_train_, trained[0].model.y_train_)
+
+
+@pytest.mark.parametrize("field,value", [
+    ("transform", "sqrt"), ("surrogate", "nn"), ("theta_box", "box"), ("n_doe", 3),
+    ("theta_sigmas", -1.0), ("backend", "mpi"), ("n_jobs", 0), ("active_learning", "yes"),
+    ("theta_bounds", (1.5, 0.5)), ("al_uncertain_frac", 2.0),
+])
+def test_config_validation_names_field_and_value(field, value):
+    with pytest.raises(ValueError, match=rf"{field} = .*{re.escape(str(value)[:3])}.*not allowed"):
+        SurrogateConfig(**{field: value})
+
+
+def test_config_from_dict_rejects_unknown_key():
+    with pytest.raises(ValueError, match="n_dOE"):
+        SurrogateConfig.from_dict({"n_dOE": 10})
+    assert SurrogateConfig.from_dict({"theta_bounds": [0.6, 1.4]}).theta_bounds == (0.6, 1.4)
+
+
+def test_bounds_box_choices():
+    sp = reference_spindle()
+    b = joint_bounds(sp, INPUTS, SurrogateConfig(theta_box="sigma", theta_sigmas=2.0))
+    np.testing.assert_allclose(b[3:], [[1 - 0.121, 1 + 0.121], [1 - 0.1282, 1 + 0.1282]])
+    b = joint_bounds(sp, INPUTS, SurrogateConfig(theta_box="bounds"))
+    np.testing.assert_allclose(b[3:], [[0.5, 1.5], [0.5, 1.5]])
+    np.testing.assert_allclose(b[:3], sp.design_map.bounds)
+
+
+def test_rejects_non_config():
+    with pytest.raises(ValueError, match="cfg"):
+        train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, {"n_doe": 10},
+                             rng=np.random.default_rng(0))
