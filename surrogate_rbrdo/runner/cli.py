@@ -52,7 +52,8 @@ def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = 
         pass
     summary = kind(cfg, run, progress=progress)
     run.write_json("summary.json", summary)
-    run.write_meta(seeds={"seed": exp.get("seed")})
+    extra = summary.get("meta") if isinstance(summary, dict) else None
+    run.write_meta(seeds={"seed": exp.get("seed")}, extra=extra)  # kinds may add to meta.json
     return run
 
 
