@@ -6,6 +6,12 @@ After an iHL-RF search for ``u*`` (counted), ``N`` points ``v = u + u*`` are dra
 The estimator is unbiased for any failure domain (the sampling density has full support), but its
 variance is only small when the failure domain is concentrated around one design point: on
 several branches use ``"ais"``.
+
+When the mean point lies in the failure domain (FORM's β < 0, P_f > 1/2) the density at ``u*``
+covers the *safe* tail instead, and weighting the failures has a variance of order ``exp(β²)``
+(at β = −3 an IS run of 2000 points returned 0.46 ± 0.06 for P_f = 0.9987). There the
+complement is estimated — ``P_f = 1 − mean(1[G(v) ≥ 0] · w)`` with the same weights, whose
+standard error is the same — which is again a small-variance tail estimate.
 """
 
 from __future__ import annotations
@@ -106,7 +112,11 @@ class ImportanceSampling:
             fail = G(v) < 0
             calls += G.calls
             logw = -v @ dp.u_star + 0.5 * dp.u_star @ dp.u_star
-            pf[i], se[i], ess[i] = is_weights_estimate(fail, logw)
+            if dp.beta >= 0:
+                pf[i], se[i], ess[i] = is_weights_estimate(fail, logw)
+            else:  # mean point fails: estimate the safe tail, P_f = 1 - P(safe)
+                ps, se[i], ess[i] = is_weights_estimate(~fail, logw)
+                pf[i] = min(max(1.0 - ps, 0.0), 1.0)
             nfail[i] = int(fail.sum())
         return make_estimate(
             "is", calls, p, pf=pf, pf_se=se, pf_ci=normal_ci(pf, se, self.ci_level),

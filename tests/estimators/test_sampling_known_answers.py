@@ -156,3 +156,15 @@ def test_adaptive_methods_stop_when_nothing_fails(name):
         resp, inputs, LimitState(2.0), np.zeros((1, 0)), rng=np.random.default_rng(0))
     assert np.isnan(quiet.pf[0])
     assert quiet.n_calls <= 10 * est.n_per_level      # stopped early, not after max_levels
+
+
+@pytest.mark.parametrize("beta", [-3.0, -4.0])
+def test_is_when_the_mean_point_fails(beta):
+    """P_f = Φ(−β) close to 1: weighting the failures at u* has variance ~ exp(β²) (β = −3
+    once gave 0.46 ± 0.06 for 0.9987); the complement estimate must be within 4 SE and tight."""
+    prob = linear_standard(beta=beta, dim=3)
+    est = run("is", prob, seed=3)
+    assert within(est, prob)
+    q = 1.0 - prob.pf_exact[0]  # the safe-tail probability the estimate rests on
+    assert abs((1.0 - est.pf[0]) / q - 1.0) < 0.2
+    assert est.pf_se[0] / q < 0.1
