@@ -65,6 +65,7 @@ class NSGA2Options:
     mutation_eta: float = 20.0
     mutation_mode: str = "per_variable"
     eliminate_duplicates: bool = True
+    engine: str = "lean"
 
     def __post_init__(self) -> None:
         check_int("pop_size", self.pop_size, minimum=2)
@@ -74,6 +75,7 @@ class NSGA2Options:
         check_range("mutation_prob", self.mutation_prob, 0.0, 1.0)
         check_positive("mutation_eta", self.mutation_eta)
         check_choice("mutation_mode", self.mutation_mode, ("per_variable", "per_individual"))
+        check_choice("engine", self.engine, ("lean", "pymoo"))
 
     def pymoo_mutation_probs(self, n_var: int) -> tuple[float, float]:
         """``(prob, prob_var)`` passed to pymoo's ``PM``."""
@@ -109,6 +111,9 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
     rng : numpy.random.Generator
         One integer seed is drawn from it for pymoo.
     options : NSGA2Options
+        ``engine="lean"`` (default) runs the array-based loop of
+        :mod:`~surrogate_rbrdo.optimization.lean` (same operators and rules, ~10x less
+        per-generation overhead); ``engine="pymoo"`` runs ``pymoo.optimize.minimize``.
     progress : bool
         Show a tqdm bar (one tick per generation).
     """
@@ -140,6 +145,8 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
                 out["G"] = G
 
     prob, prob_var = options.pymoo_mutation_probs(lo.size)
+    if options.engine == "lean":
+        return _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var)
     algorithm = NSGA2(
         pop_size=options.pop_size,
         sampling=LHS(),
@@ -159,6 +166,33 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
     F = np.asarray(pop.get("F"), dtype=float).reshape(X.shape[0], n_obj)
     G = (np.asarray(pop.get("G"), dtype=float).reshape(X.shape[0], n_con) if n_con
          else np.empty((X.shape[0], 0)))
+    return OptimizationResult(
+        X=X, F=F, G=G, pareto_mask=feasible_pareto(F, G), archive=archive,
+        n_surrogate_calls=evaluator.n_surrogate_calls, n_model_calls=evaluator.n_model_calls,
+        history=tuple(evaluator.history), wall_time_s=wall,
+        formulation=formulation.describe(),
+        optimizer={"name": "nsga2", "seed": seed, **asdict(options),
+                   "pymoo_mutation_prob": prob, "pymoo_mutation_prob_var": prob_var},
+    )
+
+
+def _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var
+              ) -> OptimizationResult:
+    from surrogate_rbrdo.optimization.lean import lean_nsga2
+
+    n_obj, n_con = formulation.n_obj, formulation.n_con
+    t0 = time.perf_counter()
+    try:
+        X, F, G = lean_nsga2(
+            evaluator, lo, hi, pop_size=options.pop_size, n_gen=options.n_gen,
+            crossover_prob=options.crossover_prob, crossover_eta=options.crossover_eta,
+            mutation_prob=prob, mutation_prob_var=prob_var, mutation_eta=options.mutation_eta,
+            eliminate_duplicates=options.eliminate_duplicates, seed=seed)
+    finally:
+        archive = evaluator.close()
+    wall = time.perf_counter() - t0
+    F = F.reshape(X.shape[0], n_obj)
+    G = G.reshape(X.shape[0], n_con) if n_con else np.empty((X.shape[0], 0))
     return OptimizationResult(
         X=X, F=F, G=G, pareto_mask=feasible_pareto(F, G), archive=archive,
         n_surrogate_calls=evaluator.n_surrogate_calls, n_model_calls=evaluator.n_model_calls,

@@ -1,0 +1,113 @@
+"""The ``study`` experiment end to end on a tiny config, and its config errors."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.runner.cli import run_experiment
+
+TINY = """
+[experiment]
+name = "tiny"
+kind = "study"
+seed = 5
+
+[surrogate]
+n_doe = 24
+n_jobs = 1
+n_start = 1
+
+[design_model]
+n_train = 10
+n_validate = 2
+
+[deterministic]
+resonance = "none"
+
+[optimization]
+p_targets = [0.10, 0.01]
+strategies = ["rdo", "rbdo", "deterministic"]
+n_theta = 40
+pop_size = 8
+n_gen = 4
+n_jobs = 1
+
+[verification]
+n_theta = 6
+n_jobs = 1
+
+[report]
+baseline = [2000.0, 465.8, 65.0]
+n_speeds = 20
+campbell_speeds = 4
+n_modes = 2
+"""
+
+
+def _write(tmp_path: Path, text: str) -> Path:
+    p = tmp_path / "study.toml"
+    p.write_text(text)
+    return p
+
+
+def test_tiny_study_writes_the_expected_files(tmp_path):
+    run = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="r1",
+                         progress=False)
+    files = {p.name for p in run.path.iterdir()}
+    for f in ("pareto_fronts.csv", "pareto_fronts.png", "compromises.csv", "mbr.csv",
+              "verification.csv", "strategy_comparison.csv", "campbell.png",
+              "unbalance_response.png", "meta.json", "config.json", "front_designs.png",
+              "design_model_validation.json"):
+        assert f in files, f
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["seeds"] == {"seed": 5}
+    # FE calls: 24 DOE + 12 design-model + 6 designs x 6 θ verification (baseline, 2 RBRDO
+    # compromises, RDO compromise, RBDO and deterministic optima)
+    assert meta["fe_calls"]["design_model"] == 12
+    assert meta["fe_calls"]["verification"] == 6 * 6
+    assert meta["surrogate_calls"]["optimization"] == 5 * 8 * 4 * 40 - 8 * 4 * 39
+    ver = (run.path / "verification.csv").read_text().splitlines()
+    assert ver[0].startswith("design,preload_N,span_mm,diameter_mm")
+    assert len(ver) == 1 + 6
+    mbr = (run.path / "mbr.csv").read_text().splitlines()
+    assert len(mbr) == 1 + 2     # one step (10 % -> 1 %) from the surrogate and from the FE
+
+
+@pytest.mark.slow
+def test_same_seed_same_compromises(tmp_path):
+    a = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="a")
+    b = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="b")
+    assert (a.path / "compromises.csv").read_text().split("wall_time_s")[0] == \
+        (b.path / "compromises.csv").read_text().split("wall_time_s")[0]
+    ca = np.genfromtxt(a.path / "compromises.csv", delimiter=",", names=True, dtype=None,
+                       encoding="utf-8")
+    cb = np.genfromtxt(b.path / "compromises.csv", delimiter=",", names=True, dtype=None,
+                       encoding="utf-8")
+    np.testing.assert_array_equal(ca["span_mm"], cb["span_mm"])
+
+
+@pytest.mark.parametrize("old,new,match", [
+    ('strategies = ["rdo", "rbdo", "deterministic"]', 'strategies = ["rdo", "robust"]',
+     r"optimization.strategies\[1\] = 'robust' is not allowed: must be one of \[.*'rbrdo'"),
+    ("p_targets = [0.10, 0.01]", "p_targets = [0.10, 1.5]",
+     r"optimization.p_targets\[1\] = 1.5 is not allowed: must lie in \(0.0, 1.0\)"),
+    ("n_theta = 40", 'n_theta = 40\nestimator = "mcmc"',
+     r"optimization.estimator = 'mcmc' is not allowed: must be one of .*'is'"),
+    ("pop_size = 8", "pop_size = 8\nweights = [0.5, 0.0]",
+     r"optimization.weights\[1\] = 0.0 is not allowed"),
+    ("n_gen = 4", "n_gen = 0", r"optimization.n_gen = 0 is not allowed"),
+    ("n_doe = 24", "n_doe = 0", r"n_doe = 0 is not allowed"),
+    ("n_theta = 6", "n_theta = 6\nn_thetas = 3",
+     r"unknown key\(s\) \['n_thetas'\] in \[verification\]"),
+    ('resonance = "none"', 'resonance = "campbell"', r"resonance = 'campbell' is not allowed"),
+])
+def test_bad_config_fails_before_work(tmp_path, old, new, match):
+    assert old in TINY
+    cfg = _write(tmp_path, TINY.replace(old, new, 1))
+    with pytest.raises(ValueError, match=match):
+        run_experiment(cfg, results_dir=tmp_path / "res", run_id="bad")
+    # nothing expensive happened: no FE cache, no tables
+    assert not (tmp_path / "res" / "tiny" / "_fe_cache").exists()
+    assert not (tmp_path / "res" / "tiny" / "bad" / "verification.csv").exists()
