@@ -100,3 +100,99 @@ def design_quantities(
         max_von_mises_Pa=stress.max_von_mises_Pa,
         stress_ratio=stress.max_von_mises_Pa / yield_Pa,
     )
+
+
+@dataclass(frozen=True)
+class ResonanceQuantities:
+    """Smooth ingredients of the peak amplitude, for physics-structured surrogates (SI units).
+
+    ``critical_rpm``: the first forward 1x critical speed (fixed point ``n = 60 f_fw,1(n)`` of
+    the lowest forward-whirl frequency), also when it lies above the operating range;
+    ``amp_res_m``: the peak tool amplitude within ±``window`` of it (the resonance's height);
+    ``amp_top_m``: the amplitude at ``n_max``; ``peak_m``: the peak over ``[n_min, n_max]``
+    (the response ``y``). Arrays over θ. Where the critical speed lies in range,
+    ``peak_m ≈ amp_res_m``; above it the peak is the flank value ``amp_top_m``: a near-step in
+    (x, θ) that the smooth ``critical_rpm`` locates.
+    """
+
+    critical_rpm: np.ndarray
+    amp_res_m: np.ndarray
+    amp_top_m: np.ndarray
+    peak_m: np.ndarray
+
+
+def first_critical_speed(model, theta: np.ndarray | None = None, *, rtol: float = 1e-7,
+                         max_iter: int = 60) -> float:
+    """First forward 1x critical speed (rpm): the root of ``h(n) = 60 f_fw,1(n) − n``.
+
+    Two fixed-point iterates ``n0 = n_max``, ``n1 = 60 f_fw,1(n0)`` bracket the root whenever
+    ``f_fw,1`` is monotone in ``n`` (speed softening, gyroscopic stiffening), and Brent's method
+    finishes in a few modal analyses; otherwise the fixed-point iteration is continued. Raises
+    ``ModelError`` if neither converges.
+    """
+    from scipy.optimize import brentq
+
+    from surrogate_rbrdo.core.errors import ModelError
+    from surrogate_rbrdo.spindle.modal import modal_analysis
+
+    def f(n: float) -> float:
+        fw = modal_analysis(model, n, theta).forward()
+        if fw.size == 0:
+            raise ModelError("no forward-whirl mode found")
+        return 60.0 * float(fw[0])
+
+    n0 = model.geometry.speed_max_rpm
+    n1 = f(n0)
+    a, b = min(n0, n1), max(n0, n1)
+    if a == b:
+        return n1
+    ha, hb = f(a) - a, f(b) - b
+    if ha >= 0 >= hb:
+        return float(brentq(lambda n: f(n) - n, a, b, rtol=rtol))
+    n = n1
+    for _ in range(max_iter):
+        n_new = f(n)
+        if abs(n_new - n) <= rtol * n_new:
+            return n_new
+        n = n_new
+    raise ModelError(f"first critical speed: no convergence (last {n:.6g} rpm)")
+
+
+def resonance_quantities(
+    spindle: ReferenceSpindle, x: np.ndarray, theta: np.ndarray, *, window: float = 0.03,
+    options: PeakOptions | None = None,
+) -> ResonanceQuantities:
+    """:class:`ResonanceQuantities` of design ``x`` for every row of ``theta``."""
+    from surrogate_rbrdo.spindle.harmonic import tool_amplitude
+
+    if not 0.0 < window < 0.5:
+        raise ValueError(f"window = {window} is not allowed: must lie in (0, 0.5)")
+    opts = options or PeakOptions()
+    model = spindle.model(np.asarray(x, dtype=float))
+    th = model.check_theta(theta)
+    g = model.geometry
+    crit = np.array([first_critical_speed(model, t) for t in th])
+    res = np.array([
+        peak_tool_amplitude(model, t, speed_range_rpm=(c * (1 - window), c * (1 + window)),
+                            options=opts).amplitude[0] for t, c in zip(th, crit, strict=True)
+    ])
+    peak = peak_tool_amplitude(model, th, options=opts)
+    top = tool_amplitude(model, np.array([g.speed_max_rpm]), th)[:, 0]
+    return ResonanceQuantities(crit, res, top, peak.amplitude)
+
+
+@dataclass(frozen=True)
+class PointwiseResonance:
+    """``f(z) -> [critical_rpm, amp_res_m, amp_top_m, peak_m]`` for one joint point
+    ``z = [x, θ]`` (for DOE sampling in worker processes)."""
+
+    spindle: ReferenceSpindle
+    window: float = 0.03
+    options: PeakOptions = field(default_factory=PeakOptions)
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        z = np.asarray(z, dtype=float)
+        d = len(self.spindle.design_map.names)
+        q = resonance_quantities(self.spindle, z[:d], z[None, d:], window=self.window,
+                                 options=self.options)
+        return np.array([q.critical_rpm[0], q.amp_res_m[0], q.amp_top_m[0], q.peak_m[0]])
