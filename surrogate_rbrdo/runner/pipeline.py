@@ -31,7 +31,7 @@ with ``U < al_u_stop`` is ≤ ``al_uncertain_frac`` or after ``al_max_added`` po
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -50,12 +50,13 @@ from surrogate_rbrdo.core.validate import (
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling import evaluate_points
 from surrogate_rbrdo.sampling.evaluate import BACKENDS
-from surrogate_rbrdo.spindle.evaluate import PointwisePeak
+from surrogate_rbrdo.spindle.evaluate import PointwisePeak, PointwiseResonance
 from surrogate_rbrdo.surrogates import SURROGATES, GPROptions, KrigingOptions
 from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
 
 TRANSFORMS = ("log", "none")
 THETA_BOXES = ("sigma", "bounds")
+STRUCTURES = ("global", "resonance")
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,30 @@ class SurrogateConfig:
         Stop when at most this fraction of the pool has ``U < al_u_stop``.
     al_n_start : int
         Multistarts during the AL refits (the final fit uses ``n_start``).
+    structure : {"global", "resonance"}
+        ``"global"`` (default): one Kriging of ``t(y)`` (:class:`PeakSurrogate`).
+        ``"resonance"``: the physics-structured
+        :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (critical
+        speed, resonance height, flank, background; ``transform`` is ignored, every sub-model
+        is a log-Kriging; static DOE only).
+    res_ares_r_min : float
+        Resonance height sub-model trained on points with ``n_max / n_c >=`` this.
+    res_bg_r_max : float
+        Background sub-model trained on points with ``n_max / n_c <=`` this (< 1).
+    res_zeta_r_min : float
+        Effective damping ratio from flank points with ``res_zeta_r_min <= n_max/n_c < 1``.
+    res_zeta_min_points : int
+        Kriging of ``log ζ`` from at least this many flank points, else a constant ζ.
+    res_n_band : int
+        Points "where they matter" added after the ``n_doe`` LHS (structure ``"resonance"``):
+        a Kriging of ``log n_c`` on the LHS predicts ``r = n_max / n_c`` on a random pool of
+        ``res_band_pool`` joint points; ``res_n_band`` pool points with
+        ``|r̂ - 1| <= res_band`` are chosen by greedy maximin (normalised box, distance to
+        all points so far) and evaluated. Total FE calls: ``n_doe + res_n_band``.
+    res_band : float
+        Half-width of the band in ``r``.
+    res_band_pool : int
+        Size of the random candidate pool.
     """
 
     n_doe: int = 200
@@ -113,6 +138,14 @@ class SurrogateConfig:
     al_u_stop: float = 2.0
     al_uncertain_frac: float = 0.002
     al_n_start: int = 2
+    structure: str = "global"
+    res_ares_r_min: float = 0.85
+    res_bg_r_max: float = 0.95
+    res_zeta_r_min: float = 0.95
+    res_zeta_min_points: int = 20
+    res_n_band: int = 0
+    res_band: float = 0.05
+    res_band_pool: int = 20000
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -141,6 +174,17 @@ class SurrogateConfig:
         check_positive("al_u_stop", self.al_u_stop)
         check_range("al_uncertain_frac", self.al_uncertain_frac, 0.0, 1.0)
         check_int("al_n_start", self.al_n_start, minimum=1)
+        check_choice("structure", self.structure, STRUCTURES)
+        check_range("res_ares_r_min", self.res_ares_r_min, 0.0, 1.0)
+        check_range("res_bg_r_max", self.res_bg_r_max, 0.0, 1.0)
+        check_range("res_zeta_r_min", self.res_zeta_r_min, 0.0, 1.0)
+        check_int("res_zeta_min_points", self.res_zeta_min_points, minimum=1)
+        check_int("res_n_band", self.res_n_band, minimum=0)
+        check_range("res_band", self.res_band, 0.0, 1.0, inclusive=False)
+        check_int("res_band_pool", self.res_band_pool, minimum=1)
+        if self.structure == "resonance" and self.active_learning:
+            raise ValueError("active_learning = True is not allowed with structure = "
+                             "'resonance': the structured surrogate uses a static DOE")
 
     @classmethod
     def from_dict(cls, table: dict[str, Any]) -> SurrogateConfig:
@@ -295,6 +339,55 @@ def sample_fe(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache: Any =
     return Z[ok], res.y[ok]
 
 
+def sample_resonance(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache: Any = None,
+                     counter: CallCounter | None = None, progress: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """FE resonance quantities at joint points (one counted, cached FE call per point).
+
+    Returns the points whose four outputs (``critical_rpm, amp_res_m, amp_top_m, peak_m``) are
+    finite and positive, and those outputs ``(n, 4)``. Cached apart from :func:`sample_fe`
+    (a different function and a vector-output cache entry).
+    """
+    Z = check_finite_array("Z", Z, ndim=2)
+    res = evaluate_points(
+        PointwiseResonance(spindle), Z, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache,
+        counter=counter, on_nonfinite="exclude", progress=progress, n_outputs=4,
+        client="local" if cfg.backend == "dask" else None)
+    ok = res.ok_mask & np.all(np.where(np.isfinite(res.y), res.y, 0.0) > 0, axis=1)
+    return Z[ok], res.y[ok]
+
+
+def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm: float,
+                cfg: SurrogateConfig, *, rng: np.random.Generator, n_design: int = 3
+                ) -> np.ndarray:
+    """``cfg.res_n_band`` new joint points with predicted ``|n_max / n_c - 1| <= res_band``.
+
+    A Kriging of ``log n_c`` on ``(Z, nc_rpm)`` screens a random pool of ``res_band_pool``
+    points of ``bounds``; the band candidates are thinned by greedy maximin (each new point the
+    candidate farthest, in the unit-scaled box, from all points so far, ``Z`` included).
+    Fewer points are returned if the pool has fewer band candidates.
+    """
+    r_fit, r_pool = require_rng(rng).spawn(2)
+    sub = fit_surrogate(Z, nc_rpm, replace(cfg, transform="log", structure="global"),
+                        rng=r_fit, n_start=cfg.al_n_start, n_design=n_design)
+    pool = lhs(cfg.res_band_pool, bounds, rng=r_pool, criterion="random")
+    r_hat = n_max_rpm / np.exp(sub.model.predict(pool).mean)
+    cand = pool[np.abs(r_hat - 1.0) <= cfg.res_band]
+    lo, span = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
+    cu, zu = (cand - lo) / span, (Z - lo) / span
+    dmin = np.full(cand.shape[0], np.inf)
+    for a in range(0, zu.shape[0], 256):
+        d = np.sqrt(((cu[:, None, :] - zu[None, a:a + 256, :]) ** 2).sum(-1))
+        dmin = np.minimum(dmin, d.min(axis=1))
+    chosen: list[int] = []
+    for _ in range(min(cfg.res_n_band, cand.shape[0])):
+        i = int(np.argmax(dmin))
+        chosen.append(i)
+        dmin = np.minimum(dmin, np.sqrt(((cu - cu[i]) ** 2).sum(-1)))
+        dmin[i] = -np.inf
+    return cand[chosen]
+
+
 def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
                   rng: np.random.Generator, n_start: int | None = None,
                   n_design: int = 3) -> PeakSurrogate:
@@ -382,6 +475,11 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
                          ) -> tuple[PeakSurrogate, dict[str, Any]]:
     """DOE (static or active) → FE sampling → fit; returns the surrogate and an info dict.
 
+    With ``cfg.structure = "resonance"`` the returned surrogate is a
+    :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (same interface:
+    ``response``, ``__call__``, ``predict``, ``n_train``, ``info``), trained on the FE
+    resonance quantities of the same static DOE.
+
     Parameters
     ----------
     spindle : ReferenceSpindle
@@ -408,6 +506,30 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     t0 = time.perf_counter()
     history: list[dict[str, Any]] = []
     reason = ""
+    if cfg.structure == "resonance":
+        from surrogate_rbrdo.runner.resonance_surrogate import fit_resonance_surrogate
+
+        bounds = joint_bounds(spindle, inputs, cfg)
+        n_max = float(spindle.geometry.speed_max_rpm)
+        Z = build_doe(cfg.n_doe, bounds, rng=r_doe)
+        Z, Q = sample_resonance(spindle, Z, cfg, cache=cache, counter=counter,
+                                progress=progress)
+        n_lhs = Z.shape[0]
+        if cfg.res_n_band > 0:
+            Zb = band_points(Z, Q[:, 0], bounds, n_max, cfg, rng=r_doe.spawn(1)[0],
+                             n_design=d)
+            Zb, Qb = sample_resonance(spindle, Zb, cfg, cache=cache, counter=counter,
+                                      progress=progress)
+            Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])
+        sample_s = time.perf_counter() - t0
+        rsur = fit_resonance_surrogate(Z, Q, cfg, rng=r_fit, n_max_rpm=n_max, n_design=d,
+                                       is_band=np.arange(Z.shape[0]) >= n_lhs)
+        rsur.info["n_lhs"], rsur.info["n_band"] = n_lhs, int(Z.shape[0] - n_lhs)
+        info = {**rsur.info, "fe_calls": counter.calls - start, "sampling_time_s": sample_s,
+                "bounds": joint_bounds(spindle, inputs, cfg).tolist(),
+                "active_learning": False, "config": cfg.to_dict()}
+        rsur.info = info
+        return rsur, info
     if cfg.active_learning:
         Z, y, history, reason = active_learning(spindle, inputs, limit, cfg, rng=r_doe,
                                                 cache=cache, counter=counter,

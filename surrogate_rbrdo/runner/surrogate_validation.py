@@ -14,14 +14,22 @@ train_peak_surrogate` and writes
   ``rel_tol``; P_f within max(1 point, 3 SE));
 * ``cost.csv``: FE calls of training, fit time and the P_f accuracy per variant (the
   active-learning comparison);
-* ``parity_<variant>.png`` (µm) and ``parity_log_<variant>.png`` (log10 y).
+* ``parity_<variant>.png`` (µm) and ``parity_log_<variant>.png`` (log10 y);
+* for variants with ``structure = "resonance"`` (the physics-structured surrogate):
+  ``resonance_submodels.csv`` (each ingredient — ``n_c``, ``A_res``, background ``y`` — against
+  the FE resonance quantities at the test points, relative errors; ``n_c`` also within
+  ``|n_max/n_c - 1| <= 0.05``) and ``nc_at_designs.csv`` (the ``n_c`` model at the validation
+  designs × the first ``n_theta_nc`` θ of the MC sample: error in rpm against the θ-spread of
+  ``n_c``, which is what places the failure boundary). Their LOO rows are the combined model
+  (``closed_form_combined``: each sub-model's closed-form LOO, combined) plus one row per
+  sub-model in its own log space.
 
 Variants with the same DOE settings share the FE cache (``<results root>/.cache``), so e.g. the
 log and raw variants cost the FE calls once. Config tables: ``[spindle]``, ``[uncertainty]``
 (``mean``, ``std``, optional ``corr``; default Table 4 pooled CoVs), ``[limit]``
 (``delta_lim_um``), ``[surrogate]`` (:class:`~surrogate_rbrdo.runner.pipeline.SurrogateConfig`)
 and ``[validation]`` (``n_test``, ``n_theta``, ``designs`` label → ``[F N, L mm, D mm]``,
-``variants``, ``rel_tol``).
+``variants``, ``rel_tol``, ``n_theta_nc``).
 """
 
 from __future__ import annotations
@@ -45,14 +53,16 @@ from surrogate_rbrdo.runner.pipeline import (
     inverse,
     joint_bounds,
     sample_fe,
+    sample_resonance,
     train_peak_surrogate,
 )
+from surrogate_rbrdo.runner.resonance_surrogate import ResonanceSurrogate
 from surrogate_rbrdo.runner.runfolder import RunFolder
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 from surrogate_rbrdo.surrogates.validation import compare_mc, loo_cv, validation_metrics
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
-VALIDATION_KEYS = {"n_test", "n_theta", "designs", "variants", "rel_tol"}
+VALIDATION_KEYS = {"n_test", "n_theta", "designs", "variants", "rel_tol", "n_theta_nc"}
 UNCERTAINTY_KEYS = {"mean", "std", "corr"}
 LIMIT_KEYS = {"delta_lim_um"}
 TABLE4_STD = (0.0605, 0.0641)
@@ -112,9 +122,57 @@ class _GridAdapter:
         return Prediction(mean=y, std=np.full_like(y, np.nan))
 
 
-def point_response(sur: PeakSurrogate, Z: np.ndarray) -> np.ndarray:
+def point_response(sur: PeakSurrogate | ResonanceSurrogate, Z: np.ndarray) -> np.ndarray:
     """The response at joint points (same quantity as ``sur.response`` on a grid)."""
+    if isinstance(sur, ResonanceSurrogate):
+        return sur.response_points(Z)
     return inverse(sur.model.predict(Z).mean, sur.transform)
+
+
+def _rel_row(variant: str, quantity: str, subset: str, true: np.ndarray, pred: np.ndarray,
+             unit_scale: float, unit: str) -> list[Any]:
+    if true.size < 2:
+        return [variant, quantity, subset, int(true.size), "", "", "", "", unit]
+    e = pred / true - 1.0
+    ml = validation_metrics(np.log(true), np.log(pred))
+    return [variant, quantity, subset, int(true.size), round(ml.r2, 6),
+            float(f"{np.sqrt(np.mean(e**2)):.3e}"), float(f"{np.max(np.abs(e)):.3e}"),
+            round(float(np.max(np.abs(pred - true))) * unit_scale, 4), unit]
+
+
+SUB_HEADER = ["variant", "quantity", "subset", "n", "r2_log", "rms_rel_err", "max_rel_err",
+              "max_abs_err", "unit"]
+NC_HEADER = ["variant", "design", "n_theta", "nc_fe_mean_rpm", "nc_fe_std_rpm",
+             "r_min", "r_max", "nc_max_abs_err_rpm", "nc_mean_err_rpm", "err_over_std"]
+
+
+def _resonance_tables(name: str, sur: ResonanceSurrogate, Z_t: np.ndarray, Q_t: np.ndarray,
+                      Z_d: np.ndarray, Q_d: np.ndarray, labels: list[str],
+                      n_th: int) -> tuple[list[list[Any]], list[list[Any]]]:
+    n_max = sur.n_max_rpm
+    p = sur.sub_predictions(Z_t)
+    r = n_max / Q_t[:, 0]
+    near = np.abs(r - 1) <= 0.05
+    rows = [_rel_row(name, "critical_rpm", "all", Q_t[:, 0], p["nc"], 1.0, "rpm"),
+            _rel_row(name, "critical_rpm", "|r-1|<=0.05", Q_t[near, 0], p["nc"][near], 1.0,
+                     "rpm"),
+            _rel_row(name, "amp_res", "r>=1", Q_t[r >= 1, 1], p["ares"][r >= 1], 1e6, "um")]
+    if "bg" in p:
+        m = r <= 0.95
+        rows.append(_rel_row(name, "background_y", "r<=0.95", Q_t[m, 3], p["bg"][m], 1e6,
+                             "um"))
+    nc_rows = []
+    pd = sur.sub_predictions(Z_d)["nc"]
+    for i, lab in enumerate(labels):
+        sl = slice(i * n_th, (i + 1) * n_th)
+        t, q = Q_d[sl, 0], pd[sl]
+        sd = float(np.std(t, ddof=1))
+        err = q - t
+        nc_rows.append([name, lab, n_th, round(float(t.mean()), 1), round(sd, 2),
+                        round(float(n_max / t.max()), 5), round(float(n_max / t.min()), 5),
+                        round(float(np.max(np.abs(err))), 2), round(float(err.mean()), 2),
+                        round(float(np.max(np.abs(err)) / sd), 4) if sd > 0 else ""])
+    return rows, nc_rows
 
 
 def _metrics_row(variant: str, y: np.ndarray, yp: np.ndarray, lim: float) -> list[Any]:
@@ -149,6 +207,7 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
     n_test = check_int("validation.n_test", val.get("n_test", 120), minimum=2)
     n_theta = check_int("validation.n_theta", val.get("n_theta", 1000), minimum=2)
     rel_tol = check_positive("validation.rel_tol", val.get("rel_tol", 0.05))
+    n_theta_nc = check_int("validation.n_theta_nc", val.get("n_theta_nc", 40), minimum=2)
     spindle = spindle_from_config(config.get("spindle", {}), config.get("_base_dir", "."))
     inputs = inputs_from_config(config.get("uncertainty", {}))
     lim_table = dict(config.get("limit", {}))
@@ -195,6 +254,10 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                      counter=fe_mc_counter, progress=progress)
 
     metrics_rows, loo_rows, mc_rows, cost_rows, sur_calls = [], [], [], [], 0
+    sub_rows: list[list[Any]] = []
+    nc_rows: list[list[Any]] = []
+    Q_test = None
+    n_th = min(n_theta_nc, n_theta)
     info_all: dict[str, Any] = {}
     for name, cfg in variants.items():
         counter = CallCounter()
@@ -211,13 +274,42 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         sur_calls += yp.size
         metrics_rows.append(_metrics_row(name, y_test, yp, limit.threshold))
         with run.timed(f"loo_{name}"):
-            loo = loo_cv(sur.model, method="closed_form")
-        y_tr = inverse(loo.y_true, sur.transform)
-        y_lo = inverse(loo.y_loo, sur.transform)
+            if isinstance(sur, ResonanceSurrogate):
+                y_tr, y_lo = sur.loo_points()
+                lm = validation_metrics(np.log(y_tr), np.log(y_lo))
+                loo_method, loo_r2, loo_rmse = "closed_form_combined", lm.r2, lm.rmse
+                sub_loo = {k: loo_cv(s.model, method="closed_form")
+                           for k, s in sur.subs.items()}
+            else:
+                loo = loo_cv(sur.model, method="closed_form")
+                y_tr = inverse(loo.y_true, sur.transform)
+                y_lo = inverse(loo.y_loo, sur.transform)
+                loo_method, loo_r2, loo_rmse = loo.method, loo.metrics.r2, loo.metrics.rmse
+                sub_loo = {}
         ml = validation_metrics(y_tr * 1e6, y_lo * 1e6)
-        loo_rows.append([name, loo.method, sur.n_train, round(loo.metrics.r2, 5),
-                         round(loo.metrics.rmse, 5), round(ml.r2, 5), round(ml.rmse, 4),
+        loo_rows.append([name, loo_method, sur.n_train, round(loo_r2, 5),
+                         round(loo_rmse, 5), round(ml.r2, 5), round(ml.rmse, 4),
                          round(ml.nrmse, 5), round(ml.max_abs_error, 3)])
+        for k, lo in sub_loo.items():
+            loo_rows.append([name, f"closed_form:{k}", int(lo.y_true.size),
+                             round(lo.metrics.r2, 6), float(f"{lo.metrics.rmse:.4e}"),
+                             "", "", "", ""])
+        if isinstance(sur, ResonanceSurrogate):
+            if Q_test is None:
+                with run.timed("fe_resonance_test_points"):
+                    Z_t, Q_test = sample_resonance(spindle, Z_test, base,
+                                                   cache=_memory(cache_dir),
+                                                   counter=fe_test_counter, progress=progress)
+                    Z_d = np.column_stack([np.repeat(X_des, n_th, axis=0),
+                                           np.tile(theta[:n_th], (X_des.shape[0], 1))])
+                    Z_d, Q_d = sample_resonance(spindle, Z_d, base, cache=_memory(cache_dir),
+                                                counter=fe_test_counter, progress=progress)
+                if Z_d.shape[0] != X_des.shape[0] * n_th:
+                    raise ValueError("FE resonance quantities failed at a validation design")
+            rs, ncs = _resonance_tables(name, sur, Z_t, Q_test, Z_d, Q_d, list(designs),
+                                        n_th)
+            sub_rows += rs
+            nc_rows += ncs
         with run.timed(f"surrogate_mc_{name}"):
             cmp = compare_mc(_GridAdapter(sur), X_des, theta, limit, y_true=y_fe,
                              rel_tol=rel_tol)
@@ -232,7 +324,9 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                 round(cmp.std_rel_err[i], 4), bool(cmp.ok_std[i]),
                 round(cmp.pf_true[i], 4), round(cmp.pf_sur[i], 4), round(pf_err[i], 4),
                 round(cmp.pf_tol[i], 4), bool(cmp.ok_pf[i])])
-        cost_rows.append([name, cfg.active_learning, cfg.transform, fe_train, sur.n_train,
+        cost_rows.append([name, cfg.active_learning,
+                          "resonance" if cfg.structure == "resonance" else cfg.transform,
+                          fe_train, sur.n_train,
                           round(info["fit_time_s"], 2), round(train_s, 2),
                           round(float(pf_err.max()), 4), round(float(pf_err.mean()), 4),
                           int(cmp.ok_pf.sum()), int(cmp.ok_mean.sum()), int(cmp.ok_std.sum()),
@@ -247,6 +341,9 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
     run.write_csv("loo.csv", LOO_HEADER, loo_rows)
     run.write_csv("mc_comparison.csv", MC_HEADER, mc_rows)
     run.write_csv("cost.csv", COST_HEADER, cost_rows)
+    if sub_rows:
+        run.write_csv("resonance_submodels.csv", SUB_HEADER, sub_rows)
+        run.write_csv("nc_at_designs.csv", NC_HEADER, nc_rows)
     run.write_json("surrogate_info.json", info_all)
     run.write_json("calls.json", {
         "fe_calls_test_points": fe_test_counter.calls, "fe_calls_mc": fe_mc_counter.calls,
@@ -260,6 +357,8 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         "surrogate_calls": sur_calls,
         "metrics": [dict(zip(METRICS_HEADER, r, strict=True)) for r in metrics_rows],
         "cost": [dict(zip(COST_HEADER, r, strict=True)) for r in cost_rows],
+        "resonance_submodels": [dict(zip(SUB_HEADER, r, strict=True)) for r in sub_rows],
+        "nc_at_designs": [dict(zip(NC_HEADER, r, strict=True)) for r in nc_rows],
         "summary": [{k: v for k, v in zip(MC_HEADER, r, strict=True)
                      if k in ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe",
                               "pf_sur", "ok_mean", "ok_std", "ok_pf")} for r in mc_rows],

@@ -1,4 +1,4 @@
-"""Evaluate ``func(point) -> float`` on every row of a point set.
+"""Evaluate ``func(point) -> float`` (or a fixed-length vector) on every row of a point set.
 
 * **Parallel**: joblib, processes (``"loky"``) by default; ``"threading"`` and ``"sequential"``
   are accepted too; ``"dask"`` runs joblib's Dask backend against a ``distributed.Client``
@@ -14,6 +14,10 @@ by reference (module and name), so after changing its *code* point the cache at 
 a model object (e.g. an FE model instance) is pickled with its parameters, so changing a
 parameter changes the key. With Dask workers on other machines the cache location must be on a
 shared file system.
+* **Vector outputs**: ``n_outputs=k`` accepts ``func(point) -> array (k,)`` (one call per point,
+  counted once); ``y`` is then ``(n, k)`` and a point is ok only if all ``k`` values are finite.
+  Vector results are cached under a different function (``_call_vector``) than scalar ones, so
+  the two never share cache entries.
 * **Non-finite output**: ``on_nonfinite="raise"`` raises
   :class:`~surrogate_rbrdo.core.ModelError` naming the first offending point;
   ``"exclude"`` keeps going and flags the points in ``ok_mask``.
@@ -50,10 +54,11 @@ class SampleResult:
     ----------
     points : ndarray, shape (n, D)
         All requested points, in order.
-    y : ndarray, shape (n,)
-        Function values (NaN/inf kept as returned where ``ok_mask`` is False).
+    y : ndarray, shape (n,) or (n, k)
+        Function values (NaN/inf kept as returned where ``ok_mask`` is False); ``(n, k)`` with
+        ``n_outputs=k``.
     ok_mask : ndarray of bool, shape (n,)
-        True where ``y`` is finite.
+        True where ``y`` is finite (every component, for vector outputs).
     from_cache : ndarray of bool, shape (n,)
         True where the value was loaded from the cache instead of computed.
     n_evaluated : int
@@ -99,6 +104,10 @@ def _call(func: Callable[[np.ndarray], float], point: np.ndarray) -> float:
     return float(func(point))
 
 
+def _call_vector(func: Callable[[np.ndarray], np.ndarray], point: np.ndarray) -> np.ndarray:
+    return np.asarray(func(point), dtype=float).reshape(-1)
+
+
 def _parallel_config(backend: str, n_jobs: int, client: Any) -> tuple[Any, Any]:
     """Return (context manager, cluster-to-close)."""
     import joblib
@@ -137,6 +146,7 @@ def evaluate_points(
     on_nonfinite: str = "raise",
     progress: bool = False,
     client: Any = None,
+    n_outputs: int | None = None,
 ) -> SampleResult:
     """Evaluate ``func`` on every row of ``points``.
 
@@ -160,6 +170,10 @@ def evaluate_points(
     client : distributed.Client or "local", optional
         Required by ``backend="dask"``; ``"local"`` starts (and closes) a temporary in-process
         ``LocalCluster`` with ``n_jobs`` workers.
+    n_outputs : int, optional
+        ``None`` (default): ``func`` returns a float and ``y`` is ``(n,)``. An integer ``k``:
+        ``func`` returns ``k`` values (any array-like) and ``y`` is ``(n, k)``; a return of
+        another length raises ``ValueError``.
 
     Returns
     -------
@@ -185,13 +199,18 @@ def evaluate_points(
         raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
     if not callable(func):
         raise ValueError(f"func = {func!r} is not allowed: must be callable")
+    if n_outputs is not None and (isinstance(n_outputs, bool) or not isinstance(
+            n_outputs, (int, np.integer)) or n_outputs < 1):
+        raise ValueError(f"n_outputs = {n_outputs!r} is not allowed: must be None or an "
+                         "integer >= 1")
 
     n = X.shape[0]
-    y = np.full(n, np.nan)
+    y = np.full(n if n_outputs is None else (n, int(n_outputs)), np.nan)
     from_cache = np.zeros(n, dtype=bool)
-    target: Callable[..., float] = _call
+    base: Callable[..., Any] = _call if n_outputs is None else _call_vector
+    target: Callable[..., Any] = base
     if cache is not None:
-        target = cache.cache(_call)
+        target = cache.cache(base)
         for i in range(n):
             if target.check_call_in_cache(func, X[i]):
                 y[i] = target(func, X[i])
@@ -218,9 +237,14 @@ def evaluate_points(
             # count what was computed even if a later point raised (it is cached already)
             if counter is not None and done:
                 counter.add(len(done))
+        if n_outputs is not None:
+            bad = [len(v) for v in done if len(v) != n_outputs]
+            if bad:
+                raise ValueError(f"func returned {bad[0]} values is not allowed: must return "
+                                 f"n_outputs = {n_outputs}")
         y[todo] = done
 
-    ok = np.isfinite(y)
+    ok = np.isfinite(y) if n_outputs is None else np.isfinite(y).all(axis=1)
     if on_nonfinite == "raise" and not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         raise ModelError(

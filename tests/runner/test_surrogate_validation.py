@@ -120,3 +120,54 @@ def test_bad_variant_names_variant(tmp_path):
     cfg.write_text(TINY.format(extra="").replace("al_n_start = 1", "al_n_start = 0"))
     with pytest.raises(ValueError, match=r"variants\.al: al_n_start = 0"):
         run_experiment(cfg, results_dir=tmp_path / "res", progress=False)
+
+
+TINY_RES = """
+[experiment]
+name = "sv_tiny_res"
+kind = "surrogate_validation"
+seed = 7
+
+[surrogate]
+n_doe = 16
+n_start = 1
+al_n_start = 1
+n_jobs = 1
+backend = "sequential"
+
+[validation]
+n_test = 10
+n_theta = 20
+n_theta_nc = 6
+
+[validation.variants.res]
+structure = "resonance"
+res_n_band = 4
+res_band = 0.1
+res_band_pool = 2000
+
+[validation.designs]
+subcritical = [2000.0, 330.0, 75.0]
+boundary = [3000.0, 490.0, 70.0]
+"""
+
+
+def test_tiny_run_with_resonance_variant(tmp_path):
+    cfg = tmp_path / "res.toml"
+    cfg.write_text(TINY_RES)
+    run = run_experiment(cfg, results_dir=tmp_path / "results", run_id="r1", progress=False)
+    cost = {r["variant"]: r for r in _read(run.path / "cost.csv")}
+    assert int(cost["res"]["n_train"]) == 20 and cost["res"]["transform"] == "resonance"
+    loo = [r for r in _read(run.path / "loo.csv") if r["variant"] == "res"]
+    assert loo[0]["method"] == "closed_form_combined"
+    assert {r["method"] for r in loo[1:]} >= {"closed_form:nc", "closed_form:ares"}
+    sub = _read(run.path / "resonance_submodels.csv")
+    assert sub[0]["quantity"] == "critical_rpm" and int(sub[0]["n"]) == 10
+    nc = _read(run.path / "nc_at_designs.csv")
+    assert [r["design"] for r in nc] == ["subcritical", "boundary"]
+    # the FE n_c at the boundary design is near n_max (r within a few % of 1)
+    assert 0.95 < float(nc[1]["r_min"]) <= float(nc[1]["r_max"]) < 1.05
+    s = json.loads((run.path / "summary.json").read_text())
+    # test points: 10 scalar + 10 resonance + 2 designs × 6 θ resonance
+    assert s["fe_calls"]["test"] == 10 + 10 + 12
+    assert s["fe_calls"]["train_res"] == 20

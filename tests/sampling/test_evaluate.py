@@ -98,3 +98,42 @@ def test_bad_arguments():
         evaluate_points(branin, POINTS, backend="dask")
     with pytest.raises(ValueError, match="non-finite"):
         evaluate_points(branin, [[np.nan, 1.0]])
+
+
+def ten_x(p):
+    return float(10.0 * p[0])
+
+
+def two_outputs(p):
+    return np.array([p[0] + p[1], np.nan if p[0] < 0 else p[0] * p[1]])
+
+
+def test_vector_outputs_counted_once_cached_apart_from_scalar(tmp_path):
+    mem = Memory(tmp_path / "cache", verbose=0)
+    c = CallCounter()
+    pts = np.array([[1.0, 2.0], [3.0, 4.0], [-1.0, 5.0]])
+    res = evaluate_points(two_outputs, pts, n_outputs=2, counter=c, cache=mem,
+                          on_nonfinite="exclude")
+    assert res.y.shape == (3, 2) and c.calls == 3
+    assert np.array_equal(res.y[:2], [[3.0, 2.0], [7.0, 12.0]])
+    assert res.ok_mask.tolist() == [True, True, False]
+    assert res.y_ok.shape == (2, 2)
+    par = evaluate_points(two_outputs, pts, n_outputs=2, n_jobs=2, on_nonfinite="exclude")
+    assert np.array_equal(par.y[:2], res.y[:2])
+    again = evaluate_points(two_outputs, pts, n_outputs=2, cache=mem, counter=c,
+                            on_nonfinite="exclude")
+    assert again.from_cache.all() and c.calls == 3
+    # the same func and point through the scalar path never reads the vector entry
+    vec = evaluate_points(ten_x, pts[:1], n_outputs=1, cache=mem)
+    assert vec.y.shape == (1, 1) and vec.y[0, 0] == 10.0
+    scal = evaluate_points(ten_x, pts[:1], cache=mem)
+    assert not scal.from_cache.any() and scal.y.tolist() == [10.0]
+
+
+def test_vector_outputs_wrong_length_and_bad_n_outputs():
+    with pytest.raises(ValueError, match="returned 2 values"):
+        evaluate_points(two_outputs, [[1.0, 2.0]], n_outputs=3)
+    with pytest.raises(ValueError, match="n_outputs = 0"):
+        evaluate_points(two_outputs, [[1.0, 2.0]], n_outputs=0)
+    with pytest.raises(ModelError, match="point index 0"):
+        evaluate_points(two_outputs, [[-1.0, 2.0]], n_outputs=2)

@@ -1,0 +1,311 @@
+r"""Physics-structured surrogate of the peak amplitude: critical speed + resonance + flank.
+
+Why: ``y(x, θ)`` (peak tool amplitude over ``[n_min, n_max]``) is a near-step where the first
+forward critical speed ``n_c`` crosses ``n_max`` (lightly damped resonance, ζ ≈ 0.3 %): from
+~1 µm to ~30 µm within ~20 mm of span. One stationary Kriging of ``y`` (or ``log y``) puts the
+step 10–30 mm off (``docs/surrogates.md``). The FE model gives smooth ingredients per joint
+point instead (:class:`~surrogate_rbrdo.spindle.evaluate.PointwiseResonance`):
+``n_c``, ``A_res`` (the resonance's peak height), ``A_top`` (amplitude at ``n_max``) and ``y``.
+
+Response definition (unchanged: ``y`` = peak over the speed range) and the structured model::
+
+    r      = n_max / n_c                       (r ≥ 1: resonance in the range)
+    ŷ      = max( Â_res · ρ_env(r̂, ζ̂),  b̂ )
+    ρ(r, ζ) = r² / sqrt((1 - r²)² + (2ζr)²) · 2ζ sqrt(1 - ζ²)
+
+``ρ`` is the single-mode unbalance response (forcing ∝ Ω²) normalised by its maximum, which
+lies at ``r_pk = 1 / sqrt(1 - 2ζ²)``; ``ρ_env(r) = max_{r' ≤ r} ρ(r')`` is ``ρ`` below
+``r_pk`` and 1 above (the peak over a range ending at ``r`` is the resonance itself once it is
+inside). Sub-models (each a Kriging of the log of a positive quantity, fitted by
+:func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`):
+
+* ``nc``: ``log n_c`` on all training points (smooth; decides where the step lies);
+* ``ares``: ``log A_res`` on the LHS points with ``r ≥ res_ares_r_min`` and the band points
+  (below) with ``r ≥ 1`` (far below the range the resonance's tool-tip height is irrelevant
+  and ill-defined; measured: adding the band points with ``r < 1`` doubled the test error of
+  ``A_res`` at ``r ≥ 1``, 2.6 % → 7.1 % rms, because ``A_res`` there has narrow dips to a few
+  µm, e.g. 3.4 µm at ``r = 0.985`` between neighbours at ~30 µm);
+* ``bg``: ``log y`` on the *subcritical* points with ``r ≤ res_bg_r_max`` (the background:
+  far from the step ``y`` is the smooth amplitude at ``n_max`` plus other modes);
+* ``ζ̂``: effective damping ratio solved from ``A_top / A_res = ρ(r, ζ)`` at subcritical
+  points with ``r ≥ res_zeta_r_min`` (the flank). Kriging of ``log ζ`` when at least
+  ``res_zeta_min_points`` such points exist, otherwise their geometric mean (a constant).
+
+The θ blocks of every sub-model are cached (one :class:`PeakSurrogate` per sub-model), so a
+population × θ sample costs a few matrix products.
+
+>>> import numpy as np
+>>> round(float(rho(np.array(1.0 / np.sqrt(1 - 2 * 0.01**2)), 0.01)), 12)
+1.0
+>>> float(rho_env(np.array(1.2), 0.01)), round(float(zeta_from_ratio(rho(0.9, 0.003), 0.9)), 6)
+(1.0, 0.003)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.protocols import Prediction
+
+#: Order of :class:`~surrogate_rbrdo.spindle.evaluate.PointwiseResonance` outputs.
+RESONANCE_OUTPUTS = ("critical_rpm", "amp_res_m", "amp_top_m", "peak_m")
+ZETA_BRACKET = (1e-5, 0.2)
+
+
+# ---------------------------------------------------------------------- the SDOF shape
+def rho(r: np.ndarray, zeta: np.ndarray) -> np.ndarray:
+    """Single-mode unbalance response at frequency ratio ``r``, normalised by its maximum.
+
+    ``ρ(r, ζ) = r² / sqrt((1 - r²)² + (2ζr)²) · 2ζ sqrt(1 - ζ²)``; 1 at ``r = 1/sqrt(1-2ζ²)``.
+
+    >>> round(float(rho(0.5, 0.05)), 6)   # 0.25 / sqrt(0.5625 + 0.0025) * 0.0998749
+    0.033216
+    """
+    r = np.asarray(r, dtype=float)
+    z = np.asarray(zeta, dtype=float)
+    return r**2 / np.sqrt((1.0 - r**2) ** 2 + (2.0 * z * r) ** 2) * (2.0 * z * np.sqrt(1 - z**2))
+
+
+def rho_env(r: np.ndarray, zeta: np.ndarray) -> np.ndarray:
+    """``max_{r' ≤ r} ρ(r', ζ)``: ``ρ`` below the peak ratio ``1/sqrt(1-2ζ²)``, 1 above."""
+    r = np.asarray(r, dtype=float)
+    z = np.asarray(zeta, dtype=float)
+    r_pk = 1.0 / np.sqrt(1.0 - 2.0 * z**2)
+    return np.where(r >= r_pk, 1.0, np.minimum(rho(np.minimum(r, r_pk), z), 1.0))
+
+
+def zeta_from_ratio(ratio: np.ndarray, r: np.ndarray, *, n_iter: int = 80) -> np.ndarray:
+    """Solve ``ρ(r, ζ) = ratio`` for ``ζ`` in ``ZETA_BRACKET`` (bisection in ``log ζ``).
+
+    ``ρ`` increases with ``ζ`` on the bracket for ``r`` off resonance; values outside the
+    attainable range are clipped to the bracket ends.
+
+    >>> round(float(zeta_from_ratio(rho(0.95, 0.004), 0.95)), 8)
+    0.004
+    """
+    ratio = np.asarray(ratio, dtype=float)
+    r = np.asarray(r, dtype=float)
+    lo = np.full(np.broadcast(ratio, r).shape, np.log(ZETA_BRACKET[0]))
+    hi = np.full_like(lo, np.log(ZETA_BRACKET[1]))
+    for _ in range(n_iter):
+        mid = 0.5 * (lo + hi)
+        up = rho(r, np.exp(mid)) < ratio
+        lo = np.where(up, mid, lo)
+        hi = np.where(up, hi, mid)
+    return np.exp(0.5 * (lo + hi))
+
+
+def combine(nc: np.ndarray, ares: np.ndarray, zeta: np.ndarray, bg: np.ndarray | None,
+            n_max: float) -> np.ndarray:
+    """The combination rule ``ŷ = max(A_res · ρ_env(n_max / n_c, ζ), bg)`` (broadcasting).
+
+    >>> float(combine(np.array(20e3), np.array(30e-6), 0.003, np.array(1e-6), 24e3)) * 1e6
+    30.0
+    """
+    flank = np.asarray(ares) * rho_env(n_max / np.asarray(nc), zeta)
+    return flank if bg is None else np.maximum(flank, bg)
+
+
+# ---------------------------------------------------------------------- the fitted model
+@dataclass(eq=False)
+class ResonanceSurrogate:
+    """Structured peak-amplitude surrogate (see the module docstring); metres at the interface.
+
+    Same interface as :class:`~surrogate_rbrdo.runner.pipeline.PeakSurrogate`:
+    ``response(x, theta)`` / ``__call__`` → ``(P, N)`` (the sub-models' medians combined),
+    ``predict(Z)`` → mean/std, ``n_train``, ``info``.
+
+    Attributes
+    ----------
+    subs : dict
+        ``"nc"``, ``"ares"``, ``"bg"`` (or absent) and ``"zeta"`` (or absent: constant
+        ``zeta_const``) → fitted log-transform :class:`PeakSurrogate`.
+    rows : dict
+        Training-row indices (into ``Z_train``) of each sub-model.
+    zeta_const : float
+        ζ used when there is no ``"zeta"`` sub-model.
+    n_max_rpm : float
+    Z_train, Q_train : ndarray
+        Joint training points and their FE outputs (``RESONANCE_OUTPUTS`` columns, SI).
+    info : dict
+    """
+
+    subs: dict[str, Any]
+    rows: dict[str, np.ndarray]
+    zeta_const: float
+    n_max_rpm: float
+    Z_train: np.ndarray
+    Q_train: np.ndarray
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_train(self) -> int:
+        """Number of FE training points (one FE call each)."""
+        return int(self.Z_train.shape[0])
+
+    @property
+    def theta_block_builds(self) -> int:
+        return sum(s.theta_block_builds for s in self.subs.values())
+
+    # ------------------------------------------------------------------ grid (hot path)
+    def _grid(self, name: str, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        return np.exp(self.subs[name].predict_transformed(x, theta, return_std=False).mean)
+
+    def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Predicted ``y`` (m) for designs ``x`` (P, 3) × θ ``(N, 2)`` → ``(P, N)``."""
+        nc = self._grid("nc", x, theta)
+        ares = self._grid("ares", x, theta)
+        zeta = self._grid("zeta", x, theta) if "zeta" in self.subs else self.zeta_const
+        bg = self._grid("bg", x, theta) if "bg" in self.subs else None
+        return combine(nc, ares, zeta, bg, self.n_max_rpm)
+
+    __call__ = response
+
+    # ------------------------------------------------------------------ joint points
+    def _points(self, Z: np.ndarray) -> dict[str, Prediction]:
+        Z = np.atleast_2d(np.asarray(Z, dtype=float))
+        return {k: s.model.predict(Z) for k, s in self.subs.items()}
+
+    def sub_predictions(self, Z: np.ndarray) -> dict[str, np.ndarray]:
+        """Median of each ingredient at joint points (SI; ``zeta`` constant if no model)."""
+        p = self._points(Z)
+        out = {k: np.exp(v.mean) for k, v in p.items()}
+        out.setdefault("zeta", np.full(np.atleast_2d(Z).shape[0], self.zeta_const))
+        return out
+
+    def response_points(self, Z: np.ndarray) -> np.ndarray:
+        """``ŷ`` (m) at joint points ``Z = [x, θ]`` (n, 5): the quantity of ``response``."""
+        s = self.sub_predictions(Z)
+        return combine(s["nc"], s["ares"], s["zeta"], s.get("bg"), self.n_max_rpm)
+
+    def predict(self, Z: np.ndarray) -> Prediction:
+        """Mean and std (m) at joint points: delta method in ``log ŷ``, lognormal moments.
+
+        ``log ŷ`` on the active branch (resonance/flank or background) is linearised in the
+        sub-models' log outputs, each with its Kriging std (sub-models treated as
+        independent; ζ constant has no variance). The branch switch itself (``max``) is not
+        smoothed: near ``ŷ_flank = b̂`` the std is that of the larger branch.
+        """
+        p = self._points(Z)
+        ln_nc, s_nc = p["nc"].mean, p["nc"].std
+        ln_a, s_a = p["ares"].mean, p["ares"].std
+        if "zeta" in p:
+            ln_z, s_z = p["zeta"].mean, p["zeta"].std
+        else:
+            ln_z = np.full_like(ln_nc, np.log(self.zeta_const))
+            s_z = np.zeros_like(ln_nc)
+        h = 1e-5
+
+        def log_rho(lnc: np.ndarray, lz: np.ndarray) -> np.ndarray:
+            return np.log(rho_env(self.n_max_rpm / np.exp(lnc), np.exp(lz)))
+
+        g_nc = (log_rho(ln_nc + h, ln_z) - log_rho(ln_nc - h, ln_z)) / (2 * h)
+        g_z = (log_rho(ln_nc, ln_z + h) - log_rho(ln_nc, ln_z - h)) / (2 * h)
+        mu = ln_a + log_rho(ln_nc, ln_z)
+        s2 = s_a**2 + (g_nc * s_nc) ** 2 + (g_z * s_z) ** 2
+        if "bg" in p:
+            use_bg = p["bg"].mean > mu
+            mu = np.where(use_bg, p["bg"].mean, mu)
+            s2 = np.where(use_bg, p["bg"].std ** 2, s2)
+        mean = np.exp(mu + 0.5 * s2)
+        return Prediction(mean=mean, std=mean * np.sqrt(np.expm1(s2)))
+
+    # ------------------------------------------------------------------ validation helpers
+    def loo_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Closed-form (Dubrule) LOO of the combined model at the training points.
+
+        Each sub-model's value at training row ``i`` is its own LOO prediction when ``i`` is
+        among its training rows, its ordinary prediction otherwise; combined by the same rule.
+        Returns ``(y_true, y_loo)`` in metres.
+        """
+        from surrogate_rbrdo.surrogates.validation import loo_cv
+
+        vals = self.sub_predictions(self.Z_train)
+        for k, s in self.subs.items():
+            lo = loo_cv(s.model, method="closed_form")
+            vals[k] = vals[k].copy()
+            vals[k][self.rows[k]] = np.exp(lo.y_loo)
+        y_loo = combine(vals["nc"], vals["ares"], vals["zeta"], vals.get("bg"), self.n_max_rpm)
+        return self.Q_train[:, 3].copy(), y_loo
+
+
+def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
+                            rng: np.random.Generator, n_max_rpm: float,
+                            n_design: int = 3,
+                            is_band: np.ndarray | None = None) -> ResonanceSurrogate:
+    """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
+
+    Parameters
+    ----------
+    Z : ndarray, shape (n, d + m)
+    Q : ndarray, shape (n, 4)
+        ``RESONANCE_OUTPUTS`` columns (rpm, m, m, m), all finite and positive.
+    cfg : SurrogateConfig
+        ``surrogate``, ``n_start`` and the ``res_*`` options are used.
+    rng : numpy.random.Generator
+    n_max_rpm : float
+        Top of the speed range.
+    n_design : int
+    is_band : ndarray of bool, shape (n,), optional
+        Rows added near the boundary (``band_points``); default none.
+    """
+    from surrogate_rbrdo.runner.pipeline import fit_surrogate
+
+    Z = np.asarray(Z, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    if Q.ndim != 2 or Q.shape != (Z.shape[0], 4) or not np.all(np.isfinite(Q) & (Q > 0)):
+        raise ValueError(f"Q with shape {Q.shape} is not allowed: must be ({Z.shape[0]}, 4), "
+                         "finite and positive")
+    sub_cfg = replace(cfg, transform="log", structure="global")
+    nc, ares, atop, y = Q.T
+    r = n_max_rpm / nc
+    all_rows = np.arange(Z.shape[0])
+    band = np.zeros(Z.shape[0], bool) if is_band is None else np.asarray(is_band, bool)
+    if band.shape != (Z.shape[0],):
+        raise ValueError(f"is_band with shape {band.shape} is not allowed: must be "
+                         f"({Z.shape[0]},)")
+    ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
+    rows = {"nc": all_rows, "ares": np.flatnonzero(ares_ok),
+            "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
+    targets = {"nc": nc, "ares": ares, "bg": y}
+    ratio = atop / ares
+    zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
+    zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
+    if zrows.size >= cfg.res_zeta_min_points:
+        rows["zeta"], targets["zeta"] = zrows, np.zeros(Z.shape[0])
+        targets["zeta"][zrows] = zeta_pts
+    zeta_const = float(np.exp(np.mean(np.log(zeta_pts)))) if zrows.size else 0.003
+    min_rows = Z.shape[1] + 2
+    subs: dict[str, Any] = {}
+    children = dict(zip(("nc", "ares", "bg", "zeta"), rng.spawn(4), strict=True))
+    for k in ("nc", "ares", "bg", "zeta"):
+        if k not in rows:
+            continue
+        if rows[k].size < min_rows:
+            if k in ("nc", "ares"):
+                raise ValueError(f"{k} sub-model has {rows[k].size} training points is not "
+                                 f"allowed: need >= {min_rows} (widen the DOE or res_* bounds)")
+            rows.pop(k)
+            continue
+        subs[k] = fit_surrogate(Z[rows[k]], targets[k][rows[k]], sub_cfg, rng=children[k],
+                                n_design=n_design)
+    info = {
+        "structure": "resonance", "n_train": int(Z.shape[0]),
+        "fit_time_s": float(sum(s.info["fit_time_s"] for s in subs.values())),
+        "sub_models": {k: {"n_train": int(rows[k].size),
+                           "hyperparameters": s.info["hyperparameters"]}
+                       for k, s in subs.items()},
+        "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
+        "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
+        "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
+    }
+    return ResonanceSurrogate(subs=subs, rows={k: rows[k] for k in subs},
+                              zeta_const=zeta_const, n_max_rpm=float(n_max_rpm),
+                              Z_train=Z, Q_train=Q, info=info)
+
+
+__all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "combine", "fit_resonance_surrogate",
+           "rho", "rho_env", "zeta_from_ratio"]

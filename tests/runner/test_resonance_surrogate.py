@@ -1,0 +1,195 @@
+"""Physics-structured surrogate: the SDOF flank shape against the closed-form unbalance
+response, the combination rule, sub-model interpolation (checked through smt's own predict),
+the separable grid path, config validation and a tiny FE run (counted, cached apart)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.core.counting import CallCounter
+from surrogate_rbrdo.core.protocols import LimitState
+from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
+from surrogate_rbrdo.runner.resonance_surrogate import (
+    ResonanceSurrogate,
+    combine,
+    fit_resonance_surrogate,
+    rho,
+    rho_env,
+    zeta_from_ratio,
+)
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+N_MAX = 24000.0
+
+
+def _sdof_unbalance(omega, k=4e7, M=12.0, zeta=0.004, me=1e-5):
+    """|X| of M x'' + c x' + k x = m e ω² e^{iωt} (complex arithmetic, independent of rho)."""
+    c = 2 * zeta * np.sqrt(k * M)
+    return np.abs(me * omega**2 / (k - M * omega**2 + 1j * c * omega))
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("zeta", [0.002, 0.004, 0.05])
+def test_rho_is_the_normalised_sdof_unbalance_response(zeta):
+    k, M = 4e7, 12.0
+    wn = np.sqrt(k / M)
+    w = wn * np.linspace(0.2, 2.0, 200001)
+    amp = _sdof_unbalance(w, k, M, zeta)
+    r_pk = 1 / np.sqrt(1 - 2 * zeta**2)
+    peak = _sdof_unbalance(wn * r_pk, k, M, zeta)
+    r = w / wn
+    assert np.allclose(rho(r, zeta), amp / peak, rtol=1e-9, atol=0)
+    # the sampled maximum is at r_pk (to the grid step) and does not exceed the peak
+    assert abs(r[np.argmax(amp)] - r_pk) < 1e-5 and amp.max() <= peak * (1 + 1e-12)
+    # A_top / A_res at r = 0.98: the flank ratio the surrogate inverts
+    i = np.argmin(np.abs(r - 0.98))
+    assert rho(r[i], zeta) == pytest.approx(amp[i] / peak, rel=1e-6)
+
+
+@pytest.mark.known_answer
+def test_rho_env_is_running_max_and_zeta_inverts_rho():
+    r = np.linspace(0.5, 1.5, 100001)
+    for z in (0.003, 0.02):
+        assert np.allclose(rho_env(r, z), np.maximum.accumulate(rho(r, z)), atol=1e-9)
+    rr, zz = np.meshgrid([0.5, 0.9, 0.97, 0.99, 1.03, 1.5], [1e-4, 0.003, 0.01, 0.05])
+    assert np.allclose(zeta_from_ratio(rho(rr, zz), rr), zz, rtol=1e-9)
+
+
+@pytest.mark.known_answer
+def test_combination_rule_known_values():
+    ares, bg = np.array(30e-6), np.array(1e-6)
+    # resonance in the range: the resonance height itself
+    assert combine(np.array(20000.0), ares, 0.003, bg, N_MAX) == pytest.approx(30e-6)
+    # resonance above the range (r = n_max / n_c = 0.98): A_res · ρ(r, ζ) written out
+    r = 0.98
+    expect = 30e-6 * (r**2 / np.sqrt((1 - r**2) ** 2 + (2 * 0.003 * r) ** 2)) \
+        * 2 * 0.003 * np.sqrt(1 - 0.003**2)
+    assert combine(np.array(N_MAX / r), ares, 0.003, bg, N_MAX) == pytest.approx(expect)
+    # far below: the background wins; no background: the flank
+    assert combine(np.array(N_MAX / 0.6), ares, 0.003, bg, N_MAX) == pytest.approx(1e-6)
+    assert combine(np.array(N_MAX / 0.6), ares, 0.003, None, N_MAX) < 1e-6
+    # between r = 1 and the peak ratio 1/sqrt(1-2ζ²) the envelope is still the flank (< A_res)
+    assert combine(np.array(N_MAX), ares, 0.003, None, N_MAX) < 30e-6
+    assert combine(np.array(N_MAX / 1.0001), ares, 0.003, None, N_MAX) == pytest.approx(30e-6)
+    # broadcasting over a (P, N) grid with scalar ζ
+    g = combine(np.full((2, 3), 20000.0), np.full((2, 3), 3e-5), 0.003, None, N_MAX)
+    assert g.shape == (2, 3) and np.allclose(g, 3e-5)
+
+
+def _synthetic(n=48, seed=0):
+    rng = np.random.default_rng(seed)
+    Z = rng.random((n, 5)) * [2000, 450, 30, 0.5, 0.5] + [1000, 300, 50, 0.75, 0.75]
+    u = (Z - [1000, 300, 50, 0.75, 0.75]) / [2000, 450, 30, 0.5, 0.5]
+    nc = N_MAX * np.exp(0.35 * (u[:, 2] - u[:, 1]) + 0.05 * u[:, 3])
+    ares = 30e-6 * np.exp(0.3 * u[:, 2] - 0.2 * u[:, 0])
+    zeta = 0.003 * np.exp(0.2 * u[:, 4])
+    atop = ares * rho(N_MAX / nc, zeta)
+    bg = 0.8e-6 * np.exp(0.5 * u[:, 0])
+    y = combine(nc, ares, zeta, bg, N_MAX)
+    return Z, np.column_stack([nc, ares, atop, y])
+
+
+@pytest.fixture(scope="module")
+def synth():
+    Z, Q = _synthetic()
+    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+                          res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0)
+    return fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX), Z, Q
+
+
+def test_sub_models_interpolate_their_training_data(synth):
+    sur, Z, Q = synth
+    assert set(sur.subs) == {"nc", "ares", "bg", "zeta"}
+    r = N_MAX / Q[:, 0]
+    targets = {"nc": Q[:, 0], "ares": Q[:, 1], "bg": Q[:, 3],
+               "zeta": zeta_from_ratio(Q[:, 2] / Q[:, 1], r)}
+    for k, s in sur.subs.items():
+        rows = sur.rows[k]
+        smt_pred = s.model.model_.predict_values(Z[rows]).ravel()   # smt's own path
+        assert np.allclose(np.exp(smt_pred), targets[k][rows], rtol=1e-5), k
+    assert sur.rows["bg"].size == int(np.sum(r <= 0.95))
+    # the recovered ζ at the flank points is the one the data were made with
+    u4 = (Z[sur.rows["zeta"], 4] - 0.75) / 0.5
+    assert np.allclose(targets["zeta"][sur.rows["zeta"]], 0.003 * np.exp(0.2 * u4), rtol=1e-7)
+
+
+def test_grid_response_equals_combination_of_smt_predictions(synth):
+    sur, Z, _ = synth
+    rng = np.random.default_rng(5)
+    x = Z[:4, :3] + rng.normal(0, 1, (4, 3))
+    theta = 1.0 + 0.05 * rng.standard_normal((6, 2))
+    grid = sur.response(x, theta)
+    joint = np.column_stack([np.repeat(x, 6, axis=0), np.tile(theta, (4, 1))])
+    smt = {k: np.exp(s.model.model_.predict_values(joint).ravel()) for k, s in sur.subs.items()}
+    ref = combine(smt["nc"], smt["ares"], smt["zeta"], smt["bg"], N_MAX).reshape(4, 6)
+    assert grid.shape == (4, 6) and np.allclose(grid, ref, rtol=1e-7)
+    assert np.allclose(sur.response_points(joint).reshape(4, 6), ref, rtol=1e-7)
+    # θ blocks cached per sub-model: a second call with the same θ object builds none
+    builds = sur.theta_block_builds
+    sur(x[:2], theta)
+    assert sur.theta_block_builds == builds
+    # training points: the combined response reproduces y (every sub-model interpolates)
+    both = np.intersect1d(sur.rows["bg"], sur.rows["zeta"])
+    assert both.size >= 1
+    assert np.allclose(sur.response_points(Z[both]), _synthetic()[1][both, 3], rtol=1e-4)
+
+
+def test_predict_moments_and_loo(synth):
+    sur, Z, Q = synth
+    p = sur.predict(Z[:10])
+    med = sur.response_points(Z[:10])
+    assert np.all(p.std >= 0) and np.all(p.mean >= med * (1 - 1e-12))
+    y_true, y_loo = sur.loo_points()
+    assert np.array_equal(y_true, Q[:, 3]) and y_loo.shape == y_true.shape
+    assert np.all(np.isfinite(y_loo)) and not np.allclose(y_loo, y_true, rtol=1e-6)
+
+
+@pytest.mark.parametrize("over, match", [
+    ({"structure": "bogus"}, r"structure = 'bogus' is not allowed.*global.*resonance"),
+    ({"structure": "resonance", "active_learning": True}, "active_learning = True"),
+    ({"res_band": 0.0}, "res_band = 0.0"),
+    ({"res_n_band": -1}, "res_n_band = -1"),
+    ({"res_bg_r_max": 1.5}, "res_bg_r_max = 1.5"),
+])
+def test_config_validation(over, match):
+    with pytest.raises(ValueError, match=match):
+        SurrogateConfig(**over)
+
+
+def test_default_structure_is_global():
+    assert SurrogateConfig().structure == "global"
+    assert SurrogateConfig.from_dict({"structure": "resonance"}).structure == "resonance"
+
+
+def test_bad_outputs_rejected():
+    Z, Q = _synthetic(12)
+    Q[0, 1] = -1.0
+    with pytest.raises(ValueError, match="finite and positive"):
+        fit_resonance_surrogate(Z, Q, SurrogateConfig(structure="resonance"),
+                                rng=np.random.default_rng(0), n_max_rpm=N_MAX)
+
+
+def test_tiny_fe_run_counts_band_points_and_caches_apart(tmp_path):
+    inputs = MultivariateNormal([1.0, 1.0], std=[0.0605, 0.0641])
+    sp = reference_spindle()
+    cfg = SurrogateConfig(structure="resonance", n_doe=16, res_n_band=4, n_start=1,
+                          al_n_start=1, n_jobs=1, backend="sequential", res_band=0.1,
+                          res_band_pool=2000)
+    c = CallCounter()
+    sur, info = train_peak_surrogate(sp, inputs, LimitState(19.5e-6), cfg,
+                                     rng=np.random.default_rng(4), cache_dir=tmp_path, counter=c)
+    assert isinstance(sur, ResonanceSurrogate)
+    assert info["n_lhs"] + info["n_band"] == sur.n_train == info["fe_calls"] == c.calls == 20
+    r_band = N_MAX / sur.Q_train[16:, 0]
+    assert np.all(np.abs(r_band - 1) <= 0.15)   # predicted within 0.1; the 16-point n_c fit
+    y = sur.response(np.array([[2000.0, 330.0, 75.0], [2000.0, 650.0, 60.0]]),
+                     np.ones((3, 2)))
+    assert y.shape == (2, 3) and np.all(y > 0)
+    # the scalar (global) path on the same DOE does not read the vector cache entries
+    c2 = CallCounter()
+    train_peak_surrogate(sp, inputs, LimitState(19.5e-6),
+                         SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential"),
+                         rng=np.random.default_rng(4), cache_dir=tmp_path, counter=c2)
+    assert c2.calls == 16
