@@ -118,6 +118,11 @@ class SurrogateConfig:
         Half-width of the band in ``r``.
     res_band_pool : int
         Size of the random candidate pool.
+    res_n_band_lim : int
+        Further points near the second boundary ``A_res = δ_lim`` with the resonance in the
+        range (``|log Â_res - log δ_lim| <= res_band_lim``), after the ``n_c`` band.
+    res_band_lim : float
+        Half-width of that band in ``log A_res``.
     """
 
     n_doe: int = 200
@@ -146,6 +151,8 @@ class SurrogateConfig:
     res_n_band: int = 0
     res_band: float = 0.05
     res_band_pool: int = 20000
+    res_n_band_lim: int = 0
+    res_band_lim: float = 0.05
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -182,6 +189,8 @@ class SurrogateConfig:
         check_int("res_n_band", self.res_n_band, minimum=0)
         check_range("res_band", self.res_band, 0.0, 1.0, inclusive=False)
         check_int("res_band_pool", self.res_band_pool, minimum=1)
+        check_int("res_n_band_lim", self.res_n_band_lim, minimum=0)
+        check_range("res_band_lim", self.res_band_lim, 0.0, 1.0, inclusive=False)
         if self.structure == "resonance" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'resonance': the structured surrogate uses a static DOE")
@@ -357,22 +366,10 @@ def sample_resonance(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache
     return Z[ok], res.y[ok]
 
 
-def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm: float,
-                cfg: SurrogateConfig, *, rng: np.random.Generator, n_design: int = 3
-                ) -> np.ndarray:
-    """``cfg.res_n_band`` new joint points with predicted ``|n_max / n_c - 1| <= res_band``.
-
-    A Kriging of ``log n_c`` on ``(Z, nc_rpm)`` screens a random pool of ``res_band_pool``
-    points of ``bounds``; the band candidates are thinned by greedy maximin (each new point the
-    candidate farthest, in the unit-scaled box, from all points so far, ``Z`` included).
-    Fewer points are returned if the pool has fewer band candidates.
-    """
-    r_fit, r_pool = require_rng(rng).spawn(2)
-    sub = fit_surrogate(Z, nc_rpm, replace(cfg, transform="log", structure="global"),
-                        rng=r_fit, n_start=cfg.al_n_start, n_design=n_design)
-    pool = lhs(cfg.res_band_pool, bounds, rng=r_pool, criterion="random")
-    r_hat = n_max_rpm / np.exp(sub.model.predict(pool).mean)
-    cand = pool[np.abs(r_hat - 1.0) <= cfg.res_band]
+def _maximin_select(cand: np.ndarray, Z: np.ndarray, bounds: np.ndarray, n: int
+                    ) -> np.ndarray:
+    """Greedy maximin: ``n`` rows of ``cand``, each the farthest (unit-scaled box) from all
+    points so far (``Z`` included)."""
     lo, span = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
     cu, zu = (cand - lo) / span, (Z - lo) / span
     dmin = np.full(cand.shape[0], np.inf)
@@ -380,12 +377,46 @@ def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm
         d = np.sqrt(((cu[:, None, :] - zu[None, a:a + 256, :]) ** 2).sum(-1))
         dmin = np.minimum(dmin, d.min(axis=1))
     chosen: list[int] = []
-    for _ in range(min(cfg.res_n_band, cand.shape[0])):
+    for _ in range(min(n, cand.shape[0])):
         i = int(np.argmax(dmin))
         chosen.append(i)
         dmin = np.minimum(dmin, np.sqrt(((cu - cu[i]) ** 2).sum(-1)))
         dmin[i] = -np.inf
     return cand[chosen]
+
+
+def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm: float,
+                cfg: SurrogateConfig, *, rng: np.random.Generator, n_design: int = 3,
+                amp_res_m: np.ndarray | None = None, threshold_m: float | None = None
+                ) -> np.ndarray:
+    """New joint points where the structured surrogate's boundaries lie.
+
+    Without ``amp_res_m``: ``cfg.res_n_band`` points with predicted
+    ``|n_max / n_c - 1| <= res_band`` (the critical-speed boundary). With ``amp_res_m`` and
+    ``threshold_m``: ``cfg.res_n_band_lim`` points with the resonance in the range
+    (``r̂ >= 1``) and ``|log Â_res - log threshold| <= res_band_lim`` (the second boundary:
+    ``y ≈ A_res = δ_lim``). Kriging models of ``log n_c`` (and ``log A_res`` on the rows with
+    ``r >= 1``) screen a random pool of ``res_band_pool`` points of ``bounds``; the
+    candidates are thinned by greedy maximin. Fewer points are returned if the pool has fewer
+    candidates.
+    """
+    r_fit, r_pool, r_fit2 = require_rng(rng).spawn(3)
+    sub_cfg = replace(cfg, transform="log", structure="global")
+    sub = fit_surrogate(Z, nc_rpm, sub_cfg, rng=r_fit, n_start=cfg.al_n_start,
+                        n_design=n_design)
+    pool = lhs(cfg.res_band_pool, bounds, rng=r_pool, criterion="random")
+    r_hat = n_max_rpm / np.exp(sub.model.predict(pool).mean)
+    if amp_res_m is None:
+        return _maximin_select(pool[np.abs(r_hat - 1.0) <= cfg.res_band], Z, bounds,
+                               cfg.res_n_band)
+    if threshold_m is None or not threshold_m > 0:
+        raise ValueError(f"threshold_m = {threshold_m!r} is not allowed: must be > 0")
+    rows = n_max_rpm / nc_rpm >= 1.0
+    ares = fit_surrogate(Z[rows], amp_res_m[rows], sub_cfg, rng=r_fit2,
+                         n_start=cfg.al_n_start, n_design=n_design)
+    la = ares.model.predict(pool).mean
+    near = (r_hat >= 1.0) & (np.abs(la - np.log(threshold_m)) <= cfg.res_band_lim)
+    return _maximin_select(pool[near], Z, bounds, cfg.res_n_band_lim)
 
 
 def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
@@ -518,6 +549,12 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
         if cfg.res_n_band > 0:
             Zb = band_points(Z, Q[:, 0], bounds, n_max, cfg, rng=r_doe.spawn(1)[0],
                              n_design=d)
+            Zb, Qb = sample_resonance(spindle, Zb, cfg, cache=cache, counter=counter,
+                                      progress=progress)
+            Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])
+        if cfg.res_n_band_lim > 0:
+            Zb = band_points(Z, Q[:, 0], bounds, n_max, cfg, rng=r_doe.spawn(1)[0],
+                             n_design=d, amp_res_m=Q[:, 1], threshold_m=limit.threshold)
             Zb, Qb = sample_resonance(spindle, Zb, cfg, cache=cache, counter=counter,
                                       progress=progress)
             Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])

@@ -24,8 +24,11 @@ train_peak_surrogate` and writes
   (``closed_form_combined``: each sub-model's closed-form LOO, combined) plus one row per
   sub-model in its own log space.
 
-Variants with the same DOE settings share the FE cache (``<results root>/.cache``), so e.g. the
-log and raw variants cost the FE calls once. Config tables: ``[spindle]``, ``[uncertainty]``
+Every variant trains from a fresh copy of the same training seed, so variants with the same DOE
+settings get the same DOE (before run ``struct2`` a shared ``SeedSequence`` was advanced by
+each variant's ``spawn``: variants after the first drew other DOEs). Variants share the FE
+cache (``<results root>/.cache``), so e.g. the log and raw variants cost the FE calls once.
+Config tables: ``[spindle]``, ``[uncertainty]``
 (``mean``, ``std``, optional ``corr``; default Table 4 pooled CoVs), ``[limit]``
 (``delta_lim_um``), ``[surrogate]`` (:class:`~surrogate_rbrdo.runner.pipeline.SurrogateConfig`)
 and ``[validation]`` (``n_test``, ``n_theta``, ``designs`` label → ``[F N, L mm, D mm]``,
@@ -263,7 +266,7 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         counter = CallCounter()
         with run.timed(f"train_{name}"):
             sur, info = train_peak_surrogate(spindle, inputs, limit, cfg,
-                                             rng=np.random.default_rng(ss_train),
+                                             rng=np.random.default_rng(_copy(ss_train)),
                                              cache_dir=cache_dir, progress=progress,
                                              counter=counter)
         train_s = run.timings[f"train_{name}"]
@@ -363,6 +366,12 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                      if k in ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe",
                               "pf_sur", "ok_mean", "ok_std", "ok_pf")} for r in mc_rows],
     }
+
+
+def _copy(ss: np.random.SeedSequence) -> np.random.SeedSequence:
+    """A fresh copy of ``ss``: ``Generator.spawn`` advances the *shared* SeedSequence's child
+    counter, so reusing one object would give every variant after the first another DOE."""
+    return np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key, pool_size=ss.pool_size)
 
 
 def _memory(cache_dir: Path) -> Any:

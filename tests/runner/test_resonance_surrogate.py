@@ -146,6 +146,35 @@ def test_predict_moments_and_loo(synth):
     assert np.all(np.isfinite(y_loo)) and not np.allclose(y_loo, y_true, rtol=1e-6)
 
 
+def test_band_points_lie_on_the_boundaries():
+    from surrogate_rbrdo.runner.pipeline import band_points
+
+    Z, Q = _synthetic(60, seed=3)
+    bounds = np.array([[1000, 3000], [300, 750], [50, 80], [0.75, 1.25], [0.75, 1.25]], float)
+    cfg = SurrogateConfig(structure="resonance", res_n_band=8, res_band=0.03, al_n_start=1,
+                          res_band_pool=4000, res_n_band_lim=5, res_band_lim=0.05)
+    pts = band_points(Z, Q[:, 0], bounds, N_MAX, cfg, rng=np.random.default_rng(2))
+    assert pts.shape == (8, 5)
+
+    def truth(P):
+        u = (P - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
+        nc = N_MAX * np.exp(0.35 * (u[:, 2] - u[:, 1]) + 0.05 * u[:, 3])
+        return nc, 30e-6 * np.exp(0.3 * u[:, 2] - 0.2 * u[:, 0])
+
+    nc, _ = truth(pts)
+    assert np.all(np.abs(N_MAX / nc - 1) <= 0.03 + 2e-3)
+    # distinct, and spread (greedy maximin): no two closer than 0.05 of the unit box
+    u = (pts - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
+    d = np.sqrt(((u[:, None] - u[None]) ** 2).sum(-1)) + np.eye(8)
+    assert d.min() > 0.05
+    thr = 30e-6
+    lim = band_points(Z, Q[:, 0], bounds, N_MAX, cfg, rng=np.random.default_rng(2),
+                      amp_res_m=Q[:, 1], threshold_m=thr)
+    nc, ares = truth(lim)
+    assert lim.shape == (5, 5)
+    assert np.all(N_MAX / nc >= 1 - 2e-3) and np.all(np.abs(np.log(ares / thr)) <= 0.06)
+
+
 @pytest.mark.parametrize("over, match", [
     ({"structure": "bogus"}, r"structure = 'bogus' is not allowed.*global.*resonance"),
     ({"structure": "resonance", "active_learning": True}, "active_learning = True"),

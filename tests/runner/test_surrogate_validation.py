@@ -140,6 +140,9 @@ n_test = 10
 n_theta = 20
 n_theta_nc = 6
 
+[validation.variants.copy]
+structure = "global"
+
 [validation.variants.res]
 structure = "resonance"
 res_n_band = 4
@@ -157,6 +160,10 @@ def test_tiny_run_with_resonance_variant(tmp_path):
     cfg.write_text(TINY_RES)
     run = run_experiment(cfg, results_dir=tmp_path / "results", run_id="r1", progress=False)
     cost = {r["variant"]: r for r in _read(run.path / "cost.csv")}
+    # a variant equal to main trains on the same DOE (fresh seed copy per variant)
+    m = {r["variant"]: r for r in _read(run.path / "metrics.csv")}
+    assert {k: v for k, v in m["copy"].items() if k != "variant"} == \
+        {k: v for k, v in m["main"].items() if k != "variant"}
     assert int(cost["res"]["n_train"]) == 20 and cost["res"]["transform"] == "resonance"
     loo = [r for r in _read(run.path / "loo.csv") if r["variant"] == "res"]
     assert loo[0]["method"] == "closed_form_combined"
