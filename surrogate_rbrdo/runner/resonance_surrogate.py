@@ -62,7 +62,7 @@ def rho(r: np.ndarray, zeta: np.ndarray) -> np.ndarray:
     ``ρ(r, ζ) = r² / sqrt((1 - r²)² + (2ζr)²) · 2ζ sqrt(1 - ζ²)``; 1 at ``r = 1/sqrt(1-2ζ²)``.
 
     >>> round(float(rho(0.5, 0.05)), 6)   # 0.25 / sqrt(0.5625 + 0.0025) * 0.0998749
-    0.033216
+    0.033218
     """
     r = np.asarray(r, dtype=float)
     z = np.asarray(zeta, dtype=float)
