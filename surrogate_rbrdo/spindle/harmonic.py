@@ -275,6 +275,8 @@ def _peak_batch(model, th, lo, hi, opt: PeakOptions):
     K = min(opt.n_candidates, opt.n_grid)
     cand = np.argsort(-score, axis=1)[:, :K]  # (B, K); non-maxima only as padding
     valid = np.take_along_axis(score, cand, axis=1) > -np.inf
+    K = int(valid.sum(axis=1).max())  # refine no more candidates than any row has maxima
+    cand, valid = cand[:, :K], valid[:, :K]
     blo = grid[np.maximum(cand - 1, 0)]
     bhi = grid[np.minimum(cand + 1, opt.n_grid - 1)]
     t = np.linspace(0.0, 1.0, opt.n_refine)
