@@ -85,3 +85,30 @@ def spindle_from_config(section: Mapping[str, Any], base_dir: str | Path = ".") 
     if "theta_bearings" in section:
         sp = replace(sp, theta_bearings=tuple(section["theta_bearings"]))
     return sp
+
+
+UNCERTAINTY_KEYS = {"mean", "std", "corr"}
+#: Table 4 pooled CoVs of k_yy (front, rear): the default scatter of the stiffness factors
+TABLE4_STD = (0.0605, 0.0641)
+
+
+def uncertainty_from_config(table: Mapping[str, Any], theta_bearings: tuple[str, ...]):
+    """θ ~ MVN(mean, std, corr) from an ``[uncertainty]`` table, one entry per bearing of θ.
+
+    Defaults: mean 1 and the Table 4 CoVs (docs/reference-spindle.md). Shapes, positivity and
+    unknown keys are checked with messages naming the field.
+    """
+    from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+    table = dict(table)
+    check_keys("[uncertainty]", table, UNCERTAINTY_KEYS)
+    m = len(theta_bearings)
+    mean = np.asarray(table.get("mean", [1.0] * m), dtype=float)
+    std = np.asarray(table.get("std", TABLE4_STD[:m]), dtype=float)
+    if mean.shape != (m,) or std.shape != (m,):
+        raise ValueError(f"uncertainty.mean/std have shapes {mean.shape}/{std.shape}: need "
+                         f"({m},) for bearings {list(theta_bearings)}")
+    for i, s in enumerate(std):
+        check_positive(f"uncertainty.std[{i}]", float(s))
+    corr = table.get("corr")
+    return MultivariateNormal(mean, std=std, corr=None if corr is None else np.asarray(corr))

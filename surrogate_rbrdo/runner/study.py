@@ -40,7 +40,7 @@ from surrogate_rbrdo.core.validate import (
     check_positive,
     check_range,
 )
-from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.runner.config import spindle_from_config, uncertainty_from_config
 from surrogate_rbrdo.runner.design_model import DesignModelOptions, fit_design_model
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
 from surrogate_rbrdo.runner.runfolder import RunFolder
@@ -49,7 +49,6 @@ RPM = 2.0 * np.pi / 60.0
 DESIGN_NAMES = ("preload_N", "span_mm", "diameter_mm")
 TABLES = {"spindle", "uncertainty", "limit", "surrogate", "design_model", "deterministic",
           "optimization", "verification", "report"}
-UNCERTAINTY_KEYS = {"mean", "std", "corr"}
 LIMIT_KEYS = {"delta_lim_um"}
 DET_KEYS = {"stress", "yield_strength_pa", "resonance", "factor", "omega_max_rpm",
             "operating_speeds_rpm", "margin"}
@@ -163,25 +162,13 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     naming the field and value before any expensive work."""
     from surrogate_rbrdo.formulations import DeterministicOptions
     from surrogate_rbrdo.runner.pipeline import SurrogateConfig
-    from surrogate_rbrdo.uncertainty import MultivariateNormal
 
     top = {k for k in config if not k.startswith("_") and k != "experiment"}
     check_keys("study config (tables)", {k: None for k in top}, TABLES)
     seed = int(config.get("experiment", {}).get("seed", 0))
     spindle = spindle_from_config(config.get("spindle", {}), config.get("_base_dir", "."))
 
-    unc = dict(config.get("uncertainty", {}))
-    check_keys("[uncertainty]", unc, UNCERTAINTY_KEYS)
-    m = len(spindle.theta_bearings)
-    mean = np.asarray(unc.get("mean", [1.0] * m), dtype=float)
-    std = np.asarray(unc.get("std", [0.0605, 0.0641][:m]), dtype=float)
-    if mean.shape != (m,) or std.shape != (m,):
-        raise ValueError(f"uncertainty.mean/std have shapes {mean.shape}/{std.shape}: need "
-                         f"({m},) for bearings {list(spindle.theta_bearings)}")
-    for i, s in enumerate(std):
-        check_positive(f"uncertainty.std[{i}]", float(s))
-    corr = unc.get("corr")
-    inputs = MultivariateNormal(mean, std=std, corr=None if corr is None else np.asarray(corr))
+    inputs = uncertainty_from_config(config.get("uncertainty", {}), spindle.theta_bearings)
 
     lim = dict(config.get("limit", {}))
     check_keys("[limit]", lim, LIMIT_KEYS)
