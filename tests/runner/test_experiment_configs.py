@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from surrogate_rbrdo.runner.cli import _kinds
@@ -29,3 +30,17 @@ def test_config_validates(path):
         parse_study_config(cfg)
     if "surrogate" in cfg:
         SurrogateConfig.from_dict(cfg["surrogate"])
+
+
+def test_uncertainty_table_defaults_and_errors():
+    from surrogate_rbrdo.runner.config import uncertainty_from_config
+
+    mvn = uncertainty_from_config({}, ("front", "rear"))
+    assert np.allclose(mvn.mean, 1.0)
+    assert np.allclose(np.sqrt(np.diag(mvn.cov)), [0.0605, 0.0641])
+    with pytest.raises(ValueError, match=r"uncertainty.std\[1\] = -0.1"):
+        uncertainty_from_config({"std": [0.05, -0.1]}, ("front", "rear"))
+    with pytest.raises(ValueError, match=r"shapes \(3,\)/\(2,\)"):
+        uncertainty_from_config({"mean": [1, 1, 1]}, ("front", "rear"))
+    with pytest.raises(ValueError, match=r"unknown key\(s\) \['sigma'\] in \[uncertainty\]"):
+        uncertainty_from_config({"sigma": [0.1, 0.1]}, ("front", "rear"))
