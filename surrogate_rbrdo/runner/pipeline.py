@@ -123,6 +123,16 @@ class SurrogateConfig:
         range (``|log Â_res - log δ_lim| <= res_band_lim``), after the ``n_c`` band.
     res_band_lim : float
         Half-width of that band in ``log A_res``.
+    res_nc_local : float
+        ``0`` (default): off. Otherwise a second, *local* Kriging of ``log n_c`` fitted only
+        on the training points with ``|n_max / n_c - 1| <= res_nc_local`` (FE ``n_c``), used
+        instead of the global one wherever the global ``r̂`` lies within ``res_band`` of 1
+        (where the boundary is placed; docs/surrogates.md, run ``struct3``).
+    res_bg_only_r : float
+        ``0`` (default): off (``ŷ = max(flank, b̂)`` everywhere). Otherwise ``ŷ = b̂`` (the
+        background Kriging alone, which is fitted to ``y`` itself there) wherever
+        ``r̂ <= res_bg_only_r``; must not exceed ``res_bg_r_max``. Removes the SDOF flank's
+        overshoot where resonance tail and background interfere (``subcritical_edge``).
     """
 
     n_doe: int = 200
@@ -153,6 +163,8 @@ class SurrogateConfig:
     res_band_pool: int = 20000
     res_n_band_lim: int = 0
     res_band_lim: float = 0.05
+    res_nc_local: float = 0.0
+    res_bg_only_r: float = 0.0
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -191,6 +203,12 @@ class SurrogateConfig:
         check_int("res_band_pool", self.res_band_pool, minimum=1)
         check_int("res_n_band_lim", self.res_n_band_lim, minimum=0)
         check_range("res_band_lim", self.res_band_lim, 0.0, 1.0, inclusive=False)
+        check_range("res_nc_local", self.res_nc_local, 0.0, 1.0)
+        check_range("res_bg_only_r", self.res_bg_only_r, 0.0, 1.0)
+        if self.res_bg_only_r > self.res_bg_r_max:
+            raise ValueError(f"res_bg_only_r = {self.res_bg_only_r} is not allowed: must be "
+                             f"<= res_bg_r_max = {self.res_bg_r_max} (the background model "
+                             "is fitted only up to there)")
         if self.structure == "resonance" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'resonance': the structured surrogate uses a static DOE")

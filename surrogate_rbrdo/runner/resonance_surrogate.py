@@ -31,6 +31,15 @@ inside). Sub-models (each a Kriging of the log of a positive quantity, fitted by
   points with ``r ≥ res_zeta_r_min`` (the flank). Kriging of ``log ζ`` when at least
   ``res_zeta_min_points`` such points exist, otherwise their geometric mean (a constant).
 
+Options (default off; ``docs/surrogates.md``, run ``struct3``):
+
+* ``nc_local`` (``res_nc_local = w > 0``): a second Kriging of ``log n_c`` fitted only on the
+  training points with ``|r - 1| <= w``; it replaces the global ``n̂_c`` wherever the global
+  ``r̂`` lies within ``nc_local_band`` (``res_band``) of 1, where the boundary is placed;
+* ``bg_only_r > 0`` (``res_bg_only_r``): ``ŷ = b̂`` wherever ``r̂ <= bg_only_r`` (the
+  background Kriging is fitted to ``y`` itself there; the SDOF flank overshoots where the
+  resonance tail and the background interfere destructively).
+
 The θ blocks of every sub-model are cached (one :class:`PeakSurrogate` per sub-model), so a
 population × θ sample costs a few matrix products.
 
@@ -109,6 +118,32 @@ def combine(nc: np.ndarray, ares: np.ndarray, zeta: np.ndarray, bg: np.ndarray |
     return flank if bg is None else np.maximum(flank, bg)
 
 
+def select_nc(nc: np.ndarray, nc_local: np.ndarray | None, n_max: float,
+              band: float) -> np.ndarray:
+    """``nc_local`` where ``|n_max / nc - 1| <= band`` (the global model's band), else ``nc``.
+
+    >>> select_nc(np.array([20e3, 24.5e3]), np.array([1.0, 2.0]), 24e3, 0.05).tolist()
+    [20000.0, 2.0]
+    """
+    nc = np.asarray(nc, dtype=float)
+    if nc_local is None or band <= 0:
+        return nc
+    return np.where(np.abs(n_max / nc - 1.0) <= band, nc_local, nc)
+
+
+def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max: float,
+                    bg_only_r: float) -> np.ndarray:
+    """``bg`` where ``n_max / nc <= bg_only_r`` (background alone), else ``y``.
+
+    >>> combine_bg_only(np.array([5.0, 5.0]), np.array([30e3, 24e3]), np.array([1.0, 1.0]),
+    ...                 24e3, 0.95).tolist()
+    [1.0, 5.0]
+    """
+    if bg is None or bg_only_r <= 0:
+        return y
+    return np.where(n_max / np.asarray(nc) <= bg_only_r, bg, y)
+
+
 # ---------------------------------------------------------------------- the fitted model
 @dataclass(eq=False)
 class ResonanceSurrogate:
@@ -131,6 +166,10 @@ class ResonanceSurrogate:
     Z_train, Q_train : ndarray
         Joint training points and their FE outputs (``RESONANCE_OUTPUTS`` columns, SI).
     info : dict
+    nc_local_band : float
+        Half-width in ``r̂`` (global model) where ``"nc_local"`` replaces ``"nc"``.
+    bg_only_r : float
+        ``ŷ = b̂`` where ``r̂ <= bg_only_r`` (0: off).
     """
 
     subs: dict[str, Any]
@@ -140,6 +179,8 @@ class ResonanceSurrogate:
     Z_train: np.ndarray
     Q_train: np.ndarray
     info: dict[str, Any] = field(default_factory=dict)
+    nc_local_band: float = 0.0
+    bg_only_r: float = 0.0
 
     @property
     def n_train(self) -> int:
@@ -157,10 +198,18 @@ class ResonanceSurrogate:
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted ``y`` (m) for designs ``x`` (P, 3) × θ ``(N, 2)`` → ``(P, N)``."""
         nc = self._grid("nc", x, theta)
+        if "nc_local" in self.subs:
+            nc = select_nc(nc, self._grid("nc_local", x, theta), self.n_max_rpm,
+                           self.nc_local_band)
         ares = self._grid("ares", x, theta)
         zeta = self._grid("zeta", x, theta) if "zeta" in self.subs else self.zeta_const
         bg = self._grid("bg", x, theta) if "bg" in self.subs else None
-        return combine(nc, ares, zeta, bg, self.n_max_rpm)
+        return self._combine(nc, ares, zeta, bg)
+
+    def _combine(self, nc: np.ndarray, ares: np.ndarray, zeta: Any,
+                 bg: np.ndarray | None) -> np.ndarray:
+        y = combine(nc, ares, zeta, bg, self.n_max_rpm)
+        return combine_bg_only(y, nc, bg, self.n_max_rpm, self.bg_only_r)
 
     __call__ = response
 
@@ -176,10 +225,17 @@ class ResonanceSurrogate:
         out.setdefault("zeta", np.full(np.atleast_2d(Z).shape[0], self.zeta_const))
         return out
 
+    def _nc_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
+        return select_nc(s["nc"], s.get("nc_local"), self.n_max_rpm, self.nc_local_band)
+
+    def nc_points(self, Z: np.ndarray) -> np.ndarray:
+        """``n̂_c`` (rpm) at joint points as used by the combination (local model in band)."""
+        return self._nc_of(self.sub_predictions(Z))
+
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """``ŷ`` (m) at joint points ``Z = [x, θ]`` (n, 5): the quantity of ``response``."""
         s = self.sub_predictions(Z)
-        return combine(s["nc"], s["ares"], s["zeta"], s.get("bg"), self.n_max_rpm)
+        return self._combine(self._nc_of(s), s["ares"], s["zeta"], s.get("bg"))
 
     def predict(self, Z: np.ndarray) -> Prediction:
         """Mean and std (m) at joint points: delta method in ``log ŷ``, lognormal moments.
@@ -191,6 +247,10 @@ class ResonanceSurrogate:
         """
         p = self._points(Z)
         ln_nc, s_nc = p["nc"].mean, p["nc"].std
+        if "nc_local" in p and self.nc_local_band > 0:
+            loc = np.abs(self.n_max_rpm / np.exp(ln_nc) - 1.0) <= self.nc_local_band
+            ln_nc = np.where(loc, p["nc_local"].mean, ln_nc)
+            s_nc = np.where(loc, p["nc_local"].std, s_nc)
         ln_a, s_a = p["ares"].mean, p["ares"].std
         if "zeta" in p:
             ln_z, s_z = p["zeta"].mean, p["zeta"].std
@@ -208,6 +268,8 @@ class ResonanceSurrogate:
         s2 = s_a**2 + (g_nc * s_nc) ** 2 + (g_z * s_z) ** 2
         if "bg" in p:
             use_bg = p["bg"].mean > mu
+            if self.bg_only_r > 0:
+                use_bg |= self.n_max_rpm / np.exp(ln_nc) <= self.bg_only_r
             mu = np.where(use_bg, p["bg"].mean, mu)
             s2 = np.where(use_bg, p["bg"].std ** 2, s2)
         mean = np.exp(mu + 0.5 * s2)
@@ -228,7 +290,7 @@ class ResonanceSurrogate:
             lo = loo_cv(s.model, method="closed_form")
             vals[k] = vals[k].copy()
             vals[k][self.rows[k]] = np.exp(lo.y_loo)
-        y_loo = combine(vals["nc"], vals["ares"], vals["zeta"], vals.get("bg"), self.n_max_rpm)
+        y_loo = self._combine(self._nc_of(vals), vals["ares"], vals["zeta"], vals.get("bg"))
         return self.Q_train[:, 3].copy(), y_loo
 
 
@@ -270,7 +332,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
     rows = {"nc": all_rows, "ares": np.flatnonzero(ares_ok),
             "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
-    targets = {"nc": nc, "ares": ares, "bg": y}
+    targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc}
+    if cfg.res_nc_local > 0:
+        rows["nc_local"] = np.flatnonzero(np.abs(r - 1.0) <= cfg.res_nc_local)
     ratio = atop / ares
     zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
     zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
@@ -281,7 +345,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     min_rows = Z.shape[1] + 2
     subs: dict[str, Any] = {}
     children = dict(zip(("nc", "ares", "bg", "zeta"), rng.spawn(4), strict=True))
-    for k in ("nc", "ares", "bg", "zeta"):
+    if "nc_local" in rows:  # spawned after the others: their fits are unchanged by the option
+        children["nc_local"] = rng.spawn(1)[0]
+    for k in ("nc", "ares", "bg", "zeta", "nc_local"):
         if k not in rows:
             continue
         if rows[k].size < min_rows:
@@ -299,13 +365,17 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                            "hyperparameters": s.info["hyperparameters"]}
                        for k, s in subs.items()},
         "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
+        "nc_local_band": float(cfg.res_band) if "nc_local" in subs else 0.0,
+        "bg_only_r": float(cfg.res_bg_only_r),
         "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
         "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
     }
     return ResonanceSurrogate(subs=subs, rows={k: rows[k] for k in subs},
                               zeta_const=zeta_const, n_max_rpm=float(n_max_rpm),
-                              Z_train=Z, Q_train=Q, info=info)
+                              Z_train=Z, Q_train=Q, info=info,
+                              nc_local_band=float(cfg.res_band) if "nc_local" in subs else 0.0,
+                              bg_only_r=float(cfg.res_bg_only_r))
 
 
-__all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "combine", "fit_resonance_surrogate",
-           "rho", "rho_env", "zeta_from_ratio"]
+__all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "combine", "combine_bg_only",
+           "fit_resonance_surrogate", "rho", "rho_env", "select_nc", "zeta_from_ratio"]

@@ -154,6 +154,7 @@ def _resonance_tables(name: str, sur: ResonanceSurrogate, Z_t: np.ndarray, Q_t: 
                       n_th: int) -> tuple[list[list[Any]], list[list[Any]]]:
     n_max = sur.n_max_rpm
     p = sur.sub_predictions(Z_t)
+    p["nc"] = sur.nc_points(Z_t)  # the n_c the combination uses (local model in its band)
     r = n_max / Q_t[:, 0]
     near = np.abs(r - 1) <= 0.05
     rows = [_rel_row(name, "critical_rpm", "all", Q_t[:, 0], p["nc"], 1.0, "rpm"),
@@ -165,7 +166,7 @@ def _resonance_tables(name: str, sur: ResonanceSurrogate, Z_t: np.ndarray, Q_t: 
         rows.append(_rel_row(name, "background_y", "r<=0.95", Q_t[m, 3], p["bg"][m], 1e6,
                              "um"))
     nc_rows = []
-    pd = sur.sub_predictions(Z_d)["nc"]
+    pd = sur.nc_points(Z_d)
     for i, lab in enumerate(labels):
         sl = slice(i * n_th, (i + 1) * n_th)
         t, q = Q_d[sl, 0], pd[sl]

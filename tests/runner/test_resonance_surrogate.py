@@ -4,6 +4,8 @@ the separable grid path, config validation and a tiny FE run (counted, cached ap
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -13,9 +15,11 @@ from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogat
 from surrogate_rbrdo.runner.resonance_surrogate import (
     ResonanceSurrogate,
     combine,
+    combine_bg_only,
     fit_resonance_surrogate,
     rho,
     rho_env,
+    select_nc,
     zeta_from_ratio,
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -181,6 +185,8 @@ def test_band_points_lie_on_the_boundaries():
     ({"res_band": 0.0}, "res_band = 0.0"),
     ({"res_n_band": -1}, "res_n_band = -1"),
     ({"res_bg_r_max": 1.5}, "res_bg_r_max = 1.5"),
+    ({"res_nc_local": -0.1}, "res_nc_local = -0.1"),
+    ({"res_bg_only_r": 0.97}, r"res_bg_only_r = 0.97 is not allowed.*res_bg_r_max = 0.95"),
 ])
 def test_config_validation(over, match):
     with pytest.raises(ValueError, match=match):
@@ -222,3 +228,70 @@ def test_tiny_fe_run_counts_band_points_and_caches_apart(tmp_path):
                          SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential"),
                          rng=np.random.default_rng(4), cache_dir=tmp_path, counter=c2)
     assert c2.calls == 16
+
+
+def test_select_nc_and_bg_only_known_values():
+    nc = np.array([N_MAX / 0.9, N_MAX / 0.961, N_MAX, N_MAX / 1.039, N_MAX / 1.2])
+    loc = np.full(5, 1.0)
+    # the local value exactly where the global r̂ lies within the band of 1
+    assert select_nc(nc, loc, N_MAX, 0.04).tolist() == [nc[0], 1.0, 1.0, 1.0, nc[4]]
+    assert np.array_equal(select_nc(nc, None, N_MAX, 0.04), nc)
+    assert np.array_equal(select_nc(nc, loc, N_MAX, 0.0), nc)
+    # background alone at and below r = bg_only_r, the combination above; off: unchanged
+    y, bg = np.full(5, 7e-6), np.full(5, 2e-6)
+    assert combine_bg_only(y, nc, bg, N_MAX, 0.961).tolist() == [2e-6, 2e-6, 7e-6, 7e-6, 7e-6]
+    assert np.array_equal(combine_bg_only(y, nc, bg, N_MAX, 0.0), y)
+    assert np.array_equal(combine_bg_only(y, nc, None, N_MAX, 0.961), y)
+
+
+@pytest.fixture(scope="module")
+def synth_opts():
+    Z, Q = _synthetic(60, seed=4)
+    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+                          res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
+                          res_nc_local=0.15, res_band=0.1, res_bg_only_r=0.9)
+    base = replace(cfg, res_nc_local=0.0, res_bg_only_r=0.0)
+    sur = fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX)
+    ref = fit_resonance_surrogate(Z, Q, base, rng=np.random.default_rng(1), n_max_rpm=N_MAX)
+    return sur, ref, Z, Q
+
+
+def test_local_nc_model_interpolates_its_band_rows(synth_opts):
+    sur, ref, Z, Q = synth_opts
+    r = N_MAX / Q[:, 0]
+    rows = sur.rows["nc_local"]
+    assert set(sur.subs) == {"nc", "nc_local", "ares", "bg", "zeta"}
+    assert np.array_equal(rows, np.flatnonzero(np.abs(r - 1) <= 0.15)) and rows.size >= 7
+    smt_pred = sur.subs["nc_local"].model.model_.predict_values(Z[rows]).ravel()
+    assert np.allclose(np.exp(smt_pred), Q[rows, 0], rtol=1e-6)
+    assert sur.nc_local_band == 0.1 and sur.bg_only_r == 0.9
+    assert ref.nc_local_band == 0.0 and "nc_local" not in ref.subs
+    # the other sub-models are fitted exactly as without the options (same child streams)
+    for k in ("nc", "ares", "bg", "zeta"):
+        assert np.array_equal(sur.subs[k].info["hyperparameters"],
+                              ref.subs[k].info["hyperparameters"]), k
+
+
+def test_options_in_grid_points_and_predict(synth_opts):
+    sur, ref, Z, Q = synth_opts
+    rng = np.random.default_rng(6)
+    x = Z[:5, :3] + rng.normal(0, 1, (5, 3))
+    theta = 1.0 + 0.05 * rng.standard_normal((4, 2))
+    joint = np.column_stack([np.repeat(x, 4, axis=0), np.tile(theta, (5, 1))])
+    smt = {k: np.exp(s.model.model_.predict_values(joint).ravel()) for k, s in sur.subs.items()}
+    nc = np.where(np.abs(N_MAX / smt["nc"] - 1) <= 0.1, smt["nc_local"], smt["nc"])
+    y = combine(nc, smt["ares"], smt["zeta"], smt["bg"], N_MAX)
+    y = np.where(N_MAX / nc <= 0.9, smt["bg"], y)
+    assert np.allclose(sur.response(x, theta), y.reshape(5, 4), rtol=1e-7)
+    assert np.allclose(sur.response_points(joint), y, rtol=1e-7)
+    assert np.allclose(sur.nc_points(joint), nc, rtol=1e-9)
+    # at the training points the combined median reproduces y where every sub-model used
+    # interpolates: background-only rows (r <= 0.9) and in-band rows of every sub-model
+    r = N_MAX / Q[:, 0]
+    low = np.flatnonzero(r <= 0.85)
+    assert low.size >= 1
+    assert np.allclose(sur.response_points(Z[low]), Q[low, 3], rtol=1e-4)
+    p = sur.predict(Z[low])
+    assert np.allclose(p.mean, Q[low, 3], rtol=1e-4) and np.all(p.std < 1e-3 * p.mean)
+    y_true, y_loo = sur.loo_points()
+    assert y_loo.shape == y_true.shape and np.all(np.isfinite(y_loo))
