@@ -133,6 +133,12 @@ class SurrogateConfig:
         background Kriging alone, which is fitted to ``y`` itself there) wherever
         ``r̂ <= res_bg_only_r``; must not exceed ``res_bg_r_max``. Removes the SDOF flank's
         overshoot where resonance tail and background interfere (``subcritical_edge``).
+    res_ares_local : float
+        ``0`` (default): off. Otherwise a second, *local* Kriging of ``log A_res`` fitted only
+        on the training points with the resonance in the range (``r >= 1``) and
+        ``|log A_res - log δ_lim| <= res_ares_local`` (typically the ``res_n_band_lim``
+        points), used instead of the global one wherever ``|log Â_res - log δ_lim| <=
+        res_band_lim`` (the second boundary; docs/surrogates.md, run ``struct4``).
     """
 
     n_doe: int = 200
@@ -165,6 +171,7 @@ class SurrogateConfig:
     res_band_lim: float = 0.05
     res_nc_local: float = 0.0
     res_bg_only_r: float = 0.0
+    res_ares_local: float = 0.0
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -205,6 +212,7 @@ class SurrogateConfig:
         check_range("res_band_lim", self.res_band_lim, 0.0, 1.0, inclusive=False)
         check_range("res_nc_local", self.res_nc_local, 0.0, 1.0)
         check_range("res_bg_only_r", self.res_bg_only_r, 0.0, 1.0)
+        check_range("res_ares_local", self.res_ares_local, 0.0, 10.0)
         if self.res_bg_only_r > self.res_bg_r_max:
             raise ValueError(f"res_bg_only_r = {self.res_bg_only_r} is not allowed: must be "
                              f"<= res_bg_r_max = {self.res_bg_r_max} (the background model "
@@ -578,7 +586,8 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
             Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])
         sample_s = time.perf_counter() - t0
         rsur = fit_resonance_surrogate(Z, Q, cfg, rng=r_fit, n_max_rpm=n_max, n_design=d,
-                                       is_band=np.arange(Z.shape[0]) >= n_lhs)
+                                       is_band=np.arange(Z.shape[0]) >= n_lhs,
+                                       threshold_m=limit.threshold)
         rsur.info["n_lhs"], rsur.info["n_band"] = n_lhs, int(Z.shape[0] - n_lhs)
         info = {**rsur.info, "fe_calls": counter.calls - start, "sampling_time_s": sample_s,
                 "bounds": joint_bounds(spindle, inputs, cfg).tolist(),

@@ -38,7 +38,12 @@ Options (default off; ``docs/surrogates.md``, run ``struct3``):
   ``r̂`` lies within ``nc_local_band`` (``res_band``) of 1, where the boundary is placed;
 * ``bg_only_r > 0`` (``res_bg_only_r``): ``ŷ = b̂`` wherever ``r̂ <= bg_only_r`` (the
   background Kriging is fitted to ``y`` itself there; the SDOF flank overshoots where the
-  resonance tail and the background interfere destructively).
+  resonance tail and the background interfere destructively);
+* ``ares_local`` (``res_ares_local = w > 0``, needs ``threshold_m`` = δ_lim): a second Kriging
+  of ``log A_res`` on the training points with ``r >= 1`` and ``|log A_res - log δ_lim| <= w``;
+  it replaces the global ``Â_res`` wherever ``|log Â_res - log δ_lim| <= ares_local_band``
+  (``res_band_lim``): P_f of a design whose resonance is within ~1 % of δ_lim needs A_res to
+  a fraction of a per cent there.
 
 The θ blocks of every sub-model are cached (one :class:`PeakSurrogate` per sub-model), so a
 population × θ sample costs a few matrix products.
@@ -131,6 +136,19 @@ def select_nc(nc: np.ndarray, nc_local: np.ndarray | None, n_max: float,
     return np.where(np.abs(n_max / nc - 1.0) <= band, nc_local, nc)
 
 
+def select_local(glob: np.ndarray, local: np.ndarray | None, center: float,
+                 band: float) -> np.ndarray:
+    """``local`` where ``|log glob - center| <= band``, else ``glob``.
+
+    >>> select_local(np.array([1.0, 2.0]), np.array([5.0, 6.0]), np.log(2.0), 0.1).tolist()
+    [1.0, 6.0]
+    """
+    glob = np.asarray(glob, dtype=float)
+    if local is None or band <= 0:
+        return glob
+    return np.where(np.abs(np.log(glob) - center) <= band, local, glob)
+
+
 def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max: float,
                     bg_only_r: float) -> np.ndarray:
     """``bg`` where ``n_max / nc <= bg_only_r`` (background alone), else ``y``.
@@ -170,6 +188,8 @@ class ResonanceSurrogate:
         Half-width in ``r̂`` (global model) where ``"nc_local"`` replaces ``"nc"``.
     bg_only_r : float
         ``ŷ = b̂`` where ``r̂ <= bg_only_r`` (0: off).
+    ares_local_center, ares_local_band : float
+        ``"ares_local"`` replaces ``"ares"`` where ``|log Â_res - center| <= band``.
     """
 
     subs: dict[str, Any]
@@ -181,6 +201,8 @@ class ResonanceSurrogate:
     info: dict[str, Any] = field(default_factory=dict)
     nc_local_band: float = 0.0
     bg_only_r: float = 0.0
+    ares_local_center: float = 0.0
+    ares_local_band: float = 0.0
 
     @property
     def n_train(self) -> int:
@@ -202,6 +224,9 @@ class ResonanceSurrogate:
             nc = select_nc(nc, self._grid("nc_local", x, theta), self.n_max_rpm,
                            self.nc_local_band)
         ares = self._grid("ares", x, theta)
+        if "ares_local" in self.subs:
+            ares = select_local(ares, self._grid("ares_local", x, theta),
+                                self.ares_local_center, self.ares_local_band)
         zeta = self._grid("zeta", x, theta) if "zeta" in self.subs else self.zeta_const
         bg = self._grid("bg", x, theta) if "bg" in self.subs else None
         return self._combine(nc, ares, zeta, bg)
@@ -228,6 +253,10 @@ class ResonanceSurrogate:
     def _nc_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
         return select_nc(s["nc"], s.get("nc_local"), self.n_max_rpm, self.nc_local_band)
 
+    def _ares_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
+        return select_local(s["ares"], s.get("ares_local"), self.ares_local_center,
+                            self.ares_local_band)
+
     def nc_points(self, Z: np.ndarray) -> np.ndarray:
         """``n̂_c`` (rpm) at joint points as used by the combination (local model in band)."""
         return self._nc_of(self.sub_predictions(Z))
@@ -235,7 +264,7 @@ class ResonanceSurrogate:
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """``ŷ`` (m) at joint points ``Z = [x, θ]`` (n, 5): the quantity of ``response``."""
         s = self.sub_predictions(Z)
-        return self._combine(self._nc_of(s), s["ares"], s["zeta"], s.get("bg"))
+        return self._combine(self._nc_of(s), self._ares_of(s), s["zeta"], s.get("bg"))
 
     def predict(self, Z: np.ndarray) -> Prediction:
         """Mean and std (m) at joint points: delta method in ``log ŷ``, lognormal moments.
@@ -252,6 +281,10 @@ class ResonanceSurrogate:
             ln_nc = np.where(loc, p["nc_local"].mean, ln_nc)
             s_nc = np.where(loc, p["nc_local"].std, s_nc)
         ln_a, s_a = p["ares"].mean, p["ares"].std
+        if "ares_local" in p and self.ares_local_band > 0:
+            loc = np.abs(ln_a - self.ares_local_center) <= self.ares_local_band
+            ln_a = np.where(loc, p["ares_local"].mean, ln_a)
+            s_a = np.where(loc, p["ares_local"].std, s_a)
         if "zeta" in p:
             ln_z, s_z = p["zeta"].mean, p["zeta"].std
         else:
@@ -290,14 +323,16 @@ class ResonanceSurrogate:
             lo = loo_cv(s.model, method="closed_form")
             vals[k] = vals[k].copy()
             vals[k][self.rows[k]] = np.exp(lo.y_loo)
-        y_loo = self._combine(self._nc_of(vals), vals["ares"], vals["zeta"], vals.get("bg"))
+        y_loo = self._combine(self._nc_of(vals), self._ares_of(vals), vals["zeta"],
+                              vals.get("bg"))
         return self.Q_train[:, 3].copy(), y_loo
 
 
 def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                             rng: np.random.Generator, n_max_rpm: float,
                             n_design: int = 3,
-                            is_band: np.ndarray | None = None) -> ResonanceSurrogate:
+                            is_band: np.ndarray | None = None,
+                            threshold_m: float | None = None) -> ResonanceSurrogate:
     """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
 
     Parameters
@@ -313,6 +348,8 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     n_design : int
     is_band : ndarray of bool, shape (n,), optional
         Rows added near the boundary (``band_points``); default none.
+    threshold_m : float, optional
+        δ_lim (m); required when ``cfg.res_ares_local > 0``.
     """
     from surrogate_rbrdo.runner.pipeline import fit_surrogate
 
@@ -335,6 +372,13 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc}
     if cfg.res_nc_local > 0:
         rows["nc_local"] = np.flatnonzero(np.abs(r - 1.0) <= cfg.res_nc_local)
+    targets["ares_local"] = ares
+    if cfg.res_ares_local > 0:
+        if threshold_m is None or not threshold_m > 0:
+            raise ValueError(f"threshold_m = {threshold_m!r} is not allowed with "
+                             "res_ares_local > 0: give delta_lim in metres (> 0)")
+        rows["ares_local"] = np.flatnonzero(
+            (r >= 1.0) & (np.abs(np.log(ares / threshold_m)) <= cfg.res_ares_local))
     ratio = atop / ares
     zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
     zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
@@ -345,9 +389,10 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     min_rows = Z.shape[1] + 2
     subs: dict[str, Any] = {}
     children = dict(zip(("nc", "ares", "bg", "zeta"), rng.spawn(4), strict=True))
-    if "nc_local" in rows:  # spawned after the others: their fits are unchanged by the option
-        children["nc_local"] = rng.spawn(1)[0]
-    for k in ("nc", "ares", "bg", "zeta", "nc_local"):
+    for k in ("nc_local", "ares_local"):  # spawned after the others: their fits unchanged
+        if k in rows:
+            children[k] = rng.spawn(1)[0]
+    for k in ("nc", "ares", "bg", "zeta", "nc_local", "ares_local"):
         if k not in rows:
             continue
         if rows[k].size < min_rows:
@@ -367,6 +412,7 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
         "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
         "nc_local_band": float(cfg.res_band) if "nc_local" in subs else 0.0,
         "bg_only_r": float(cfg.res_bg_only_r),
+        "ares_local_band": float(cfg.res_band_lim) if "ares_local" in subs else 0.0,
         "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
         "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
     }
@@ -374,8 +420,13 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                               zeta_const=zeta_const, n_max_rpm=float(n_max_rpm),
                               Z_train=Z, Q_train=Q, info=info,
                               nc_local_band=float(cfg.res_band) if "nc_local" in subs else 0.0,
-                              bg_only_r=float(cfg.res_bg_only_r))
+                              bg_only_r=float(cfg.res_bg_only_r),
+                              ares_local_center=float(np.log(threshold_m))
+                              if "ares_local" in subs else 0.0,
+                              ares_local_band=float(cfg.res_band_lim)
+                              if "ares_local" in subs else 0.0)
 
 
 __all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "combine", "combine_bg_only",
-           "fit_resonance_surrogate", "rho", "rho_env", "select_nc", "zeta_from_ratio"]
+           "fit_resonance_surrogate", "rho", "rho_env", "select_local", "select_nc",
+           "zeta_from_ratio"]

@@ -19,6 +19,7 @@ from surrogate_rbrdo.runner.resonance_surrogate import (
     fit_resonance_surrogate,
     rho,
     rho_env,
+    select_local,
     select_nc,
     zeta_from_ratio,
 )
@@ -186,6 +187,7 @@ def test_band_points_lie_on_the_boundaries():
     ({"res_n_band": -1}, "res_n_band = -1"),
     ({"res_bg_r_max": 1.5}, "res_bg_r_max = 1.5"),
     ({"res_nc_local": -0.1}, "res_nc_local = -0.1"),
+    ({"res_ares_local": -0.1}, "res_ares_local = -0.1"),
     ({"res_bg_only_r": 0.97}, r"res_bg_only_r = 0.97 is not allowed.*res_bg_r_max = 0.95"),
 ])
 def test_config_validation(over, match):
@@ -295,3 +297,48 @@ def test_options_in_grid_points_and_predict(synth_opts):
     assert np.allclose(p.mean, Q[low, 3], rtol=1e-4) and np.all(p.std < 1e-3 * p.mean)
     y_true, y_loo = sur.loo_points()
     assert y_loo.shape == y_true.shape and np.all(np.isfinite(y_loo))
+
+
+def test_select_local_known_values():
+    glob = np.array([10e-6, 19e-6, 19.5e-6, 21e-6, 30e-6])
+    loc = np.full(5, 1.0)
+    c = np.log(19.5e-6)
+    # |log(19/19.5)| = 0.026, |log(21/19.5)| = 0.074: inside 0.05 / outside
+    assert select_local(glob, loc, c, 0.05).tolist() == [10e-6, 1.0, 1.0, 21e-6, 30e-6]
+    assert select_local(glob, loc, c, 0.1).tolist() == [10e-6, 1.0, 1.0, 1.0, 30e-6]
+    assert np.array_equal(select_local(glob, None, c, 0.1), glob)
+    assert np.array_equal(select_local(glob, loc, c, 0.0), glob)
+
+
+def test_local_ares_model_interpolates_and_is_used_near_the_threshold():
+    Z, Q = _synthetic(60, seed=4)
+    thr = float(np.median(Q[:, 1]))
+    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+                          res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
+                          res_ares_local=0.3, res_band_lim=0.2)
+    with pytest.raises(ValueError, match="threshold_m = None is not allowed"):
+        fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX)
+    sur = fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX,
+                                  threshold_m=thr)
+    r = N_MAX / Q[:, 0]
+    rows = sur.rows["ares_local"]
+    assert np.array_equal(rows, np.flatnonzero((r >= 1) & (np.abs(np.log(Q[:, 1] / thr)) <= 0.3)))
+    assert rows.size >= 7
+    smt_pred = sur.subs["ares_local"].model.model_.predict_values(Z[rows]).ravel()
+    assert np.allclose(np.exp(smt_pred), Q[rows, 1], rtol=1e-6)
+    assert sur.ares_local_band == 0.2 and sur.ares_local_center == pytest.approx(np.log(thr))
+    # grid and points: the local model exactly where the global Â_res is within the band
+    rng = np.random.default_rng(8)
+    x = Z[:5, :3] + rng.normal(0, 1, (5, 3))
+    theta = 1.0 + 0.05 * rng.standard_normal((4, 2))
+    joint = np.column_stack([np.repeat(x, 4, axis=0), np.tile(theta, (5, 1))])
+    smt = {k: np.exp(s.model.model_.predict_values(joint).ravel()) for k, s in sur.subs.items()}
+    a = np.where(np.abs(np.log(smt["ares"] / thr)) <= 0.2, smt["ares_local"], smt["ares"])
+    y = combine(smt["nc"], a, smt["zeta"], smt["bg"], N_MAX)
+    assert np.allclose(sur.response(x, theta), y.reshape(5, 4), rtol=1e-7)
+    assert np.allclose(sur.response_points(joint), y, rtol=1e-7)
+    # at its own training rows in the resonant regime (r above the flank) ŷ = A_res exactly
+    res = rows[r[rows] > 1.01]
+    glob_in = np.abs(np.log(sur.sub_predictions(Z[res])["ares"] / thr)) <= 0.2
+    assert glob_in.sum() >= 1
+    assert np.allclose(sur.response_points(Z[res[glob_in]]), Q[res[glob_in], 1], rtol=1e-5)
