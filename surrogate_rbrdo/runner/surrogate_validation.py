@@ -48,7 +48,7 @@ from surrogate_rbrdo.core.protocols import LimitState, Prediction
 from surrogate_rbrdo.core.validate import check_int, check_keys, check_positive
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
-from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.runner.config import spindle_from_config, uncertainty_from_config
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
 from surrogate_rbrdo.runner.pipeline import (
     PeakSurrogate,
@@ -63,12 +63,10 @@ from surrogate_rbrdo.runner.resonance_surrogate import ResonanceSurrogate
 from surrogate_rbrdo.runner.runfolder import RunFolder
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 from surrogate_rbrdo.surrogates.validation import compare_mc, loo_cv, validation_metrics
-from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 VALIDATION_KEYS = {"n_test", "n_theta", "designs", "variants", "rel_tol", "n_theta_nc"}
-UNCERTAINTY_KEYS = {"mean", "std", "corr"}
 LIMIT_KEYS = {"delta_lim_um"}
-TABLE4_STD = (0.0605, 0.0641)
+
 DEFAULT_DESIGNS = {
     "resonant": [2000.0, 650.0, 60.0],
     "subcritical_far": [2000.0, 330.0, 75.0],
@@ -76,13 +74,6 @@ DEFAULT_DESIGNS = {
     "boundary_b": [3000.0, 480.0, 70.0],
     "boundary_c": [2000.0, 460.0, 65.0],
 }
-
-
-def inputs_from_config(table: Mapping[str, Any]) -> MultivariateNormal:
-    """θ ~ MVN from an ``[uncertainty]`` table (default mean 1, Table 4 pooled CoVs)."""
-    check_keys("[uncertainty]", table, UNCERTAINTY_KEYS)
-    return MultivariateNormal(table.get("mean", [1.0, 1.0]), std=table.get("std", TABLE4_STD),
-                              corr=table.get("corr"))
 
 
 def _fe_mc_one(spindle: Any, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -213,7 +204,7 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
     rel_tol = check_positive("validation.rel_tol", val.get("rel_tol", 0.05))
     n_theta_nc = check_int("validation.n_theta_nc", val.get("n_theta_nc", 40), minimum=2)
     spindle = spindle_from_config(config.get("spindle", {}), config.get("_base_dir", "."))
-    inputs = inputs_from_config(config.get("uncertainty", {}))
+    inputs = uncertainty_from_config(config.get("uncertainty", {}), spindle.theta_bearings)
     lim_table = dict(config.get("limit", {}))
     check_keys("[limit]", lim_table, LIMIT_KEYS)
     limit = LimitState(check_positive("limit.delta_lim_um",
@@ -381,4 +372,4 @@ def _memory(cache_dir: Path) -> Any:
     return fe_cache(cache_dir)
 
 
-__all__ = ["fe_mc", "inputs_from_config", "point_response", "run_surrogate_validation"]
+__all__ = ["fe_mc", "point_response", "run_surrogate_validation"]
