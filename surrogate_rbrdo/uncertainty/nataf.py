@@ -63,8 +63,36 @@ def fictitious_correlation(mi: _Marginal, mj: _Marginal, rho: float) -> float:
                                  xtol=1e-13))
 
 
+class _MarginalVector(_SampleMixin):
+    """Shared parts of vectors built from marginals: moments and per-marginal maps to and
+    from standard normal space (the correlation, if any, is handled by the subclass)."""
+
+    marginals: Sequence[_Marginal]
+
+    @property
+    def dim(self) -> int:
+        return len(self.marginals)
+
+    @property
+    def mean(self) -> np.ndarray:
+        return np.array([m.mean[0] for m in self.marginals])
+
+    @property
+    def std(self) -> np.ndarray:
+        return np.array([m.std[0] for m in self.marginals])
+
+    def _from_normals(self, z: np.ndarray) -> np.ndarray:
+        return np.column_stack([m.ppf_normal(z[:, i]) for i, m in enumerate(self.marginals)])
+
+    def _to_normals(self, theta: np.ndarray) -> np.ndarray:
+        theta = as_batch("theta", theta, self.dim)
+        return np.column_stack(
+            [m.cdf_normal_inv(theta[:, i]) for i, m in enumerate(self.marginals)]
+        )
+
+
 @dataclass(frozen=True)
-class Independent(_SampleMixin):
+class Independent(_MarginalVector):
     """Vector of independent marginals.
 
     >>> from surrogate_rbrdo.uncertainty.marginals import Uniform
@@ -79,34 +107,18 @@ class Independent(_SampleMixin):
         object.__setattr__(self, "marginals", _check_marginals(self.marginals))
 
     @property
-    def dim(self) -> int:
-        return len(self.marginals)
-
-    @property
-    def mean(self) -> np.ndarray:
-        return np.array([m.mean[0] for m in self.marginals])
-
-    @property
-    def std(self) -> np.ndarray:
-        return np.array([m.std[0] for m in self.marginals])
-
-    @property
     def cov(self) -> np.ndarray:
         return np.diag(self.std**2)
 
     def from_standard(self, u: np.ndarray) -> np.ndarray:
-        u = as_batch("u", u, self.dim)
-        return np.column_stack([m.ppf_normal(u[:, i]) for i, m in enumerate(self.marginals)])
+        return self._from_normals(as_batch("u", u, self.dim))
 
     def to_standard(self, theta: np.ndarray) -> np.ndarray:
-        theta = as_batch("theta", theta, self.dim)
-        return np.column_stack(
-            [m.cdf_normal_inv(theta[:, i]) for i, m in enumerate(self.marginals)]
-        )
+        return self._to_normals(theta)
 
 
 @dataclass(frozen=True, eq=False)
-class Nataf(_SampleMixin):
+class Nataf(_MarginalVector):
     """Marginals coupled by a Gaussian copula with target Pearson correlation ``corr``.
 
     Attributes ``corr0`` (fictitious normal correlation) and ``chol0`` are computed once.
@@ -137,26 +149,11 @@ class Nataf(_SampleMixin):
         object.__setattr__(self, "chol0", chol0)
 
     @property
-    def dim(self) -> int:
-        return len(self.marginals)
-
-    @property
-    def mean(self) -> np.ndarray:
-        return np.array([m.mean[0] for m in self.marginals])
-
-    @property
-    def std(self) -> np.ndarray:
-        return np.array([m.std[0] for m in self.marginals])
-
-    @property
     def cov(self) -> np.ndarray:
         return self.corr * np.outer(self.std, self.std)
 
     def from_standard(self, u: np.ndarray) -> np.ndarray:
-        z = as_batch("u", u, self.dim) @ self.chol0.T
-        return np.column_stack([m.ppf_normal(z[:, i]) for i, m in enumerate(self.marginals)])
+        return self._from_normals(as_batch("u", u, self.dim) @ self.chol0.T)
 
     def to_standard(self, theta: np.ndarray) -> np.ndarray:
-        theta = as_batch("theta", theta, self.dim)
-        z = np.column_stack([m.cdf_normal_inv(theta[:, i]) for i, m in enumerate(self.marginals)])
-        return np.linalg.solve(self.chol0, z.T).T
+        return np.linalg.solve(self.chol0, self._to_normals(theta).T).T
