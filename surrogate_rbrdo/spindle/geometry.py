@@ -378,14 +378,6 @@ class DesignMap:
         z0, z1 = starts[idx[0]], starts[idx[-1] + 1]
         scale = span / (z1 - z0)
 
-        def zmap(z: float) -> float:
-            if z <= z0:
-                return z
-            if z <= z1:
-                return z0 + (z - z0) * scale
-            # clamp: rounding must not push an item at the shaft end off the shaft
-            return min(z + (z1 - z0) * (scale - 1.0), new_total[0])
-
         sections = []
         for i, s in enumerate(geometry.sections):
             if i in idx:
@@ -396,7 +388,16 @@ class DesignMap:
                     )
                 s = replace(s, length_mm=s.length_mm * scale, outer_diameter_mm=diam)
             sections.append(s)
-        new_total = [float(sum(s.length_mm for s in sections))]  # as total_length_mm sums
+        new_total = float(sum(s.length_mm for s in sections))  # as total_length_mm sums
+
+        def zmap(z: float) -> float:
+            if z <= z0:
+                return z
+            if z <= z1:
+                return z0 + (z - z0) * scale
+            # clamp: rounding must not push an item at the shaft end off the shaft
+            return min(z + (z1 - z0) * (scale - 1.0), new_total)
+
         bearings = []
         for b in geometry.bearings:
             law = b.law
