@@ -90,6 +90,8 @@ class SpindleModel:
     tool_node: int
     rotor_mass_kg: float
     sections: tuple[BeamSection, ...] = field(repr=False, default=())
+    #: per element: its 8x8 mass, stiffness and gyroscopic matrices, shape (ne, 3, 8, 8)
+    element_mats: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 3, 8, 8)))
 
     @property
     def n_nodes(self) -> int:
@@ -260,10 +262,11 @@ def build_model(
     K = np.zeros((n, n))
     G = np.zeros((n, n))
     mass = 0.0
+    emats = np.zeros((nn - 1, 3, 8, 8))
     for e in range(nn - 1):
         L = z[e + 1] - z[e]
         sec = sections[sec_idx[e]]
-        Me, Ke, Ge = element_matrices(sec, L, shear=shear, rotary=rotary)
+        Me, Ke, Ge = emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
         sl = slice(4 * e, 4 * e + 8)
         M[sl, sl] += Me
         K[sl, sl] += Ke
@@ -317,4 +320,5 @@ def build_model(
         tool_node=_node_of(z, geometry.tool_tip_mm),
         rotor_mass_kg=float(mass),
         sections=sections,
+        element_mats=emats,
     )

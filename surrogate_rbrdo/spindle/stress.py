@@ -26,7 +26,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import SingularSystemError
 from surrogate_rbrdo.spindle.assembly import MM, RPM, SpindleModel
-from surrogate_rbrdo.spindle.element import XPLANE, YPLANE, element_matrices
+from surrogate_rbrdo.spindle.element import XPLANE, YPLANE
 from surrogate_rbrdo.spindle.geometry import PreloadLaw
 from surrogate_rbrdo.spindle.harmonic import orbit_amplitude, unbalance_response
 
@@ -92,8 +92,7 @@ def _element_moments(model: SpindleModel, q: np.ndarray, *, omega: float = 0.0,
     uy = np.zeros(8)
     uy[[1, 5]] = 1.0
     for e in range(ne):
-        L = model.z[e + 1] - model.z[e]
-        Me, Ke, Ge = element_matrices(model.sections[model.element_section[e]], L)
+        Me, Ke, Ge = model.element_mats[e]
         A = Ke if omega == 0.0 else Ke - omega**2 * Me + 1j * model.gyro_scale * omega**2 * Ge
         fe = A @ q[4 * e: 4 * e + 8]
         if weight:
