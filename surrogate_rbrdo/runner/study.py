@@ -20,6 +20,9 @@ Config tables (every key optional unless stated; unknown keys raise):
                     ``chunk``
 ``[report]``        ``baseline`` ([F N, L mm, D mm]), ``n_speeds``, ``campbell_speeds``,
                     ``n_modes``
+``[refine]``        ``rounds`` (0: off), ``designs``, ``theta``, ``tol``: FE infill at the
+                    optimiser's designs, refit, optimise again
+                    (:class:`~surrogate_rbrdo.runner.refine.RefineOptions`)
 """
 
 from __future__ import annotations
@@ -43,12 +46,13 @@ from surrogate_rbrdo.core.validate import (
 from surrogate_rbrdo.runner.config import spindle_from_config, uncertainty_from_config
 from surrogate_rbrdo.runner.design_model import DesignModelOptions, fit_design_model
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
+from surrogate_rbrdo.runner.refine import RefineOptions, refine_surrogate, select_designs
 from surrogate_rbrdo.runner.runfolder import RunFolder
 
 RPM = 2.0 * np.pi / 60.0
 DESIGN_NAMES = ("preload_N", "span_mm", "diameter_mm")
 TABLES = {"spindle", "uncertainty", "limit", "surrogate", "design_model", "deterministic",
-          "optimization", "verification", "report"}
+          "optimization", "verification", "report", "refine"}
 LIMIT_KEYS = {"delta_lim_um"}
 DET_KEYS = {"stress", "yield_strength_pa", "resonance", "factor", "omega_max_rpm",
             "operating_speeds_rpm", "margin"}
@@ -155,6 +159,7 @@ class StudyConfig:
     report: ReportConfig
     baseline: np.ndarray
     seed: int
+    refine: RefineOptions = RefineOptions()
 
 
 def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
@@ -203,6 +208,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     opt = _dataclass_from(OptimizationConfig, "[optimization]", config.get("optimization", {}))
     ver = _dataclass_from(VerificationConfig, "[verification]", config.get("verification", {}))
     rep = _dataclass_from(ReportConfig, "[report]", config.get("report", {}))
+    ref = _dataclass_from(RefineOptions, "[refine]", config.get("refine", {}))
     try:
         base = spindle.design_map.check(np.asarray(
             rep.baseline if rep.baseline is not None else spindle.baseline, dtype=float))
@@ -210,7 +216,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
         raise ValueError(f"report.baseline: {exc}") from None
     return StudyConfig(spindle=spindle, inputs=inputs, limit=limit, surrogate=surrogate,
                        design_model=dmo, deterministic=det_opts, optimization=opt,
-                       verification=ver, report=rep, baseline=base, seed=seed)
+                       verification=ver, report=rep, baseline=base, seed=seed, refine=ref)
 
 
 # ----------------------------------------------------------------------------- verification
@@ -316,6 +322,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     opt, ver, sp = cfg.optimization, cfg.verification, cfg.spindle
     rng = np.random.default_rng(cfg.seed)
     r_sur, r_dm, r_crn, r_opt, r_ver = rng.spawn(5)
+    r_ref = rng.spawn(1)[0]   # after the others: their streams are unchanged
     lo, hi = sp.design_map.bounds[:, 0], sp.design_map.bounds[:, 1]
     t_start = time.perf_counter()
 
@@ -357,16 +364,60 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     labels = [_label(n, pt) for n, pt in runs]
     res = dict(zip(labels, results, strict=True))
 
+    def compromises(res: Mapping[str, Any]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for lab, r in res.items():
+            try:
+                out[lab] = select_compromise(r, opt.weights if r.archive.F.shape[1] == 2
+                                             else None)
+            except ValueError:
+                out[lab] = None
+        return out
+
+    # 3b. refinement: FE at the chosen designs, refit, optimise again (``[refine]``)
+    refine_rows: list[dict[str, Any]] = []
+    if cfg.refine.rounds:
+        from surrogate_rbrdo.core import CallCounter
+        from surrogate_rbrdo.runner.pipeline import fe_cache
+
+        ref, ref_counter = cfg.refine, CallCounter()
+        bounds = sp.design_map.bounds
+        for rnd, r_round in enumerate(r_ref.spawn(ref.rounds), start=1):
+            r_th, r_fit, r_nsga = r_round.spawn(3)
+            comp = compromises(res)
+            fr = {}
+            for (name, _), lab in zip(runs, labels, strict=True):
+                if name in ("rbrdo", "rdo"):
+                    idx = archive_front(res[lab])
+                    idx = idx[np.argsort(res[lab].archive.F[idx, 0])]
+                    fr[lab] = res[lab].archive.X[idx]
+            X_sel = select_designs([c.x for c in comp.values() if c is not None], fr, bounds,
+                                   ref.designs)
+            with run.timed(f"refine_{rnd}"):
+                surrogate, st = refine_surrogate(
+                    surrogate, sp, X_sel, cfg.inputs.sample(ref.theta, rng=r_th),
+                    cfg.surrogate, cfg.limit, rng=r_fit,
+                    cache=fe_cache(run.path.parent / "_fe_cache"), counter=ref_counter,
+                    progress=progress, tol=ref.tol)
+                refine_rows.append({"round": rnd, **{k: v for k, v in st.items()
+                                                     if not isinstance(v, list)}})
+                if not st["refit"]:
+                    break
+                forms = [formulation(n, pt) for n, pt in runs]
+                tasks = [partial(run_nsga2, f, lo, hi, rng=r, options=nsga, progress=progress)
+                         for f, r in zip(forms, r_nsga.spawn(len(runs)), strict=True)]
+                results = run_many(tasks, n_jobs=opt.n_jobs)
+                res = dict(zip(labels, results, strict=True))
+        fe_calls["refine"] = int(ref_counter.calls)
+        write_csv(run.file("refine.csv"), refine_rows)
+        run.write_json("surrogate_info.json", surrogate.info)
+
     # 4. fronts, compromises, MBR
-    comp: dict[str, Any] = {}
+    comp = compromises(res)
     fronts, clouds, front_designs = {}, {}, {}
     front_rows = []
     for (name, pt), lab in zip(runs, labels, strict=True):
         r = res[lab]
-        try:
-            comp[lab] = select_compromise(r, opt.weights if r.archive.F.shape[1] == 2 else None)
-        except ValueError:
-            comp[lab] = None
         if name in ("rbrdo", "rdo"):
             idx = archive_front(r)
             fronts[lab] = r.archive.F[idx]
@@ -503,6 +554,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
              "design_model_calls": int(sum(r.n_model_calls for r in results)),
              "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in res.items()},
              "study_wall_time_s": time.perf_counter() - t_start,
+             "refine": refine_rows,
              "surrogate": sinfo.get("config", {})}
     run.write_json("study_meta.json", extra)
     summary_rows = [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()

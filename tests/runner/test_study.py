@@ -75,6 +75,19 @@ def test_tiny_study_writes_the_expected_files(tmp_path):
     assert len(mbr) == 1 + 2     # one step (10 % -> 1 %) from the surrogate and from the FE
 
 
+def test_refine_round_evaluates_the_chosen_designs(tmp_path):
+    text = TINY + "\n[refine]\nrounds = 1\ndesigns = 2\ntheta = 3\ntol = 1e-9\n"
+    run = run_experiment(_write(tmp_path, text), results_dir=tmp_path / "res", run_id="r",
+                         progress=False)
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["fe_calls"]["refine"] == 2 * 3          # fresh cache: every point is new
+    rows = (run.path / "refine.csv").read_text().splitlines()
+    assert rows[0].startswith("round,n_designs,n_theta,fe_points") and len(rows) == 2
+    assert rows[1].startswith("1,2,3,6,")
+    info = json.loads((run.path / "surrogate_info.json").read_text())
+    assert info["n_refine_points"] == 6 and info["n_train"] == 24 + 6
+
+
 @pytest.mark.slow
 def test_same_seed_same_compromises(tmp_path):
     a = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="a")
@@ -102,6 +115,9 @@ def test_same_seed_same_compromises(tmp_path):
     ("n_theta = 6", "n_theta = 6\nn_thetas = 3",
      r"unknown key\(s\) \['n_thetas'\] in \[verification\]"),
     ('resonance = "none"', 'resonance = "campbell"', r"resonance = 'campbell' is not allowed"),
+    ("n_modes = 2", "n_modes = 2\n[refine]\nrounds = 1\ntheta = 1",
+     r"refine.theta = 1 is not allowed"),
+    ("n_modes = 2", "n_modes = 2\n[refine]\nround = 1", r"unknown key\(s\) \['round'\]"),
 ])
 def test_bad_config_fails_before_work(tmp_path, old, new, match):
     assert old in TINY

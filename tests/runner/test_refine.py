@@ -1,0 +1,90 @@
+"""Refinement at the optimiser's designs: design selection, FE error before the refit
+(checked against an independent FE evaluation), interpolation after it, options."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.core.counting import CallCounter
+from surrogate_rbrdo.core.protocols import LimitState
+from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
+from surrogate_rbrdo.runner.refine import RefineOptions, refine_surrogate, select_designs
+from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.uncertainty import MultivariateNormal
+
+INPUTS = MultivariateNormal([1.0, 1.0], std=[0.0605, 0.0641])
+LIMIT = LimitState(19.5e-6)
+CFG = SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential")
+BOUNDS = np.array([[1000.0, 3000.0], [300.0, 750.0], [50.0, 80.0]])
+
+
+# ------------------------------------------------------------------ select_designs
+def test_priority_first_then_front_ends_then_spread():
+    front = np.array([[1000.0, 300.0 + 50 * i, 50.0 + 3 * i] for i in range(10)])
+    comp = [front[4]]
+    X = select_designs(comp, {"f": front}, BOUNDS, 4)
+    np.testing.assert_array_equal(X[0], front[4])
+    np.testing.assert_array_equal(X[1], front[0])
+    np.testing.assert_array_equal(X[2], front[9])
+    # the fourth is the front point farthest from the three: index 2 or 7 (equal distance)
+    d = [np.min(np.abs(np.array([4, 0, 9]) - i)) for i in range(10)]
+    assert any(np.array_equal(X[3], front[i]) for i in range(10) if d[i] == max(d))
+
+
+def test_near_duplicates_are_skipped_and_count_is_capped():
+    a = np.array([2000.0, 500.0, 65.0])
+    near = a + np.array([1.0, 0.1, 0.01])           # far below 2 % of the box
+    X = select_designs([a, near, a], {}, BOUNDS, 5)
+    assert X.shape == (1, 3)
+    front = np.array([[1000.0, 300.0, 50.0], [3000.0, 750.0, 80.0], [2000.0, 400.0, 60.0]])
+    assert select_designs([a], {"f": front}, BOUNDS, 2).shape == (2, 3)
+
+
+# ------------------------------------------------------------------ refine_surrogate
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    sur, _ = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, CFG,
+                                  rng=np.random.default_rng(4),
+                                  cache_dir=tmp_path_factory.mktemp("fe"))
+    return sur
+
+
+def test_refine_reports_the_error_against_independent_fe_and_interpolates(trained):
+    sp = reference_spindle()
+    X = np.array([[3000.0, 480.0, 72.0], [2000.0, 380.0, 60.0]])
+    theta = INPUTS.sample(3, rng=np.random.default_rng(1))
+    counter = CallCounter()
+    new, st = refine_surrogate(trained, sp, X, theta, CFG, LIMIT,
+                               rng=np.random.default_rng(2), counter=counter)
+    # independent FE evaluation of the same designs x θ
+    y_fe = PeakAmplitudeResponse(sp)(X, theta)
+    np.testing.assert_allclose(st["mean_um_fe"], y_fe.mean(axis=1) * 1e6, rtol=1e-9)
+    y_old = trained.response(X, theta)
+    np.testing.assert_allclose(st["mean_um_surrogate"], y_old.mean(axis=1) * 1e6, rtol=1e-6)
+    err = np.abs(y_old.mean(1) - y_fe.mean(1)) / y_fe.mean(1)
+    assert st["max_rel_err_mean"] == pytest.approx(err.max(), rel=1e-6)
+    assert st["refit"] and st["fe_points"] == 6 == counter.calls
+    assert new.n_train == trained.n_train + 6
+    # the refitted Kriging interpolates the new FE points
+    np.testing.assert_allclose(new.response(X, theta), y_fe, rtol=1e-3)
+
+
+def test_refine_within_tolerance_keeps_the_surrogate(trained):
+    X = np.array([[2500.0, 420.0, 66.0]])
+    theta = INPUTS.sample(2, rng=np.random.default_rng(5))
+    new, st = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+                               rng=np.random.default_rng(0), tol=1e9)
+    assert new is trained and st["refit"] is False
+
+
+@pytest.mark.parametrize("kw,match", [
+    ({"rounds": -1}, r"refine.rounds = -1 is not allowed"),
+    ({"theta": 1}, r"refine.theta = 1 is not allowed"),
+    ({"designs": 0}, r"refine.designs = 0 is not allowed"),
+    ({"tol": 0.0}, r"refine.tol = 0.0 is not allowed"),
+])
+def test_bad_refine_options(kw, match):
+    with pytest.raises(ValueError, match=match):
+        RefineOptions(**kw)
