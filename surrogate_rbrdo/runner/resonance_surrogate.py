@@ -332,7 +332,8 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                             rng: np.random.Generator, n_max_rpm: float,
                             n_design: int = 3,
                             is_band: np.ndarray | None = None,
-                            threshold_m: float | None = None) -> ResonanceSurrogate:
+                            threshold_m: float | None = None,
+                            like: ResonanceSurrogate | None = None) -> ResonanceSurrogate:
     """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
 
     Parameters
@@ -350,6 +351,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
         Rows added near the boundary (``band_points``); default none.
     threshold_m : float, optional
         δ_lim (m); required when ``cfg.res_ares_local > 0``.
+    like : ResonanceSurrogate, optional
+        Keep the physical length scales of its sub-models (condition on the new data without
+        re-optimising; see :func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`).
     """
     from surrogate_rbrdo.runner.pipeline import fit_surrogate
 
@@ -402,7 +406,8 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
             rows.pop(k)
             continue
         subs[k] = fit_surrogate(Z[rows[k]], targets[k][rows[k]], sub_cfg, rng=children[k],
-                                n_design=n_design)
+                                n_design=n_design,
+                                like=like.subs.get(k) if like is not None else None)
     info = {
         "structure": "resonance", "n_train": int(Z.shape[0]),
         "fit_time_s": float(sum(s.info["fit_time_s"] for s in subs.values())),

@@ -376,6 +376,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
 
     # 3b. refinement: FE at the chosen designs, refit, optimise again (``[refine]``)
     refine_rows: list[dict[str, Any]] = []
+    refine_meta: list[dict[str, Any]] = []
     if cfg.refine.rounds:
         from surrogate_rbrdo.core import CallCounter
         from surrogate_rbrdo.runner.pipeline import fe_cache
@@ -398,9 +399,10 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
                     surrogate, sp, X_sel, cfg.inputs.sample(ref.theta, rng=r_th),
                     cfg.surrogate, cfg.limit, rng=r_fit,
                     cache=fe_cache(run.path.parent / "_fe_cache"), counter=ref_counter,
-                    progress=progress, tol=ref.tol)
+                    progress=progress, tol=ref.tol, keep_hyper=ref.hyper == "keep")
                 refine_rows.append({"round": rnd, **{k: v for k, v in st.items()
                                                      if not isinstance(v, list)}})
+                refine_meta.append({"round": rnd, "designs": X_sel.tolist(), **st})
                 if not st["refit"]:
                     break
                 forms = [formulation(n, pt) for n, pt in runs]
@@ -554,7 +556,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
              "design_model_calls": int(sum(r.n_model_calls for r in results)),
              "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in res.items()},
              "study_wall_time_s": time.perf_counter() - t_start,
-             "refine": refine_rows,
+             "refine": refine_meta,
              "surrogate": sinfo.get("config", {})}
     run.write_json("study_meta.json", extra)
     summary_rows = [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()

@@ -38,9 +38,9 @@ class KrigingOptions:
 
     Attributes
     ----------
-    theta0 : float
-        Initial correlation parameter (same for every dimension), in smt's units (normalised
-        inputs).
+    theta0 : float or tuple of float
+        Initial correlation parameter(s), in smt's units (normalised inputs): one value for
+        every dimension, or one per dimension.
     theta_lower, theta_upper : float
         Bounds of the correlation parameters in the likelihood optimisation.
     n_start : int
@@ -53,7 +53,7 @@ class KrigingOptions:
         BLAS threads during fit/predict (0: do not touch the thread pools).
     """
 
-    theta0: float = 1e-2
+    theta0: float | tuple[float, ...] = 1e-2
     theta_lower: float = 1e-6
     theta_upper: float = 20.0
     n_start: int = 10
@@ -62,7 +62,12 @@ class KrigingOptions:
     blas_threads: int = 1
 
     def __post_init__(self) -> None:
-        check_positive("theta0", self.theta0)
+        if np.ndim(self.theta0) == 0:
+            check_positive("theta0", self.theta0)
+        else:
+            object.__setattr__(self, "theta0", tuple(float(t) for t in self.theta0))
+            for i, t in enumerate(self.theta0):
+                check_positive(f"theta0[{i}]", t)
         check_positive("theta_lower", self.theta_lower)
         check_positive("theta_upper", self.theta_upper)
         if not self.theta_lower < self.theta_upper:
@@ -89,6 +94,15 @@ class _SmtKriging:
     def _threads(self) -> int | None:
         return self.options.blas_threads or None
 
+    def _theta0(self, D: int) -> list[float]:
+        t0 = self.options.theta0
+        if np.ndim(t0) == 0:
+            return [float(t0)] * D
+        if len(t0) != D:
+            raise ValueError(f"theta0 has {len(t0)} values is not allowed: the data have "
+                             f"{D} input dimensions")
+        return list(t0)
+
     def fit(self, X: np.ndarray, y: np.ndarray) -> _SmtKriging:
         """Fit on ``X`` (n, D) and ``y`` (n,); returns ``self``."""
         from smt.surrogate_models import KRG
@@ -102,7 +116,7 @@ class _SmtKriging:
         model = KRG(
             corr=self.corr,
             poly="constant",
-            theta0=[o.theta0] * D,
+            theta0=self._theta0(D),
             theta_bounds=[o.theta_lower, o.theta_upper],
             n_start=o.n_start,
             hyper_opt=o.hyper_opt,

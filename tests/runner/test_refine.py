@@ -71,6 +71,21 @@ def test_refine_reports_the_error_against_independent_fe_and_interpolates(traine
     np.testing.assert_allclose(new.response(X, theta), y_fe, rtol=1e-3)
 
 
+def test_refit_keeps_the_physical_length_scales(trained):
+    X = np.array([[2500.0, 450.0, 70.0]])
+    theta = INPUTS.sample(4, rng=np.random.default_rng(7))
+    new, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+                              rng=np.random.default_rng(0))
+    old_f, new_f = trained.fast, new.fast
+    # squared exponential exp(-w (Δ/s)²): w / s² is the physical length scale, unchanged
+    np.testing.assert_allclose(new_f.weights / new_f.scale**2, old_f.weights / old_f.scale**2,
+                               rtol=1e-9)
+    refit, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+                                rng=np.random.default_rng(0), keep_hyper=False)
+    assert not np.allclose(refit.fast.weights / refit.fast.scale**2,
+                           old_f.weights / old_f.scale**2, rtol=1e-3)
+
+
 def test_refine_within_tolerance_keeps_the_surrogate(trained):
     X = np.array([[2500.0, 420.0, 66.0]])
     theta = INPUTS.sample(2, rng=np.random.default_rng(5))
@@ -84,6 +99,7 @@ def test_refine_within_tolerance_keeps_the_surrogate(trained):
     ({"theta": 1}, r"refine.theta = 1 is not allowed"),
     ({"designs": 0}, r"refine.designs = 0 is not allowed"),
     ({"tol": 0.0}, r"refine.tol = 0.0 is not allowed"),
+    ({"hyper": "fixed"}, r"refine.hyper = 'fixed' is not allowed"),
 ])
 def test_bad_refine_options(kw, match):
     with pytest.raises(ValueError, match=match):

@@ -64,3 +64,17 @@ def test_options_validated():
         KrigingOptions(hyper_opt="BFGS")
     with pytest.raises(ValueError, match="n_restarts"):
         GPROptions(n_restarts=-1)
+
+
+@pytest.mark.parametrize("name", ["krg_se", "krg_matern52"])
+def test_fixed_per_dimension_theta0_is_kept(name, data5):
+    Z, y = data5
+    t0 = (0.3, 0.05, 1.2, 0.01, 2.0)
+    m = SURROGATES[name](KrigingOptions(theta0=t0, hyper_opt="NoOp"),
+                         rng=np.random.default_rng(0)).fit(Z, y)
+    np.testing.assert_allclose(np.ravel(m.model_.optimal_theta), t0, rtol=1e-12)
+    with pytest.raises(ValueError, match=r"theta0\[1\] = -1.0 is not allowed"):
+        KrigingOptions(theta0=(1.0, -1.0))
+    with pytest.raises(ValueError, match="theta0 has 2 values is not allowed"):
+        SURROGATES[name](KrigingOptions(theta0=(1.0, 2.0)),
+                         rng=np.random.default_rng(0)).fit(Z, y)
