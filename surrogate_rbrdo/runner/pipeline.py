@@ -447,15 +447,18 @@ def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm
 
 def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
                   rng: np.random.Generator, n_start: int | None = None,
-                  n_design: int = 3, like: PeakSurrogate | None = None) -> PeakSurrogate:
+                  n_design: int = 3, like: PeakSurrogate | None = None,
+                  like_mode: str = "warm") -> PeakSurrogate:
     """Fit ``cfg.surrogate`` to ``(Z, t(y))`` and wrap it (``y`` in metres, > 0).
 
-    ``like``: a fitted smt-Kriging ``PeakSurrogate`` whose *physical* length scales are kept
-    (no likelihood optimisation): the new model is the old one conditioned on the new data.
-    smt normalises inputs by their sample std ``s``; the kernel weights are rescaled so that
-    ``w / s²`` (squared exponential) or ``w / s`` (Matérn 5/2) is unchanged. Used by the
-    refinement loop: re-optimising the hyperparameters on clustered infill points changed the
-    fit far from them (docs/paper-study.md).
+    ``like``: a fitted smt-Kriging ``PeakSurrogate`` whose *physical* length scales start
+    (``like_mode = "warm"``: one local likelihood optimisation from them) or are kept
+    (``"keep"``: no optimisation, the old model conditioned on the new data). smt normalises
+    inputs by their sample std ``s``; the kernel weights are rescaled so that ``w / s²``
+    (squared exponential) or ``w / s`` (Matérn 5/2) is unchanged. Used by the refinement loop:
+    a fresh multistart optimisation on clustered infill points changed the fit far from them,
+    and kept length scales made near-duplicate points (θ-weights ~1e-3) ill-conditioned
+    (docs/paper-study.md).
     """
     n_start = cfg.n_start if n_start is None else n_start
     cls = SURROGATES[cfg.surrogate]
@@ -464,8 +467,9 @@ def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
         p = 2.0 if f.kernel == "se" else 1.0
         s_new = np.asarray(Z, dtype=float).std(axis=0, ddof=1)
         w = np.asarray(f.weights) * (s_new / np.asarray(f.scale)) ** p
+        check_choice("like_mode", like_mode, ("warm", "keep"))
         opts = KrigingOptions(theta0=tuple(np.clip(w, 1e-6, 20.0)), n_start=1,
-                              hyper_opt="NoOp")
+                              hyper_opt="NoOp" if like_mode == "keep" else "TNC")
     else:
         opts = (GPROptions(n_restarts=n_start - 1) if cfg.surrogate == "gpr"
                 else KrigingOptions(n_start=n_start))

@@ -46,23 +46,23 @@ class RefineOptions:
     tol : float
         Stop (without refitting) once ``max |μ̂ − μ_FE| / μ_FE`` over the round's designs,
         on its θ sample, is at most ``tol``.
-    hyper : {"keep", "refit"}
-        ``"keep"``: condition on the new points with the first fit's length scales;
-        ``"refit"``: re-optimise them every round.
+    hyper : {"warm", "keep", "refit"}
+        ``"warm"``: one local likelihood optimisation started from the previous length scales;
+        ``"keep"``: condition on the new points with them; ``"refit"``: fresh multistart.
     """
 
     rounds: int = 0
     designs: int = 8
     theta: int = 8
     tol: float = 0.05
-    hyper: str = "keep"
+    hyper: str = "warm"
 
     def __post_init__(self) -> None:
         check_int("refine.rounds", self.rounds, minimum=0)
         check_int("refine.designs", self.designs, minimum=1)
         check_int("refine.theta", self.theta, minimum=2)
         check_positive("refine.tol", self.tol)
-        check_choice("refine.hyper", self.hyper, ("keep", "refit"))
+        check_choice("refine.hyper", self.hyper, ("warm", "keep", "refit"))
 
 
 def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarray],
@@ -116,16 +116,19 @@ def _point_response(surrogate: Any, Z: np.ndarray) -> np.ndarray:
 def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndarray,
                      cfg: Any, limit: Any, *, rng: np.random.Generator, cache: Any = None,
                      counter: Any = None, progress: bool = False, tol: float | None = None,
-                     keep_hyper: bool = True) -> tuple[Any, dict[str, Any]]:
+                     hyper: str = "warm") -> tuple[Any, dict[str, Any]]:
     """FE at designs ``X`` (P, 3) × ``theta`` (M, m), the error there, and a refit.
 
     Returns ``(new_surrogate, stats)``. ``stats`` has the error of the surrogate given *before*
     the refit: ``max_rel_err_y`` (pointwise), ``max_rel_err_mean`` (per design, over its θ
     sample) and the per-design means. If ``tol`` is given and ``max_rel_err_mean <= tol``,
     no refit is done and the input surrogate is returned (``stats["refit"] = False``).
-    ``keep_hyper`` (default): the refit keeps the Kriging length scales of ``surrogate``
-    (conditioning only; smt Kriging), instead of re-optimising them on clustered points.
+    ``hyper``: how the refit treats the Kriging length scales of ``surrogate`` (smt
+    Kriging): ``"warm"`` one local likelihood optimisation started from them, ``"keep"`` kept
+    (conditioning only), ``"refit"`` a fresh multistart optimisation.
     """
+    check_choice("hyper", hyper, ("warm", "keep", "refit"))
+    like_mode = "keep" if hyper == "keep" else "warm"
     from surrogate_rbrdo.runner.pipeline import fit_surrogate, sample_fe, sample_resonance
 
     X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -167,7 +170,8 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
         new = fit_resonance_surrogate(
             np.vstack([surrogate.Z_train, Zn]), np.vstack([surrogate.Q_train, Qn]), cfg,
             rng=rng, n_max_rpm=surrogate.n_max_rpm, n_design=d, is_band=is_band,
-            threshold_m=limit.threshold, like=surrogate if keep_hyper else None)
+            threshold_m=limit.threshold, like=None if hyper == "refit" else surrogate,
+            like_mode=like_mode)
         new.info = {**surrogate.info, **{k: v for k, v in new.info.items()
                                          if k not in ("n_lhs", "n_band")}}
     else:
@@ -176,7 +180,7 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
         Zt = np.vstack([surrogate.model.X_train_, Zn])
         yt = np.concatenate([inverse(surrogate.model.y_train_, surrogate.transform), yn])
         new = fit_surrogate(Zt, yt, cfg, rng=rng, n_design=d,
-                            like=surrogate if keep_hyper else None)
+                            like=None if hyper == "refit" else surrogate, like_mode=like_mode)
         new.info = {**surrogate.info, **new.info}
     new.info["n_refine_points"] = int(surrogate.info.get("n_refine_points", 0) + Zn.shape[0])
     stats["refit"] = True

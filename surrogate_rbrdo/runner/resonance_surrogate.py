@@ -333,7 +333,8 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                             n_design: int = 3,
                             is_band: np.ndarray | None = None,
                             threshold_m: float | None = None,
-                            like: ResonanceSurrogate | None = None) -> ResonanceSurrogate:
+                            like: ResonanceSurrogate | None = None,
+                            like_mode: str = "warm") -> ResonanceSurrogate:
     """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
 
     Parameters
@@ -352,8 +353,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     threshold_m : float, optional
         δ_lim (m); required when ``cfg.res_ares_local > 0``.
     like : ResonanceSurrogate, optional
-        Keep the physical length scales of its sub-models (condition on the new data without
-        re-optimising; see :func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`).
+        Start from (``like_mode = "warm"``) or keep (``"keep"``) the physical length scales of
+        its sub-models (see :func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`).
+    like_mode : {"warm", "keep"}
     """
     from surrogate_rbrdo.runner.pipeline import fit_surrogate
 
@@ -407,7 +409,8 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
             continue
         subs[k] = fit_surrogate(Z[rows[k]], targets[k][rows[k]], sub_cfg, rng=children[k],
                                 n_design=n_design,
-                                like=like.subs.get(k) if like is not None else None)
+                                like=like.subs.get(k) if like is not None else None,
+                                like_mode=like_mode)
     info = {
         "structure": "resonance", "n_train": int(Z.shape[0]),
         "fit_time_s": float(sum(s.info["fit_time_s"] for s in subs.values())),

@@ -399,7 +399,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
                     surrogate, sp, X_sel, cfg.inputs.sample(ref.theta, rng=r_th),
                     cfg.surrogate, cfg.limit, rng=r_fit,
                     cache=fe_cache(run.path.parent / "_fe_cache"), counter=ref_counter,
-                    progress=progress, tol=ref.tol, keep_hyper=ref.hyper == "keep")
+                    progress=progress, tol=ref.tol, hyper=ref.hyper)
                 refine_rows.append({"round": rnd, **{k: v for k, v in st.items()
                                                      if not isinstance(v, list)}})
                 refine_meta.append({"round": rnd, "designs": X_sel.tolist(), **st})

@@ -75,13 +75,13 @@ def test_refit_keeps_the_physical_length_scales(trained):
     X = np.array([[2500.0, 450.0, 70.0]])
     theta = INPUTS.sample(4, rng=np.random.default_rng(7))
     new, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
-                              rng=np.random.default_rng(0))
+                              rng=np.random.default_rng(0), hyper="keep")
     old_f, new_f = trained.fast, new.fast
     # squared exponential exp(-w (Δ/s)²): w / s² is the physical length scale, unchanged
     np.testing.assert_allclose(new_f.weights / new_f.scale**2, old_f.weights / old_f.scale**2,
                                rtol=1e-9)
     refit, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
-                                rng=np.random.default_rng(0), keep_hyper=False)
+                                rng=np.random.default_rng(0), hyper="refit")
     assert not np.allclose(refit.fast.weights / refit.fast.scale**2,
                            old_f.weights / old_f.scale**2, rtol=1e-3)
 
