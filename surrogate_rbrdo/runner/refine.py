@@ -164,9 +164,11 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
     if structured:
         from surrogate_rbrdo.runner.resonance_surrogate import fit_resonance_surrogate
 
+        # band rows are n_lhs .. n_lhs + n_band (refinement rows of earlier rounds follow)
         n_lhs = int(surrogate.info.get("n_lhs", surrogate.n_train))
-        old = surrogate.Z_train.shape[0]
-        is_band = np.concatenate([np.arange(old) >= n_lhs, np.zeros(Zn.shape[0], bool)])
+        n_band = int(surrogate.info.get("n_band", 0))
+        i = np.arange(surrogate.Z_train.shape[0] + Zn.shape[0])
+        is_band = (i >= n_lhs) & (i < n_lhs + n_band)
         new = fit_resonance_surrogate(
             np.vstack([surrogate.Z_train, Zn]), np.vstack([surrogate.Q_train, Qn]), cfg,
             rng=rng, n_max_rpm=surrogate.n_max_rpm, n_design=d, is_band=is_band,

@@ -20,8 +20,8 @@ Config tables (every key optional unless stated; unknown keys raise):
                     ``chunk``
 ``[report]``        ``baseline`` ([F N, L mm, D mm]), ``n_speeds``, ``campbell_speeds``,
                     ``n_modes``
-``[refine]``        ``rounds`` (0: off), ``designs``, ``theta``, ``tol``: FE infill at the
-                    optimiser's designs, refit, optimise again
+``[refine]``        ``rounds`` (0: off), ``designs``, ``theta``, ``tol``, ``hyper``: FE
+                    infill at the optimiser's designs, refit, optimise again
                     (:class:`~surrogate_rbrdo.runner.refine.RefineOptions`)
 """
 

@@ -104,3 +104,30 @@ def test_refine_within_tolerance_keeps_the_surrogate(trained):
 def test_bad_refine_options(kw, match):
     with pytest.raises(ValueError, match=match):
         RefineOptions(**kw)
+
+
+def test_band_flags_survive_two_rounds(tmp_path, monkeypatch):
+    """Rows added by refinement are ordinary rows in later rounds, not band rows."""
+    from surrogate_rbrdo.runner import resonance_surrogate as rs
+
+    cfg = SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential",
+                          structure="resonance", res_n_band=4)
+    sur, _ = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, cfg,
+                                  rng=np.random.default_rng(4), cache_dir=tmp_path)
+    assert sur.info["n_lhs"] == 16 and sur.info["n_band"] == 4
+    seen = []
+    real = rs.fit_resonance_surrogate
+
+    def spy(Z, Q, cfg_, **kw):
+        seen.append(np.asarray(kw["is_band"]).copy())
+        return real(Z, Q, cfg_, **kw)
+
+    monkeypatch.setattr(rs, "fit_resonance_surrogate", spy)
+    X = np.array([[3000.0, 480.0, 72.0]])
+    for k in range(2):
+        th = INPUTS.sample(2, rng=np.random.default_rng(10 + k))
+        sur, _ = refine_surrogate(sur, reference_spindle(), X, th, cfg, LIMIT,
+                                  rng=np.random.default_rng(k))
+    assert [b.size for b in seen] == [22, 24]
+    for b in seen:
+        assert b[16:20].all() and not b[:16].any() and not b[20:].any()
