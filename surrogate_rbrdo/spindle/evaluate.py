@@ -135,11 +135,15 @@ def first_critical_speed(model, theta: np.ndarray | None = None, *, rtol: float 
     from surrogate_rbrdo.core.errors import ModelError
     from surrogate_rbrdo.spindle.modal import modal_analysis
 
+    seen: dict[float, float] = {}   # the bracket ends are asked for again by brentq
+
     def f(n: float) -> float:
-        fw = modal_analysis(model, n, theta).forward()
-        if fw.size == 0:
-            raise ModelError("no forward-whirl mode found")
-        return 60.0 * float(fw[0])
+        if n not in seen:
+            fw = modal_analysis(model, n, theta).forward()
+            if fw.size == 0:
+                raise ModelError("no forward-whirl mode found")
+            seen[n] = 60.0 * float(fw[0])
+        return seen[n]
 
     n0 = model.geometry.speed_max_rpm
     n1 = f(n0)

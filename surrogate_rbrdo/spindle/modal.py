@@ -181,8 +181,13 @@ def critical_speeds(
         g = np.array([v[k] for v in fw_list]) - sp / 60.0
         for i in np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]:
             if refine:
-                root = brentq(lambda s, k=k: _forward_k(model, s, theta, k) - s / 60.0,
-                              sp[i], sp[i + 1], rtol=1e-6)
+                # the bracket ends are known from the scan (when it was this same solve)
+                known = {} if _campbell is not None else {sp[i]: g[i], sp[i + 1]: g[i + 1]}
+
+                def h(s, k=k, known=known):
+                    return known[s] if s in known else _forward_k(model, s, theta, k) - s / 60.0
+
+                root = brentq(h, sp[i], sp[i + 1], rtol=1e-6)
             else:
                 root = sp[i] - g[i] * (sp[i + 1] - sp[i]) / (g[i + 1] - g[i])
             out.append(root)
