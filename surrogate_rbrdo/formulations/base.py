@@ -90,6 +90,7 @@ class Formulation:
     estimator: Any = None
     estimator_seed: int = 0
     _theta: np.ndarray = field(init=False, repr=False)
+    _theta_nominal: np.ndarray = field(init=False, repr=False)
 
     name: ClassVar[str] = "base"
     objective_names: ClassVar[tuple[str, ...]] = ()
@@ -102,6 +103,9 @@ class Formulation:
         theta = np.array(self.inputs.from_standard(self.u), dtype=float)
         theta.flags.writeable = False
         object.__setattr__(self, "_theta", theta)
+        nominal = np.array(self.inputs.from_standard(np.zeros((1, self.u.shape[1]))), dtype=float)
+        nominal.flags.writeable = False
+        object.__setattr__(self, "_theta_nominal", nominal)
 
     # ------------------------------------------------------------------ shape information
     @property
@@ -111,8 +115,9 @@ class Formulation:
 
     @property
     def theta_nominal(self) -> np.ndarray:
-        """Nominal θ, shape ``(1, m)``: the image of ``u = 0`` (the mean for a Gaussian)."""
-        return self.inputs.from_standard(np.zeros((1, self.u.shape[1])))
+        """Nominal θ, shape ``(1, m)``: the image of ``u = 0`` (the mean for a Gaussian);
+        read-only, the same object on every access (so a θ-block cache hits)."""
+        return self._theta_nominal
 
     @property
     def constraint_names(self) -> tuple[str, ...]:
@@ -169,8 +174,7 @@ class Formulation:
     def evaluate(self, x: np.ndarray) -> Evaluation:
         """Evaluate a population ``x`` of shape ``(P, d)``."""
         x = _as_2d(x)
-        theta = None if self.estimator is not None or self.nominal_only else self.theta
-        est = self._nominal(x) if self.nominal_only else self.estimate(x, theta=theta)
+        est = self._nominal(x) if self.nominal_only else self.estimate(x)
         n_sur = int(est.n_calls)
         if not self.nominal_only and self.estimator is not None and (
                 not np.all(np.isfinite(est.mean)) or not np.all(np.isfinite(est.std))):
@@ -187,7 +191,7 @@ class Formulation:
             if self.limit is not None:
                 cols.append(np.asarray(est.pf, dtype=float) / pt - 1.0)
             for c in self.extra_reliability:
-                e = self.estimate(x, c.response, c.limit, theta=theta)
+                e = self.estimate(x, c.response, c.limit)
                 n_sur += int(e.n_calls)
                 cols.append(np.asarray(e.pf, dtype=float) / pt - 1.0)
         n_model = 0
@@ -205,8 +209,10 @@ class Formulation:
         return Evaluation(F=F, G=G, estimate=est, n_surrogate_calls=n_sur,
                           n_model_calls=n_model)
 
-    def _objectives(self, est: Estimate) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def _objectives(self, est: Estimate) -> np.ndarray:
+        """The columns named by ``objective_names`` ("nominal"/"mean": μ_y, "std": σ_y)."""
+        cols = {"nominal": est.mean, "mean": est.mean, "std": est.std}
+        return np.column_stack([cols[n] for n in self.objective_names]).astype(float)
 
     def describe(self) -> dict[str, Any]:
         """Plain description for run metadata."""

@@ -19,9 +19,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from surrogate_rbrdo.core.protocols import Estimate
 from surrogate_rbrdo.formulations.base import FORMULATIONS, Formulation
 
 
@@ -34,9 +31,6 @@ class DeterministicFormulation(Formulation):
     objective_names = ("nominal",)
     nominal_only = True
 
-    def _objectives(self, est: Estimate) -> np.ndarray:
-        return np.asarray(est.mean, dtype=float)[:, None]
-
 
 @FORMULATIONS.register("rdo")
 @dataclass(frozen=True, eq=False)
@@ -45,9 +39,6 @@ class RDOFormulation(Formulation):
 
     name = "rdo"
     objective_names = ("mean", "std")
-
-    def _objectives(self, est: Estimate) -> np.ndarray:
-        return np.column_stack([est.mean, est.std]).astype(float)
 
 
 @FORMULATIONS.register("rbdo")
@@ -59,9 +50,6 @@ class RBDOFormulation(Formulation):
     objective_names = ("mean",)
     reliability = True
 
-    def _objectives(self, est: Estimate) -> np.ndarray:
-        return np.asarray(est.mean, dtype=float)[:, None]
-
 
 @FORMULATIONS.register("rbrdo")
 @dataclass(frozen=True, eq=False)
@@ -71,6 +59,3 @@ class RBRDOFormulation(Formulation):
     name = "rbrdo"
     objective_names = ("mean", "std")
     reliability = True
-
-    def _objectives(self, est: Estimate) -> np.ndarray:
-        return np.column_stack([est.mean, est.std]).astype(float)
