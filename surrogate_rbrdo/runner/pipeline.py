@@ -317,6 +317,11 @@ class PeakSurrogate:
         """Mean and std of ``t(y)`` on the grid (no inverse transform)."""
         return self.fast.predict_grid(x, self.theta_block(theta), return_std=return_std)
 
+    def response_points(self, Z: np.ndarray) -> np.ndarray:
+        """``y`` (m) at joint points ``Z = [x, θ]``: the quantity of :meth:`response`."""
+        Z = np.atleast_2d(np.asarray(Z, dtype=float))
+        return inverse(self.model.predict(Z, return_std=False).mean, self.transform)
+
     def predict(self, Z: np.ndarray) -> Prediction:
         """Mean and std (m) at joint points ``Z = [x, θ]`` (n, 5).
 
@@ -431,7 +436,7 @@ def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm
     sub = fit_surrogate(Z, nc_rpm, sub_cfg, rng=r_fit, n_start=cfg.al_n_start,
                         n_design=n_design)
     pool = lhs(cfg.res_band_pool, bounds, rng=r_pool, criterion="random")
-    r_hat = n_max_rpm / np.exp(sub.model.predict(pool).mean)
+    r_hat = n_max_rpm / np.exp(sub.model.predict(pool, return_std=False).mean)
     if amp_res_m is None:
         return _maximin_select(pool[np.abs(r_hat - 1.0) <= cfg.res_band], Z, bounds,
                                cfg.res_n_band)
@@ -440,7 +445,7 @@ def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm
     rows = n_max_rpm / nc_rpm >= 1.0
     ares = fit_surrogate(Z[rows], amp_res_m[rows], sub_cfg, rng=r_fit2,
                          n_start=cfg.al_n_start, n_design=n_design)
-    la = ares.model.predict(pool).mean
+    la = ares.model.predict(pool, return_std=False).mean
     near = (r_hat >= 1.0) & (np.abs(la - np.log(threshold_m)) <= cfg.res_band_lim)
     return _maximin_select(pool[near], Z, bounds, cfg.res_n_band_lim)
 

@@ -104,15 +104,6 @@ def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarr
     return np.array(chosen).reshape(-1, bounds.shape[0])
 
 
-def _point_response(surrogate: Any, Z: np.ndarray) -> np.ndarray:
-    """The surrogate's ``y`` (m) at joint points, the quantity its ``response`` returns."""
-    if hasattr(surrogate, "response_points"):
-        return surrogate.response_points(Z)
-    from surrogate_rbrdo.runner.pipeline import inverse
-
-    return inverse(surrogate.model.predict(Z).mean, surrogate.transform)
-
-
 def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndarray,
                      cfg: Any, limit: Any, *, rng: np.random.Generator, cache: Any = None,
                      counter: Any = None, progress: bool = False, tol: float | None = None,
@@ -144,7 +135,7 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
         Zn, yn = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress)
     if Zn.shape[0] == 0:
         raise ValueError("refine: the FE model gave no finite value at any refinement point")
-    y_hat = _point_response(surrogate, Zn)
+    y_hat = surrogate.response_points(Zn)
     rel = np.abs(y_hat - yn) / yn
     des = np.argmin(np.abs(Zn[:, None, :X.shape[1]] - X[None]).sum(axis=-1), axis=1)
     cnt = np.bincount(des, minlength=P)

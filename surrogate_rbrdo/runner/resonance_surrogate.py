@@ -239,13 +239,13 @@ class ResonanceSurrogate:
     __call__ = response
 
     # ------------------------------------------------------------------ joint points
-    def _points(self, Z: np.ndarray) -> dict[str, Prediction]:
+    def _points(self, Z: np.ndarray, return_std: bool = True) -> dict[str, Prediction]:
         Z = np.atleast_2d(np.asarray(Z, dtype=float))
-        return {k: s.model.predict(Z) for k, s in self.subs.items()}
+        return {k: s.model.predict(Z, return_std=return_std) for k, s in self.subs.items()}
 
     def sub_predictions(self, Z: np.ndarray) -> dict[str, np.ndarray]:
         """Median of each ingredient at joint points (SI; ``zeta`` constant if no model)."""
-        p = self._points(Z)
+        p = self._points(Z, return_std=False)
         out = {k: np.exp(v.mean) for k, v in p.items()}
         out.setdefault("zeta", np.full(np.atleast_2d(Z).shape[0], self.zeta_const))
         return out

@@ -116,13 +116,6 @@ class _GridAdapter:
         return Prediction(mean=y, std=np.full_like(y, np.nan))
 
 
-def point_response(sur: PeakSurrogate | ResonanceSurrogate, Z: np.ndarray) -> np.ndarray:
-    """The response at joint points (same quantity as ``sur.response`` on a grid)."""
-    if isinstance(sur, ResonanceSurrogate):
-        return sur.response_points(Z)
-    return inverse(sur.model.predict(Z).mean, sur.transform)
-
-
 def _rel_row(variant: str, quantity: str, subset: str, true: np.ndarray, pred: np.ndarray,
              unit_scale: float, unit: str) -> list[Any]:
     if true.size < 2:
@@ -265,7 +258,7 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         # FE calls of training counted as if uncached (the cache is shared between variants)
         fe_train = int(sur.n_train)
         info_all[name] = {k: v for k, v in info.items() if k != "config"}
-        yp = point_response(sur, Z_test)
+        yp = sur.response_points(Z_test)
         sur_calls += yp.size
         metrics_rows.append(_metrics_row(name, y_test, yp, limit.threshold))
         with run.timed(f"loo_{name}"):
@@ -372,4 +365,4 @@ def _memory(cache_dir: Path) -> Any:
     return fe_cache(cache_dir)
 
 
-__all__ = ["fe_mc", "point_response", "run_surrogate_validation"]
+__all__ = ["fe_mc", "run_surrogate_validation"]

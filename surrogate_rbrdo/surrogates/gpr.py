@@ -122,11 +122,17 @@ class GPR:
         self.y_train_ = y
         return self
 
-    def predict(self, X: np.ndarray) -> Prediction:
-        """Mean and standard deviation at ``X`` (n, D): 1-D arrays of length n."""
+    def predict(self, X: np.ndarray, *, return_std: bool = True) -> Prediction:
+        """Mean and standard deviation at ``X`` (n, D): 1-D arrays of length n.
+
+        ``return_std=False`` skips the standard deviation (``std`` is then NaN).
+        """
         X = check_predict_input(X, self.n_features_in_)
         with blas_threads(self._threads()):
-            mean, std = self.model_.predict((X - self.X_offset_) / self.X_scale_,
-                                            return_std=True)
+            Xn = (X - self.X_offset_) / self.X_scale_
+            if not return_std:
+                mean = np.asarray(self.model_.predict(Xn), dtype=float).ravel()
+                return Prediction(mean=mean, std=np.full_like(mean, np.nan))
+            mean, std = self.model_.predict(Xn, return_std=True)
         return Prediction(mean=np.asarray(mean, dtype=float).ravel(),
                           std=np.asarray(std, dtype=float).ravel())

@@ -133,11 +133,16 @@ class _SmtKriging:
         self.y_train_ = y
         return self
 
-    def predict(self, X: np.ndarray) -> Prediction:
-        """Mean and standard deviation at ``X`` (n, D): 1-D arrays of length n."""
+    def predict(self, X: np.ndarray, *, return_std: bool = True) -> Prediction:
+        """Mean and standard deviation at ``X`` (n, D): 1-D arrays of length n.
+
+        ``return_std=False`` skips the variance (most of the cost; ``std`` is then NaN).
+        """
         X = check_predict_input(X, self.n_features_in_)
         with blas_threads(self._threads()):
             mean = self.model_.predict_values(X).ravel()
+            if not return_std:
+                return Prediction(mean=mean, std=np.full_like(mean, np.nan))
             var = self.model_.predict_variances(X).ravel()
         return Prediction(mean=mean, std=np.sqrt(np.maximum(var, 0.0)))
 
