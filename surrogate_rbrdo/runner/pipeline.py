@@ -397,10 +397,11 @@ def sample_resonance(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache
     return Z[ok], res.y[ok]
 
 
-def _maximin_select(cand: np.ndarray, Z: np.ndarray, bounds: np.ndarray, n: int
-                    ) -> np.ndarray:
+def _maximin_select(cand: np.ndarray, Z: np.ndarray, bounds: np.ndarray, n: int, *,
+                    min_dist: float = 0.0) -> np.ndarray:
     """Greedy maximin: ``n`` rows of ``cand``, each the farthest (unit-scaled box) from all
-    points so far (``Z`` included)."""
+    points so far (``Z`` included); stops early when the farthest is nearer than
+    ``min_dist``."""
     lo, span = bounds[:, 0], bounds[:, 1] - bounds[:, 0]
     cu, zu = (cand - lo) / span, (Z - lo) / span
     dmin = np.full(cand.shape[0], np.inf)
@@ -410,6 +411,8 @@ def _maximin_select(cand: np.ndarray, Z: np.ndarray, bounds: np.ndarray, n: int
     chosen: list[int] = []
     for _ in range(min(n, cand.shape[0])):
         i = int(np.argmax(dmin))
+        if dmin[i] < min_dist:
+            break
         chosen.append(i)
         dmin = np.minimum(dmin, np.sqrt(((cu - cu[i]) ** 2).sum(-1)))
         dmin[i] = -np.inf

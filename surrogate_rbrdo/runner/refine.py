@@ -94,14 +94,13 @@ def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarr
     for f in F:  # a front's rows are sorted by the first objective: its two ends
         add(f[0])
         add(f[-1])
-    pool = np.vstack(F) if F else np.empty((0, bounds.shape[0]))
-    while len(chosen) < n and pool.size:
-        d = np.array([far(x) for x in pool])
-        i = int(np.argmax(d))
-        if d[i] < min_dist:
-            break
-        add(pool[i])
-    return np.array(chosen).reshape(-1, bounds.shape[0])
+    X = np.array(chosen).reshape(-1, bounds.shape[0])
+    if F and len(chosen) < n:  # the spread: greedy maximin over the fronts' designs
+        from surrogate_rbrdo.runner.pipeline import _maximin_select
+
+        X = np.vstack([X, _maximin_select(np.vstack(F), X, bounds, n - len(chosen),
+                                          min_dist=min_dist)])
+    return X
 
 
 def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndarray,
@@ -120,6 +119,7 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
     """
     check_choice("hyper", hyper, ("warm", "keep", "refit"))
     like_mode = "keep" if hyper == "keep" else "warm"
+    like = None if hyper == "refit" else surrogate
     from surrogate_rbrdo.runner.pipeline import fit_surrogate, sample_fe, sample_resonance
 
     X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -163,18 +163,14 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
         new = fit_resonance_surrogate(
             np.vstack([surrogate.Z_train, Zn]), np.vstack([surrogate.Q_train, Qn]), cfg,
             rng=rng, n_max_rpm=surrogate.n_max_rpm, n_design=d, is_band=is_band,
-            threshold_m=limit.threshold, like=None if hyper == "refit" else surrogate,
-            like_mode=like_mode)
-        new.info = {**surrogate.info, **{k: v for k, v in new.info.items()
-                                         if k not in ("n_lhs", "n_band")}}
+            threshold_m=limit.threshold, like=like, like_mode=like_mode)
     else:
         from surrogate_rbrdo.runner.pipeline import inverse
 
         Zt = np.vstack([surrogate.model.X_train_, Zn])
         yt = np.concatenate([inverse(surrogate.model.y_train_, surrogate.transform), yn])
-        new = fit_surrogate(Zt, yt, cfg, rng=rng, n_design=d,
-                            like=None if hyper == "refit" else surrogate, like_mode=like_mode)
-        new.info = {**surrogate.info, **new.info}
+        new = fit_surrogate(Zt, yt, cfg, rng=rng, n_design=d, like=like, like_mode=like_mode)
+    new.info = {**surrogate.info, **new.info}  # keeps n_lhs (the fit's n_band is the same)
     new.info["n_refine_points"] = int(surrogate.info.get("n_refine_points", 0) + Zn.shape[0])
     stats["refit"] = True
     return new, stats

@@ -325,12 +325,13 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     r_ref = rng.spawn(1)[0]   # after the others: their streams are unchanged
     lo, hi = sp.design_map.bounds[:, 0], sp.design_map.bounds[:, 1]
     t_start = time.perf_counter()
+    # FE points are cached per experiment (joblib.Memory keyed by the point), shared by runs
+    cache_dir = run.path.parent / "_fe_cache"
 
     # 1. surrogate of the peak amplitude over (x, θ)
     with run.timed("surrogate"):
-        # FE points are cached per experiment (joblib.Memory keyed by the point), shared by runs
         surrogate, sinfo = train_peak_surrogate(sp, cfg.inputs, cfg.limit, cfg.surrogate,
-                                                rng=r_sur, cache_dir=run.path.parent / "_fe_cache",
+                                                rng=r_sur, cache_dir=cache_dir,
                                                 progress=progress)
     run.write_json("surrogate_info.json", sinfo)
     fe_calls = {"doe": int(sinfo.get("fe_calls", 0))}
@@ -356,13 +357,18 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     runs += [(s, opt.strategy_p_target) for s in opt.strategies]
     nsga = NSGA2Options(pop_size=opt.pop_size, n_gen=opt.n_gen,
                         eliminate_duplicates=opt.eliminate_duplicates)
-    forms = [formulation(n, pt) for n, pt in runs]
-    tasks = [partial(run_nsga2, f, lo, hi, rng=r, options=nsga, progress=progress)
-             for f, r in zip(forms, r_opt.spawn(len(runs)), strict=True)]
-    with run.timed("optimization"):
-        results = run_many(tasks, n_jobs=opt.n_jobs)
     labels = [_label(n, pt) for n, pt in runs]
-    res = dict(zip(labels, results, strict=True))
+
+    def optimise(r: np.random.Generator) -> tuple[list[Any], list[Any], dict[str, Any]]:
+        """Every run on the current surrogate: formulations, results, results by label."""
+        fs = [formulation(n, pt) for n, pt in runs]
+        tasks = [partial(run_nsga2, f, lo, hi, rng=ri, options=nsga, progress=progress)
+                 for f, ri in zip(fs, r.spawn(len(runs)), strict=True)]
+        out = run_many(tasks, n_jobs=opt.n_jobs)
+        return fs, out, dict(zip(labels, out, strict=True))
+
+    with run.timed("optimization"):
+        forms, results, res = optimise(r_opt)
 
     def compromises(res: Mapping[str, Any]) -> dict[str, Any]:
         out: dict[str, Any] = {}
@@ -381,35 +387,28 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
         from surrogate_rbrdo.core import CallCounter
         from surrogate_rbrdo.runner.pipeline import fe_cache
 
-        ref, ref_counter = cfg.refine, CallCounter()
+        ref, ref_counter, ref_cache = cfg.refine, CallCounter(), fe_cache(cache_dir)
         bounds = sp.design_map.bounds
         for rnd, r_round in enumerate(r_ref.spawn(ref.rounds), start=1):
             r_th, r_fit, r_nsga = r_round.spawn(3)
             comp = compromises(res)
-            fr = {}
-            for (name, _), lab in zip(runs, labels, strict=True):
-                if name in ("rbrdo", "rdo"):
-                    idx = archive_front(res[lab])
-                    idx = idx[np.argsort(res[lab].archive.F[idx, 0])]
-                    fr[lab] = res[lab].archive.X[idx]
+            fr = {lab: res[lab].archive.X[archive_front(res[lab])]   # sorted by objective 1
+                  for (name, _), lab in zip(runs, labels, strict=True)
+                  if name in ("rbrdo", "rdo")}
             X_sel = select_designs([c.x for c in comp.values() if c is not None], fr, bounds,
                                    ref.designs)
             with run.timed(f"refine_{rnd}"):
                 surrogate, st = refine_surrogate(
                     surrogate, sp, X_sel, cfg.inputs.sample(ref.theta, rng=r_th),
                     cfg.surrogate, cfg.limit, rng=r_fit,
-                    cache=fe_cache(run.path.parent / "_fe_cache"), counter=ref_counter,
+                    cache=ref_cache, counter=ref_counter,
                     progress=progress, tol=ref.tol, hyper=ref.hyper)
                 refine_rows.append({"round": rnd, **{k: v for k, v in st.items()
                                                      if not isinstance(v, list)}})
                 refine_meta.append({"round": rnd, "designs": X_sel.tolist(), **st})
                 if not st["refit"]:
                     break
-                forms = [formulation(n, pt) for n, pt in runs]
-                tasks = [partial(run_nsga2, f, lo, hi, rng=r, options=nsga, progress=progress)
-                         for f, r in zip(forms, r_nsga.spawn(len(runs)), strict=True)]
-                results = run_many(tasks, n_jobs=opt.n_jobs)
-                res = dict(zip(labels, results, strict=True))
+                forms, results, res = optimise(r_nsga)
         fe_calls["refine"] = int(ref_counter.calls)
         write_csv(run.file("refine.csv"), refine_rows)
         run.write_json("surrogate_info.json", surrogate.info)
