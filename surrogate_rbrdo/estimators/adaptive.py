@@ -24,20 +24,17 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
 from surrogate_rbrdo.estimators._common import (
     LimitStateU,
-    check_args,
     log_std_normal,
     make_estimate,
-    nan_p,
     normal_ci,
 )
 from surrogate_rbrdo.estimators._gmm import GaussianMixture, fit_mixture
+from surrogate_rbrdo.estimators._levels import StallGuard, run_per_design
 from surrogate_rbrdo.estimators.importance import is_weights_estimate
-from surrogate_rbrdo.estimators.mc import mc_from_values
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
 
@@ -99,7 +96,7 @@ class CrossEntropyIS:
         h = GaussianMixture(np.ones(1), np.zeros((1, m)), np.eye(m)[None])
         v = u0 if u0 is not None else rng.standard_normal((self.n_per_level, m))
         y0 = None
-        level, prev_gamma, stalled, scale = 0, np.inf, 0, 1.0
+        level, stall = 0, StallGuard()
         for level in range(1, self.max_levels + 1):
             if level > 1:
                 v = h.sample(self.n_per_level, rng)
@@ -114,12 +111,7 @@ class CrossEntropyIS:
             h = fit_mixture(v[elite], logw[elite], self.n_components, rng)
             if gamma == 0.0:
                 break
-            if level == 1:
-                scale = gamma
-            # thresholds stopped decreasing (by 0.1 % of the first one): no failure in reach
-            stalled = stalled + 1 if prev_gamma - gamma < 1e-3 * scale else 0
-            prev_gamma = min(prev_gamma, gamma)
-            if stalled >= 3:
+            if stall(gamma, level):  # thresholds stopped decreasing: no failure in reach
                 return np.nan, np.nan, np.nan, level, False, y0
         else:
             return np.nan, np.nan, np.nan, level, False, y0
@@ -141,26 +133,14 @@ class CrossEntropyIS:
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
         """Adapt and estimate for every design of ``x``."""
-        x, u = check_args(inputs, limit, x, rng, u)
-        p, m = x.shape[0], inputs.dim
-        pf, se, ess, levels = nan_p(p), nan_p(p), nan_p(p), np.zeros(p, int)
-        conv = np.zeros(p, bool)
-        y0s, calls = [], 0
-        for i in range(p):
-            G = LimitStateU(response, inputs, limit, x[i])
-            pf[i], se[i], ess[i], levels[i], conv[i], y0 = self._one(G, m, u, rng)
-            calls += G.calls
-            y0s.append(y0)
-            if not conv[i] and self.on_failure == "raise":
-                raise ModelError(
-                    f"cross-entropy IS did not reach the failure domain for design {i} after "
-                    f"{levels[i]} levels (max_levels={self.max_levels}; the thresholds stop "
-                    "decreasing when the response never fails); increase max_levels or "
-                    "n_per_level, or pass on_failure='nan'")
-        mc = mc_from_values(np.vstack(y0s), limit)
+        r = run_per_design(
+            self, response, inputs, limit, x, rng, u, what="cross-entropy IS",
+            why="the thresholds stop decreasing when the response never fails",
+            advice="increase max_levels or n_per_level, or pass on_failure='nan'")
+        mc = r.moments
         return make_estimate(
-            "ais", calls, p, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,
-            pf=pf, pf_se=se, pf_ci=normal_ci(pf, se, self.ci_level),
-            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "ess": ess,
-                         "levels": levels, "converged": conv},
+            "ais", r.calls, r.pf.size, mean=mc.mean, std=mc.std, mean_se=mc.mean_se,
+            std_se=mc.std_se, pf=r.pf, pf_se=r.se, pf_ci=normal_ci(r.pf, r.se, self.ci_level),
+            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "ess": r.extra,
+                         "levels": r.levels, "converged": r.converged},
         )

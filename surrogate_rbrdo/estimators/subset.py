@@ -25,17 +25,14 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
 from surrogate_rbrdo.estimators._common import (
     LimitStateU,
-    check_args,
     make_estimate,
-    nan_p,
     normal_ci,
 )
-from surrogate_rbrdo.estimators.mc import mc_from_values
+from surrogate_rbrdo.estimators._levels import StallGuard, run_per_design
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
 
@@ -108,7 +105,7 @@ class SubsetSimulation:
         y0 = G.last_y.copy()
         pf, delta2, delta_sum = 1.0, 0.0, 0.0
         chains = None      # (nc, ns) values of G along the chains of the previous level
-        prev_gam, stalled, scale = np.inf, 0, 1.0
+        stall = StallGuard()
         s = np.sqrt(1.0 - self.rho**2)
         for level in range(1, self.max_levels + 1):
             nf = int(np.count_nonzero(g < 0))
@@ -119,12 +116,7 @@ class SubsetSimulation:
                 order = np.argsort(g, kind="stable")
                 gam = 0.5 * (g[order[nc - 1]] + g[order[nc]])
                 p_k = nc / g.size
-                if level == 1:
-                    scale = abs(gam)
-                # thresholds stopped decreasing (by 0.1 % of the first one): no failure in reach
-                stalled = stalled + 1 if prev_gam - gam < 1e-3 * scale else 0
-                prev_gam = min(prev_gam, gam)
-                if stalled >= 3:
+                if stall(gam, level):  # thresholds stopped decreasing: no failure in reach
                     return np.nan, np.nan, np.nan, level, False, y0
             # chain correlation of the indicator of this level's event (Au & Beck 2001, Eq. 27)
             corr = 0.0
@@ -155,26 +147,15 @@ class SubsetSimulation:
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
         """Run subset simulation for every design of ``x``."""
-        x, u = check_args(inputs, limit, x, rng, u)
-        p, m = x.shape[0], inputs.dim
-        pf, se, levels, conv = nan_p(p), nan_p(p), np.zeros(p, int), np.zeros(p, bool)
-        cov_hi = nan_p(p)
-        y0s, calls = [], 0
-        for i in range(p):
-            G = LimitStateU(response, inputs, limit, x[i])
-            pf[i], se[i], cov_hi[i], levels[i], conv[i], y0 = self._one(G, m, u, rng)
-            calls += G.calls
-            y0s.append(y0)
-            if not conv[i] and self.on_failure == "raise":
-                raise ModelError(
-                    f"subset simulation did not reach the failure domain for design {i} after "
-                    f"{levels[i]} levels (max_levels={self.max_levels}; P_f < p0^max_levels, "
-                    "or the thresholds stopped decreasing because the response never fails); "
-                    "increase max_levels or pass on_failure='nan'")
-        mc = mc_from_values(np.vstack(y0s), limit)
+        r = run_per_design(
+            self, response, inputs, limit, x, rng, u, what="subset simulation",
+            why="P_f < p0^max_levels, or the thresholds stopped decreasing because the "
+                "response never fails",
+            advice="increase max_levels or pass on_failure='nan'")
+        mc = r.moments
         return make_estimate(
-            "subset", calls, p, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,
-            pf=pf, pf_se=se, pf_ci=normal_ci(pf, se, self.ci_level),
-            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "levels": levels,
-                         "converged": conv, "pf_cov_upper": cov_hi},
+            "subset", r.calls, r.pf.size, mean=mc.mean, std=mc.std, mean_se=mc.mean_se,
+            std_se=mc.std_se, pf=r.pf, pf_se=r.se, pf_ci=normal_ci(r.pf, r.se, self.ci_level),
+            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "levels": r.levels,
+                         "converged": r.converged, "pf_cov_upper": r.extra},
         )
