@@ -92,7 +92,7 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
             lam *= 0.5
         u, g = un, gn  # the last trial is taken even if Armijo failed (as FERUM does)
         grad = fd_gradient(G, u, g, fd_step, fd_scheme)
-        if not accepted and lam < 1e-3:
+        if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
     ng = float(np.linalg.norm(grad))
     alpha = -grad / ng if ng > 0 else np.full(m, np.nan)

@@ -30,6 +30,7 @@ from surrogate_rbrdo.estimators._common import (
     nan_p,
     normal_ci,
 )
+from surrogate_rbrdo.estimators._gmm import _ess
 from surrogate_rbrdo.estimators.form import FORM
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
@@ -40,9 +41,7 @@ def is_weights_estimate(fail: np.ndarray, logw: np.ndarray) -> tuple[float, floa
     w = np.where(fail, np.exp(np.where(fail, logw, 0.0)), 0.0)
     pf = float(w.mean())
     se = float(w.std(ddof=1) / np.sqrt(n)) if n > 1 else np.nan
-    s2 = float(np.sum(w * w))
-    ess = float(w.sum() ** 2 / s2) if s2 > 0 else 0.0
-    return pf, se, ess
+    return pf, se, _ess(w)
 
 
 def check_form(value: Any) -> None:

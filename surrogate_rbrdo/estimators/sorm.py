@@ -2,8 +2,9 @@
 
 After the FORM search, the Hessian of ``G`` in the tangent plane at ``u*`` is found by central
 second differences along an orthonormal basis ``R`` of the plane orthogonal to ``α``
-(``2(m−1)² `` extra calls, counted), the curvatures are ``κ_i = eig(Rᵀ H R) / ‖∇G‖`` (``κ > 0``:
-the limit state bends away from the origin) and
+(``2m(m−1) + 1`` extra calls in one batch — four per pair ``i ≤ j`` of the ``m − 1`` basis
+vectors, plus ``u*`` — counted), the curvatures are ``κ_i = eig(Rᵀ H R) / ‖∇G‖`` (``κ > 0``: the
+limit state bends away from the origin) and
 
 * Breitung (1984): ``P_f ≈ Φ(−β) Π (1 + β κ_i)^{−1/2}``;
 * Hohenbichler & Rackwitz (1988): ``β`` in the product replaced by ``φ(β)/Φ(−β)``.
