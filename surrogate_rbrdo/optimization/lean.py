@@ -26,9 +26,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-
-def _cv(G: np.ndarray) -> np.ndarray:
-    return np.maximum(G, 0.0).sum(axis=1) if G.shape[1] else np.zeros(G.shape[0])
+from surrogate_rbrdo.optimization.pareto import total_violation
 
 
 def _rank_crowding(F: np.ndarray, n_survive: int, rng: np.random.Generator, nds, crowd
@@ -58,7 +56,7 @@ def _rank_crowding(F: np.ndarray, n_survive: int, rng: np.random.Generator, nds,
 
 
 def _survive(F, G, n_survive, rng, nds, crowd):
-    cv = _cv(G)
+    cv = total_violation(G)
     feas = np.flatnonzero(cv <= 0.0)
     infeas = np.flatnonzero(cv > 0.0)
     rank = np.full(F.shape[0], np.inf)

@@ -24,6 +24,17 @@ def feasible_mask(G: np.ndarray) -> np.ndarray:
     return np.all(G <= 0.0, axis=1)
 
 
+def total_violation(G: np.ndarray) -> np.ndarray:
+    """Sum of the positive parts of the constraints per row (0 where feasible or none).
+
+    >>> total_violation(np.array([[-1.0, 2.0], [0.5, 0.25]])).tolist()
+    [2.0, 0.75]
+    >>> total_violation(np.empty((2, 0))).tolist()
+    [0.0, 0.0]
+    """
+    return np.maximum(np.asarray(G, dtype=float), 0.0).sum(axis=1)
+
+
 def nondominated(F: np.ndarray) -> np.ndarray:
     """Mask of non-dominated rows of ``F`` (minimisation); exact duplicates keep one copy.
 

@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.optimization.pareto import feasible_mask, total_violation
+
 
 @dataclass(frozen=True, eq=False)
 class Archive:
@@ -42,7 +44,7 @@ class Archive:
     @property
     def feasible(self) -> np.ndarray:
         """Boolean mask of designs with every constraint ``<= 0``."""
-        return np.all(self.G <= 0.0, axis=1)
+        return feasible_mask(self.G)
 
     def to_dict(self) -> dict[str, Any]:
         return {k: getattr(self, k).tolist()
@@ -130,8 +132,8 @@ class OptimizationResult:
 
 def batch_history(gen: int, F: np.ndarray, G: np.ndarray) -> dict[str, Any]:
     """Summary of one evaluated batch for :attr:`OptimizationResult.history`."""
-    feas = np.all(G <= 0.0, axis=1)
-    cv = np.maximum(G, 0.0).sum(axis=1) if G.shape[1] else np.zeros(F.shape[0])
+    feas = feasible_mask(G)
+    cv = total_violation(G)
     f_min = F[feas].min(axis=0).tolist() if feas.any() else [float("nan")] * F.shape[1]
     return {"generation": gen, "n_evals": int(F.shape[0]), "n_feasible": int(feas.sum()),
             "f_min": f_min, "cv_min": float(cv.min()) if cv.size else 0.0}

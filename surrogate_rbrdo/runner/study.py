@@ -423,8 +423,7 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
             idx = archive_front(r)
             fronts[lab] = r.archive.F[idx]
             front_designs[lab] = r.archive.X[idx]
-            feas = np.all(r.archive.G <= 0, axis=1)
-            clouds[lab] = r.archive.F[feas]
+            clouds[lab] = r.archive.F[r.archive.feasible]
             for row in front_table(r, design_names=DESIGN_NAMES):
                 front_rows.append({"run": lab, "p_target_pct": pt * 100, **row})
     if front_rows:
