@@ -9,7 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate_rbrdo.optimization.result import Archive, ArchiveRecorder, batch_history
+from surrogate_rbrdo.optimization.pareto import feasible_pareto
+from surrogate_rbrdo.optimization.result import (
+    Archive,
+    ArchiveRecorder,
+    OptimizationResult,
+    batch_history,
+)
 
 
 class RecordingEvaluator:
@@ -60,3 +66,14 @@ class RecordingEvaluator:
         if self._bar is not None:
             self._bar.close()
         return self.recorder.freeze()
+
+    def result(self, archive: Archive, X: np.ndarray, F: np.ndarray, G: np.ndarray,
+               wall_time_s: float, optimizer: dict) -> OptimizationResult:
+        """The :class:`OptimizationResult` of a finished run (final population ``X, F, G``,
+        Pareto mask, archive, call counts, history, formulation and ``optimizer`` info)."""
+        return OptimizationResult(
+            X=X, F=F, G=G, pareto_mask=feasible_pareto(F, G), archive=archive,
+            n_surrogate_calls=self.n_surrogate_calls, n_model_calls=self.n_model_calls,
+            history=tuple(self.history), wall_time_s=wall_time_s,
+            formulation=self.formulation.describe(), optimizer=optimizer,
+        )

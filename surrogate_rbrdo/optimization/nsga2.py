@@ -37,7 +37,6 @@ from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 from surrogate_rbrdo.optimization.evaluator import RecordingEvaluator
-from surrogate_rbrdo.optimization.pareto import feasible_pareto
 from surrogate_rbrdo.optimization.result import OptimizationResult
 
 OPTIMIZERS = Registry("optimizer")
@@ -166,7 +165,7 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
     F = np.asarray(pop.get("F"), dtype=float).reshape(X.shape[0], n_obj)
     G = (np.asarray(pop.get("G"), dtype=float).reshape(X.shape[0], n_con) if n_con
          else np.empty((X.shape[0], 0)))
-    return _result(formulation, evaluator, archive, X, F, G, wall, options, seed, prob, prob_var)
+    return _result(evaluator, archive, X, F, G, wall, options, seed, prob, prob_var)
 
 
 def _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var
@@ -186,17 +185,13 @@ def _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var
     wall = time.perf_counter() - t0
     F = F.reshape(X.shape[0], n_obj)
     G = G.reshape(X.shape[0], n_con) if n_con else np.empty((X.shape[0], 0))
-    return _result(formulation, evaluator, archive, X, F, G, wall, options, seed, prob, prob_var)
+    return _result(evaluator, archive, X, F, G, wall, options, seed, prob, prob_var)
 
 
-def _result(formulation, evaluator, archive, X, F, G, wall, options, seed, prob, prob_var
+def _result(evaluator, archive, X, F, G, wall, options, seed, prob, prob_var
             ) -> OptimizationResult:
     """The result both engines return."""
-    return OptimizationResult(
-        X=X, F=F, G=G, pareto_mask=feasible_pareto(F, G), archive=archive,
-        n_surrogate_calls=evaluator.n_surrogate_calls, n_model_calls=evaluator.n_model_calls,
-        history=tuple(evaluator.history), wall_time_s=wall,
-        formulation=formulation.describe(),
-        optimizer={"name": "nsga2", "seed": seed, **asdict(options),
-                   "pymoo_mutation_prob": prob, "pymoo_mutation_prob_var": prob_var},
-    )
+    return evaluator.result(
+        archive, X, F, G, wall,
+        {"name": "nsga2", "seed": seed, **asdict(options), "pymoo_mutation_prob": prob,
+         "pymoo_mutation_prob_var": prob_var})

@@ -29,7 +29,6 @@ from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
 from surrogate_rbrdo.optimization.evaluator import RecordingEvaluator
 from surrogate_rbrdo.optimization.nsga2 import OPTIMIZERS, check_bounds
-from surrogate_rbrdo.optimization.pareto import feasible_pareto
 from surrogate_rbrdo.optimization.result import OptimizationResult
 
 
@@ -108,11 +107,6 @@ def run_optuna(formulation, lower, upper, *, rng: np.random.Generator,
     wall = time.perf_counter() - t0
     last = archive.generation == archive.generation.max()
     X, F, G = archive.X[last], archive.F[last], archive.G[last]
-    return OptimizationResult(
-        X=X, F=F, G=G, pareto_mask=feasible_pareto(F, G), archive=archive,
-        n_surrogate_calls=evaluator.n_surrogate_calls, n_model_calls=evaluator.n_model_calls,
-        history=tuple(evaluator.history), wall_time_s=wall,
-        formulation=formulation.describe(),
-        optimizer={"name": "optuna", "seed": seed, "optuna_version": optuna.__version__,
-                   **asdict(options)},
-    )
+    return evaluator.result(archive, X, F, G, wall,
+                            {"name": "optuna", "seed": seed,
+                             "optuna_version": optuna.__version__, **asdict(options)})
