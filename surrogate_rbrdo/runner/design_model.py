@@ -75,8 +75,7 @@ def fe_design_quantities(spindle, x: np.ndarray) -> np.ndarray:
     out = np.empty((x.shape[0], 2))
     for i, xi in enumerate(x):
         model = spindle.model(xi)
-        g = model.geometry
-        yield_pa = min(g.materials[s.material].yield_Pa for s in g.sections)
+        yield_pa = model.geometry.min_yield_Pa
         peak = peak_tool_amplitude(model, None)
         stress = max_von_mises(model, float(peak.speed_rpm[0]))
         out[i, 0] = stress.max_von_mises_Pa / yield_pa
@@ -162,8 +161,7 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
     kopts = KrigingOptions(theta0=1.0, theta_lower=1e-3, theta_upper=100.0, n_start=5)
     models = tuple(KrgSE(kopts, rng=r).fit(U, np.log(Y[:, j]))
                    for j, r in enumerate(r_fit.spawn(2)))
-    g = spindle.geometry
-    yield_pa = min(g.materials[s.material].yield_Pa for s in g.sections)
+    yield_pa = spindle.geometry.min_yield_Pa
     dm = DesignModel(lower=lo, upper=hi, yield_pa=yield_pa, models=models)
     val: dict[str, Any] = {"n_train": options.n_train, "n_validate": options.n_validate,
                            "fit_time_s": time.perf_counter() - t0}

@@ -19,9 +19,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq
 
-from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_tool_amplitude
-from surrogate_rbrdo.spindle.modal import critical_speeds, first_natural_frequency
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_tool_amplitude, tool_amplitude
+from surrogate_rbrdo.spindle.modal import (
+    critical_speeds,
+    first_natural_frequency,
+    modal_analysis,
+)
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle
 from surrogate_rbrdo.spindle.stress import max_von_mises
 
@@ -90,7 +96,7 @@ def design_quantities(
         g.speed_min_rpm, g.speed_max_rpm, 24)
     peak = peak_tool_amplitude(model, theta)
     stress = max_von_mises(model, float(peak.speed_rpm[0]), theta)
-    yield_Pa = min(g.materials[s.material].yield_Pa for s in g.sections)
+    yield_Pa = g.min_yield_Pa
     return DesignQuantities(
         rotor_mass_kg=model.rotor_mass_kg,
         first_natural_frequency_hz=first_natural_frequency(model, 0.0, theta),
@@ -130,11 +136,6 @@ def first_critical_speed(model, theta: np.ndarray | None = None, *, rtol: float 
     finishes in a few modal analyses; otherwise the fixed-point iteration is continued. Raises
     ``ModelError`` if neither converges.
     """
-    from scipy.optimize import brentq
-
-    from surrogate_rbrdo.core.errors import ModelError
-    from surrogate_rbrdo.spindle.modal import modal_analysis
-
     seen: dict[float, float] = {}   # the bracket ends are asked for again by brentq
 
     def f(n: float) -> float:
@@ -167,8 +168,6 @@ def resonance_quantities(
     options: PeakOptions | None = None,
 ) -> ResonanceQuantities:
     """:class:`ResonanceQuantities` of design ``x`` for every row of ``theta``."""
-    from surrogate_rbrdo.spindle.harmonic import tool_amplitude
-
     if not 0.0 < window < 0.5:
         raise ValueError(f"window = {window} is not allowed: must lie in (0, 0.5)")
     opts = options or PeakOptions()

@@ -248,6 +248,12 @@ class SpindleGeometry:
     def total_length_mm(self) -> float:
         return float(sum(s.length_mm for s in self.sections))
 
+    @property
+    def min_yield_Pa(self) -> float:
+        """The lowest yield strength of the shaft sections' materials (the stress ratio's
+        reference)."""
+        return min(self.materials[s.material].yield_Pa for s in self.sections)
+
     def bearing(self, name: str) -> Bearing:
         for b in self.bearings:
             if b.name == name:
@@ -263,8 +269,7 @@ class SpindleGeometry:
         d = dict(data)
         mats = {"steel": Material()}
         for name, m in dict(d.get("materials", {})).items():
-            check_keys(f"materials.{name}", m, {f.name for f in dataclasses.fields(Material)})
-            mats[name] = Material(**m)
+            mats[name] = _build(Material, m, f"materials.{name}")
         d["materials"] = mats
         d["sections"] = tuple(_build(ShaftSection, s, "sections[]") for s in d.get("sections", ()))
         d["disks"] = tuple(_build(Disk, s, "disks[]") for s in d.get("disks", ()))
