@@ -112,3 +112,21 @@ def uncertainty_from_config(table: Mapping[str, Any], theta_bearings: tuple[str,
         check_positive(f"uncertainty.std[{i}]", float(s))
     corr = table.get("corr")
     return MultivariateNormal(mean, std=std, corr=None if corr is None else np.asarray(corr))
+
+
+LIMIT_KEYS = {"delta_lim_um"}
+
+
+def limit_from_config(table: Mapping[str, Any]):
+    """The limit state ``y > δ_lim`` from a ``[limit]`` table (``delta_lim_um``, default 19.5,
+    paper-notes §3.3).
+
+    >>> round(limit_from_config({"delta_lim_um": 20.0}).threshold * 1e6, 9)
+    20.0
+    """
+    from surrogate_rbrdo.core.protocols import LimitState
+
+    table = dict(table)
+    check_keys("[limit]", table, LIMIT_KEYS)
+    return LimitState(check_positive("limit.delta_lim_um", table.get("delta_lim_um", 19.5))
+                      * 1e-6)

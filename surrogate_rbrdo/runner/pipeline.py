@@ -476,7 +476,8 @@ def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
         s_new = np.asarray(Z, dtype=float).std(axis=0, ddof=1)
         w = np.asarray(f.weights) * (s_new / np.asarray(f.scale)) ** p
         check_choice("like_mode", like_mode, ("warm", "keep"))
-        opts = KrigingOptions(theta0=tuple(np.clip(w, 1e-6, 20.0)), n_start=1,
+        d = KrigingOptions()
+        opts = KrigingOptions(theta0=tuple(np.clip(w, d.theta_lower, d.theta_upper)), n_start=1,
                               hyper_opt="NoOp" if like_mode == "keep" else "TNC")
     else:
         opts = (GPROptions(n_restarts=n_start - 1) if cfg.surrogate == "gpr"

@@ -309,18 +309,24 @@ class ResonanceSurrogate:
         return Prediction(mean=mean, std=mean * np.sqrt(np.expm1(s2)))
 
     # ------------------------------------------------------------------ validation helpers
-    def loo_points(self) -> tuple[np.ndarray, np.ndarray]:
+    def sub_loo(self) -> dict[str, Any]:
+        """Closed-form LOO (:func:`~surrogate_rbrdo.surrogates.validation.loo_cv`) of every
+        sub-model, in its own log units."""
+        from surrogate_rbrdo.surrogates.validation import loo_cv
+
+        return {k: loo_cv(s.model, method="closed_form") for k, s in self.subs.items()}
+
+    def loo_points(self, sub_loo: dict[str, Any] | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
         """Closed-form (Dubrule) LOO of the combined model at the training points.
 
         Each sub-model's value at training row ``i`` is its own LOO prediction when ``i`` is
         among its training rows, its ordinary prediction otherwise; combined by the same rule.
-        Returns ``(y_true, y_loo)`` in metres.
+        ``sub_loo``: :meth:`sub_loo` if already computed. Returns ``(y_true, y_loo)`` in metres.
         """
-        from surrogate_rbrdo.surrogates.validation import loo_cv
-
+        sub_loo = self.sub_loo() if sub_loo is None else sub_loo
         vals = self.sub_predictions(self.Z_train)
-        for k, s in self.subs.items():
-            lo = loo_cv(s.model, method="closed_form")
+        for k, lo in sub_loo.items():
             vals[k] = vals[k].copy()
             vals[k][self.rows[k]] = np.exp(lo.y_loo)
         y_loo = self._combine(self._nc_of(vals), self._ares_of(vals), vals["zeta"],

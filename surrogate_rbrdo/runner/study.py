@@ -43,7 +43,11 @@ from surrogate_rbrdo.core.validate import (
     check_positive,
     check_range,
 )
-from surrogate_rbrdo.runner.config import spindle_from_config, uncertainty_from_config
+from surrogate_rbrdo.runner.config import (
+    limit_from_config,
+    spindle_from_config,
+    uncertainty_from_config,
+)
 from surrogate_rbrdo.runner.design_model import DesignModelOptions, fit_design_model
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
 from surrogate_rbrdo.runner.refine import RefineOptions, refine_surrogate, select_designs
@@ -53,7 +57,6 @@ RPM = 2.0 * np.pi / 60.0
 DESIGN_NAMES = ("preload_N", "span_mm", "diameter_mm")
 TABLES = {"spindle", "uncertainty", "limit", "surrogate", "design_model", "deterministic",
           "optimization", "verification", "report", "refine"}
-LIMIT_KEYS = {"delta_lim_um"}
 DET_KEYS = {"stress", "yield_strength_pa", "resonance", "factor", "omega_max_rpm",
             "operating_speeds_rpm", "margin"}
 
@@ -175,10 +178,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
 
     inputs = uncertainty_from_config(config.get("uncertainty", {}), spindle.theta_bearings)
 
-    lim = dict(config.get("limit", {}))
-    check_keys("[limit]", lim, LIMIT_KEYS)
-    delta = check_positive("limit.delta_lim_um", lim.get("delta_lim_um", 19.5))
-    limit = LimitState(delta * 1e-6)
+    limit = limit_from_config(config.get("limit", {}))
 
     surrogate = SurrogateConfig.from_dict(dict(config.get("surrogate", {})))
     dmo = _dataclass_from(DesignModelOptions, "[design_model]", config.get("design_model", {}))

@@ -44,15 +44,20 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.counting import CallCounter
-from surrogate_rbrdo.core.protocols import LimitState, Prediction
+from surrogate_rbrdo.core.protocols import Prediction
 from surrogate_rbrdo.core.validate import check_int, check_keys, check_positive
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
-from surrogate_rbrdo.runner.config import spindle_from_config, uncertainty_from_config
+from surrogate_rbrdo.runner.config import (
+    limit_from_config,
+    spindle_from_config,
+    uncertainty_from_config,
+)
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
 from surrogate_rbrdo.runner.pipeline import (
     PeakSurrogate,
     SurrogateConfig,
+    fe_cache,
     inverse,
     joint_bounds,
     sample_fe,
@@ -65,7 +70,6 @@ from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 from surrogate_rbrdo.surrogates.validation import compare_mc, loo_cv, validation_metrics
 
 VALIDATION_KEYS = {"n_test", "n_theta", "designs", "variants", "rel_tol", "n_theta_nc"}
-LIMIT_KEYS = {"delta_lim_um"}
 
 DEFAULT_DESIGNS = {
     "resonant": [2000.0, 650.0, 60.0],
@@ -198,10 +202,7 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
     n_theta_nc = check_int("validation.n_theta_nc", val.get("n_theta_nc", 40), minimum=2)
     spindle = spindle_from_config(config.get("spindle", {}), config.get("_base_dir", "."))
     inputs = uncertainty_from_config(config.get("uncertainty", {}), spindle.theta_bearings)
-    lim_table = dict(config.get("limit", {}))
-    check_keys("[limit]", lim_table, LIMIT_KEYS)
-    limit = LimitState(check_positive("limit.delta_lim_um",
-                                      lim_table.get("delta_lim_um", 19.5)) * 1e-6)
+    limit = limit_from_config(config.get("limit", {}))
     base = SurrogateConfig.from_dict(dict(config.get("surrogate", {})))
     variants = {"main": base}
     raw_var = val.get("variants", {})
@@ -228,13 +229,14 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
     seed = int(config["experiment"].get("seed", 0))
     ss_train, ss_test, ss_theta = np.random.SeedSequence(seed).spawn(3)
     cache_dir = run.path.parent.parent / ".cache"
+    points_cache = fe_cache(cache_dir)
     fe_test_counter, fe_mc_counter = CallCounter(), CallCounter()
 
     # ---- truth: fresh LHS test points and full-FE MC at the designs (same θ sample for all)
     with run.timed("fe_test_points"):
         Z_test = lhs(n_test, joint_bounds(spindle, inputs, base),
                      rng=np.random.default_rng(ss_test))
-        Z_test, y_test = sample_fe(spindle, Z_test, base, cache=_memory(cache_dir),
+        Z_test, y_test = sample_fe(spindle, Z_test, base, cache=points_cache,
                                    counter=fe_test_counter, progress=progress)
     theta = inputs.sample(n_theta, rng=np.random.default_rng(ss_theta))
     with run.timed("fe_mc"):
@@ -263,11 +265,10 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         metrics_rows.append(_metrics_row(name, y_test, yp, limit.threshold))
         with run.timed(f"loo_{name}"):
             if isinstance(sur, ResonanceSurrogate):
-                y_tr, y_lo = sur.loo_points()
+                sub_loo = sur.sub_loo()
+                y_tr, y_lo = sur.loo_points(sub_loo)
                 lm = validation_metrics(np.log(y_tr), np.log(y_lo))
                 loo_method, loo_r2, loo_rmse = "closed_form_combined", lm.r2, lm.rmse
-                sub_loo = {k: loo_cv(s.model, method="closed_form")
-                           for k, s in sur.subs.items()}
             else:
                 loo = loo_cv(sur.model, method="closed_form")
                 y_tr = inverse(loo.y_true, sur.transform)
@@ -286,11 +287,11 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
             if Q_test is None:
                 with run.timed("fe_resonance_test_points"):
                     Z_t, Q_test = sample_resonance(spindle, Z_test, base,
-                                                   cache=_memory(cache_dir),
+                                                   cache=points_cache,
                                                    counter=fe_test_counter, progress=progress)
                     Z_d = np.column_stack([np.repeat(X_des, n_th, axis=0),
                                            np.tile(theta[:n_th], (X_des.shape[0], 1))])
-                    Z_d, Q_d = sample_resonance(spindle, Z_d, base, cache=_memory(cache_dir),
+                    Z_d, Q_d = sample_resonance(spindle, Z_d, base, cache=points_cache,
                                                 counter=fe_test_counter, progress=progress)
                 if Z_d.shape[0] != X_des.shape[0] * n_th:
                     raise ValueError("FE resonance quantities failed at a validation design")
@@ -357,12 +358,6 @@ def _copy(ss: np.random.SeedSequence) -> np.random.SeedSequence:
     """A fresh copy of ``ss``: ``Generator.spawn`` advances the *shared* SeedSequence's child
     counter, so reusing one object would give every variant after the first another DOE."""
     return np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key, pool_size=ss.pool_size)
-
-
-def _memory(cache_dir: Path) -> Any:
-    from surrogate_rbrdo.runner.pipeline import fe_cache
-
-    return fe_cache(cache_dir)
 
 
 __all__ = ["fe_mc", "run_surrogate_validation"]
