@@ -202,11 +202,8 @@ def test_undamped_resonance_raises_instead_of_nan():
     mod = build(rigid_rotor_geometry(K_B, unbalance_kgm=U))  # no damping at all
     wn_rpm = np.sqrt(2 * K_B / m) / RPM
     speeds = wn_rpm * (1 + np.linspace(-1e-12, 1e-12, 2001))
-    try:
-        A = tool_amplitude(mod, speeds)
-    except SingularSystemError:
-        return
-    assert np.all(np.isfinite(A))
+    with pytest.raises(SingularSystemError):
+        tool_amplitude(mod, speeds)
 
 
 # --------------------------------------------------------------------------- reference spindle

@@ -42,6 +42,26 @@ def test_pf_stop_rule_and_budget():
     assert not res.converged or "P_f" in res.stop_reason
 
 
+def test_pf_rule_fires_once_pf_is_stable():
+    """stop = "pf": the loop ends at the first iteration whose last ``patience`` P_f changes
+    are all within ``pf_rel_change`` of the current P_f (checked on the history)."""
+    rng = np.random.default_rng(3)
+    pool = rng.normal(size=(500, 2))
+    o = AKMCSOptions(n_initial=6, max_added=30, stop="pf", patience=2, pf_rel_change=0.05)
+    res = ak_mcs(quadratic_ls, pool, [[-4, 4]] * 2, LimitState(3.0), factory, rng=rng,
+                 options=o)
+    assert res.converged and "P_f stable" in res.stop_reason
+    pf = [h["pf"] for h in res.history]
+
+    def stable(n):  # the rule on the first n P_f values
+        return n > o.patience and all(abs(pf[n - 1 - k] - pf[n - 2 - k])
+                                      <= o.pf_rel_change * pf[n - 1] for k in range(o.patience))
+
+    assert stable(len(pf))
+    assert not any(stable(n) for n in range(1, len(pf)))
+    assert res.added.shape[0] < o.max_added
+
+
 def test_bad_options():
     with pytest.raises(ValueError, match="stop"):
         AKMCSOptions(stop="never")

@@ -18,7 +18,7 @@ def test_registry_names():
 def test_contract(name, fitted5, data5):
     Z, y = data5
     m = fitted5[name]
-    assert m.fit  # the fitted attributes end in _
+    assert all(hasattr(m, a) for a in ("X_train_", "y_train_", "n_features_in_"))
     assert m.n_features_in_ == 5
     Zt = lhs(30, BOUNDS5, rng=np.random.default_rng(99))
     p = m.predict(Zt)
