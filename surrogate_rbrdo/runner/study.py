@@ -365,7 +365,10 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
         tasks = [partial(run_nsga2, f, lo, hi, rng=ri, options=nsga, progress=progress)
                  for f, ri in zip(fs, r.spawn(len(runs)), strict=True)]
         out = run_many(tasks, n_jobs=opt.n_jobs)
+        every_run.extend(out)   # call counts cover the refinement rounds too
         return fs, out, dict(zip(labels, out, strict=True))
+
+    every_run: list[Any] = []
 
     with run.timed("optimization"):
         forms, results, res = optimise(r_opt)
@@ -547,11 +550,11 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     with run.timed("spindle_figures"):
         _spindle_figures(run, sp, cfg, {"baseline": cfg.baseline,
                                         **({f"{pick} compromise": chosen[pick]} if pick else {})})
-    total_sur = sum(r.n_surrogate_calls for r in results) + int(y_sv.size) + int(crn.n_calls)
+    opt_sur = int(sum(r.n_surrogate_calls for r in every_run))
+    total_sur = opt_sur + int(y_sv.size) + int(crn.n_calls)
     extra = {"fe_calls": {**fe_calls, "total": int(sum(fe_calls.values()))},
-             "surrogate_calls": {"optimization": int(sum(r.n_surrogate_calls for r in results)),
-                                 "total": int(total_sur)},
-             "design_model_calls": int(sum(r.n_model_calls for r in results)),
+             "surrogate_calls": {"optimization": opt_sur, "total": int(total_sur)},
+             "design_model_calls": int(sum(r.n_model_calls for r in every_run)),
              "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in res.items()},
              "study_wall_time_s": time.perf_counter() - t_start,
              "refine": refine_meta,

@@ -86,6 +86,9 @@ def test_refine_round_evaluates_the_chosen_designs(tmp_path):
     assert rows[1].startswith("1,2,3,6,")
     info = json.loads((run.path / "surrogate_info.json").read_text())
     assert info["n_refine_points"] == 6 and info["n_train"] == 24 + 6
+    # two optimisation passes (before and after the refit), each 5 runs x 8 x 4 generations
+    # x 40 θ minus the deterministic run's 8 x 4 x 39 (it evaluates nominal θ only)
+    assert meta["surrogate_calls"]["optimization"] == 2 * (5 * 8 * 4 * 40 - 8 * 4 * 39)
 
 
 @pytest.mark.slow
