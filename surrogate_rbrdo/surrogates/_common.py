@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_finite_array
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -69,3 +71,32 @@ def check_predict_input(X: object, n_features: int) -> np.ndarray:
 def seed_from(rng: np.random.Generator) -> int:
     """Draw an integer seed for a library that wants an ``int`` (smt, scikit-learn)."""
     return int(rng.integers(0, 2**31 - 1))
+
+
+class SurrogateWrapper:
+    """What the registry's wrappers share: options (``options_cls``), the rng, BLAS threads,
+    the checks at the start of ``fit`` and the fitted attributes at its end."""
+
+    options_cls: type = type(None)
+
+    def __init__(self, options: Any = None, *, rng: np.random.Generator) -> None:
+        self.options = options if options is not None else self.options_cls()
+        self.rng = rng
+
+    def _threads(self) -> int | None:
+        return self.options.blas_threads or None
+
+    def _start_fit(self, X: object, y: object
+                   ) -> tuple[np.random.Generator, np.ndarray, np.ndarray]:
+        """Check the options' type, the rng and the data; returns ``(rng, X, y)``."""
+        if not isinstance(self.options, self.options_cls):
+            raise ValueError(f"options = {self.options!r} is not allowed: must be "
+                             f"{self.options_cls.__name__}")
+        rng = require_rng(self.rng)
+        return (rng, *check_training_data(X, y))
+
+    def _store_fit(self, model: Any, X: np.ndarray, y: np.ndarray) -> None:
+        self.model_ = model
+        self.n_features_in_ = X.shape[1]
+        self.X_train_ = X
+        self.y_train_ = y

@@ -19,12 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate_rbrdo.core.protocols import Prediction
-from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.surrogates._common import (
+    SurrogateWrapper,
     blas_threads,
     check_predict_input,
-    check_training_data,
     seed_from,
 )
 from surrogate_rbrdo.surrogates.registry import SURROGATES
@@ -72,7 +71,7 @@ class GPROptions:
 
 
 @SURROGATES.register("gpr")
-class GPR:
+class GPR(SurrogateWrapper):
     """scikit-learn ``GaussianProcessRegressor`` with ``ConstantKernel * RBF(ARD)``.
 
     Parameters
@@ -82,23 +81,14 @@ class GPR:
         Seeds the optimiser restarts.
     """
 
-    def __init__(self, options: GPROptions | None = None, *,
-                 rng: np.random.Generator) -> None:
-        self.options = options if options is not None else GPROptions()
-        self.rng = rng
-
-    def _threads(self) -> int | None:
-        return self.options.blas_threads or None
+    options_cls = GPROptions
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> GPR:
         """Fit on ``X`` (n, D) and ``y`` (n,); returns ``self``."""
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel
 
-        if not isinstance(self.options, GPROptions):
-            raise ValueError(f"options = {self.options!r} is not allowed: must be GPROptions")
-        rng = require_rng(self.rng)
-        X, y = check_training_data(X, y)
+        rng, X, y = self._start_fit(X, y)
         o = self.options
         D = X.shape[1]
         offset = X.mean(axis=0)
@@ -114,12 +104,9 @@ class GPR:
         )
         with blas_threads(self._threads()):
             model.fit((X - offset) / scale, y)
-        self.model_ = model
+        self._store_fit(model, X, y)
         self.X_offset_ = offset
         self.X_scale_ = scale
-        self.n_features_in_ = D
-        self.X_train_ = X
-        self.y_train_ = y
         return self
 
     def predict(self, X: np.ndarray, *, return_std: bool = True) -> Prediction:

@@ -21,12 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate_rbrdo.core.protocols import Prediction
-from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.surrogates._common import (
+    SurrogateWrapper,
     blas_threads,
     check_predict_input,
-    check_training_data,
     seed_from,
 )
 from surrogate_rbrdo.surrogates.registry import SURROGATES
@@ -81,18 +80,11 @@ class KrigingOptions:
         check_int("blas_threads", self.blas_threads, minimum=0)
 
 
-class _SmtKriging:
+class _SmtKriging(SurrogateWrapper):
     """Common code of the smt KRG wrappers; subclasses fix ``corr``."""
 
+    options_cls = KrigingOptions
     corr: str = ""
-
-    def __init__(self, options: KrigingOptions | None = None, *,
-                 rng: np.random.Generator) -> None:
-        self.options = options if options is not None else KrigingOptions()
-        self.rng = rng
-
-    def _threads(self) -> int | None:
-        return self.options.blas_threads or None
 
     def _theta0(self, D: int) -> list[float]:
         t0 = self.options.theta0
@@ -107,10 +99,7 @@ class _SmtKriging:
         """Fit on ``X`` (n, D) and ``y`` (n,); returns ``self``."""
         from smt.surrogate_models import KRG
 
-        if not isinstance(self.options, KrigingOptions):
-            raise ValueError(f"options = {self.options!r} is not allowed: must be KrigingOptions")
-        rng = require_rng(self.rng)
-        X, y = check_training_data(X, y)
+        rng, X, y = self._start_fit(X, y)
         o = self.options
         D = X.shape[1]
         model = KRG(
@@ -127,10 +116,7 @@ class _SmtKriging:
         model.set_training_values(X, y)
         with blas_threads(self._threads()):
             model.train()
-        self.model_ = model
-        self.n_features_in_ = D
-        self.X_train_ = X
-        self.y_train_ = y
+        self._store_fit(model, X, y)
         return self
 
     def predict(self, X: np.ndarray, *, return_std: bool = True) -> Prediction:
