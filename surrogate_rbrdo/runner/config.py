@@ -130,3 +130,22 @@ def limit_from_config(table: Mapping[str, Any]):
     check_keys("[limit]", table, LIMIT_KEYS)
     return LimitState(check_positive("limit.delta_lim_um", table.get("delta_lim_um", 19.5))
                       * 1e-6)
+
+
+RESPONSE_KEYS = {"kind", "speed_rpm"}
+
+
+def response_from_config(table: Mapping[str, Any]):
+    """What ``y`` is, from a ``[response]`` table: ``kind = "peak"`` (default, the peak
+    tool-tip amplitude over the speed range) or ``"at_speed"`` with ``speed_rpm``.
+
+    >>> response_from_config({"kind": "at_speed", "speed_rpm": 24000}).label
+    'amplitude at 24000 rpm'
+    >>> response_from_config({}).kind
+    'peak'
+    """
+    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+
+    table = dict(table)
+    check_keys("[response]", table, RESPONSE_KEYS)
+    return ResponseSpec(**table)

@@ -50,13 +50,13 @@ from surrogate_rbrdo.core.validate import (
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling import evaluate_points
 from surrogate_rbrdo.sampling.evaluate import BACKENDS
-from surrogate_rbrdo.spindle.evaluate import PointwisePeak, PointwiseResonance
+from surrogate_rbrdo.spindle.evaluate import PointwiseResonance, ResponseSpec
 from surrogate_rbrdo.surrogates import SURROGATES, GPROptions, KrigingOptions
 from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
 
 TRANSFORMS = ("log", "none")
 THETA_BOXES = ("sigma", "bounds")
-STRUCTURES = ("global", "resonance")
+STRUCTURES = ("global", "resonance", "fe")
 
 
 @dataclass(frozen=True)
@@ -94,8 +94,11 @@ class SurrogateConfig:
         Stop when at most this fraction of the pool has ``U < al_u_stop``.
     al_n_start : int
         Multistarts during the AL refits (the final fit uses ``n_start``).
-    structure : {"global", "resonance"}
+    structure : {"global", "resonance", "fe"}
         ``"global"`` (default): one Kriging of ``t(y)`` (:class:`PeakSurrogate`).
+        ``"fe"``: no surrogate: the full FE model in the loop (:class:`FullModel`), the
+        ground truth a surrogate study is compared with (cheap for ``at_speed`` responses,
+        ~15 ms per design for 200 θ; no DOE, no training).
         ``"resonance"``: the physics-structured
         :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (critical
         speed, resonance height, flank, background; ``transform`` is ignored, every sub-model
@@ -217,6 +220,9 @@ class SurrogateConfig:
             raise ValueError(f"res_bg_only_r = {self.res_bg_only_r} is not allowed: must be "
                              f"<= res_bg_r_max = {self.res_bg_r_max} (the background model "
                              "is fitted only up to there)")
+        if self.structure == "fe" and self.active_learning:
+            raise ValueError("active_learning = True is not allowed with structure = 'fe': "
+                             "there is no surrogate to enrich")
         if self.structure == "resonance" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'resonance': the structured surrogate uses a static DOE")
@@ -335,6 +341,38 @@ class PeakSurrogate:
         return Prediction(mean=mean, std=mean * np.sqrt(np.expm1(p.std**2)))
 
 
+@dataclass(eq=False)
+class FullModel:
+    """The full FE model behind the surrogate interface (``structure = "fe"``).
+
+    ``response(x, θ)`` runs the FE model for every design and θ sample: the reference a
+    surrogate-based study is judged against. Its calls are FE calls.
+
+    >>> import numpy as np
+    >>> from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> fm = FullModel(ResponseSpec("at_speed", 24000.0).fe_response(reference_spindle()))
+    >>> fm.response(np.array([[3000.0, 600.0, 80.0]]), np.ones((2, 2))).shape
+    (1, 2)
+    """
+
+    fe: Any
+    info: dict[str, Any] = field(default_factory=dict)
+    n_train: int = 0
+
+    def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """FE ``y`` (m) for designs ``x`` (P, 3) × θ (N, m) → (P, N)."""
+        return self.fe(x, theta)
+
+    __call__ = response
+
+    def response_points(self, Z: np.ndarray) -> np.ndarray:
+        """FE ``y`` (m) at joint points ``Z = [x, θ]``."""
+        Z = np.atleast_2d(np.asarray(Z, dtype=float))
+        d = Z.shape[1] - self.fe.n_theta
+        return np.array([self.fe(z[None, :d], z[None, d:])[0, 0] for z in Z])
+
+
 # ---------------------------------------------------------------------- building blocks
 def joint_bounds(spindle: Any, inputs: Any, cfg: SurrogateConfig) -> np.ndarray:
     """The (3 + m, 2) joint DOE box: the design box and the θ box of ``cfg``."""
@@ -363,15 +401,17 @@ def fe_cache(cache_dir: str | Path | None) -> Any:
 
 
 def sample_fe(spindle: Any, Z: np.ndarray, cfg: SurrogateConfig, *, cache: Any = None,
-              counter: CallCounter | None = None, progress: bool = False
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """FE peak amplitude (m) at joint points ``Z`` via ``evaluate_points`` (counted, cached).
+              counter: CallCounter | None = None, progress: bool = False,
+              response: ResponseSpec | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """FE response ``y`` (m; default the peak amplitude, else ``response``) at joint points
+    ``Z`` via ``evaluate_points`` (counted, cached).
 
     Returns the points with a finite positive value and their values.
     """
     Z = check_finite_array("Z", Z, ndim=2)
+    response = ResponseSpec() if response is None else response
     res = evaluate_points(
-        PointwisePeak(spindle), Z, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache,
+        response.pointwise(spindle), Z, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache,
         counter=counter, on_nonfinite="exclude", progress=progress,
         client="local" if cfg.backend == "dask" else None)
     ok = res.y > 0
@@ -496,7 +536,8 @@ def fit_surrogate(Z: np.ndarray, y: np.ndarray, cfg: SurrogateConfig, *,
 # ---------------------------------------------------------------------- active learning
 def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: SurrogateConfig, *,
                     rng: np.random.Generator, cache: Any = None,
-                    counter: CallCounter | None = None, progress: bool = False
+                    counter: CallCounter | None = None, progress: bool = False,
+                    response: ResponseSpec | None = None
                     ) -> tuple[np.ndarray, np.ndarray, list[dict[str, Any]], str]:
     """AK-MCS-style enrichment (see the module docstring). Returns ``Z, y, history, reason``."""
     rng = require_rng(rng)
@@ -504,7 +545,7 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: Surrogate
     bounds = joint_bounds(spindle, inputs, cfg)
     d = spindle.design_map.bounds.shape[0]
     Z, y = sample_fe(spindle, build_doe(cfg.al_n_initial, bounds, rng=r_doe), cfg,
-                     cache=cache, counter=counter, progress=progress)
+                     cache=cache, counter=counter, progress=progress, response=response)
     pool_x = lhs(cfg.al_pool_designs, bounds[:d], rng=r_pool_x, criterion="random")
     pool_t = inputs.sample(cfg.al_pool_theta, rng=r_pool_t)
     used = np.zeros((pool_x.shape[0], pool_t.shape[0]), dtype=bool)
@@ -543,7 +584,8 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: Surrogate
                 break
             used[rows, best_t[rows]] = True
             new = np.column_stack([pool_x[rows], pool_t[best_t[rows]]])
-            Zn, yn = sample_fe(spindle, new, cfg, cache=cache, counter=counter)
+            Zn, yn = sample_fe(spindle, new, cfg, cache=cache, counter=counter,
+                               response=response)
             Z, y = np.vstack([Z, Zn]), np.concatenate([y, yn])
             n_added += rows.size
             if bar is not None:
@@ -557,9 +599,13 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: Surrogate
 # ---------------------------------------------------------------------- entry point
 def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: SurrogateConfig,
                          *, rng: np.random.Generator, cache_dir: str | Path | None = None,
-                         progress: bool = False, counter: CallCounter | None = None
+                         progress: bool = False, counter: CallCounter | None = None,
+                         response: ResponseSpec | None = None
                          ) -> tuple[PeakSurrogate, dict[str, Any]]:
     """DOE (static or active) → FE sampling → fit; returns the surrogate and an info dict.
+
+    ``response`` says what ``y`` is (default: the peak amplitude). With ``cfg.structure =
+    "fe"`` no surrogate is built: the returned :class:`FullModel` runs the FE model.
 
     With ``cfg.structure = "resonance"`` the returned surrogate is a
     :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (same interface:
@@ -580,9 +626,21 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     progress : bool
     counter : CallCounter, optional
         Receives every FE call (a new one is made if omitted; its total is in the info).
+    response : ResponseSpec, optional
     """
     if not isinstance(cfg, SurrogateConfig):
         raise ValueError(f"cfg = {cfg!r} is not allowed: must be a SurrogateConfig")
+    response = ResponseSpec() if response is None else response
+    if not isinstance(response, ResponseSpec):
+        raise ValueError(f"response = {response!r} is not allowed: must be a ResponseSpec")
+    if cfg.structure == "resonance" and response.kind != "peak":
+        raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
+                         f"= {response.kind!r}: the resonance structure models the peak over "
+                         "the speed range; use 'global' or 'fe'")
+    if cfg.structure == "fe":
+        info = {"structure": "fe", "response": response.label, "fe_calls": 0,
+                "n_train": 0, "config": cfg.to_dict()}
+        return FullModel(response.fe_response(spindle), info=info), info
     rng = require_rng(rng)
     r_doe, r_fit = rng.spawn(2)
     counter = counter if counter is not None else CallCounter()
@@ -626,15 +684,17 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     if cfg.active_learning:
         Z, y, history, reason = active_learning(spindle, inputs, limit, cfg, rng=r_doe,
                                                 cache=cache, counter=counter,
-                                                progress=progress)
+                                                progress=progress, response=response)
     else:
         Z = build_doe(cfg.n_doe, joint_bounds(spindle, inputs, cfg), rng=r_doe)
-        Z, y = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress)
+        Z, y = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress,
+                         response=response)
     sample_s = time.perf_counter() - t0
     sur = fit_surrogate(Z, y, cfg, rng=r_fit, n_design=d)
     info = {**sur.info, "fe_calls": counter.calls - start, "sampling_time_s": sample_s,
             "bounds": joint_bounds(spindle, inputs, cfg).tolist(),
-            "active_learning": cfg.active_learning, "config": cfg.to_dict()}
+            "active_learning": cfg.active_learning, "config": cfg.to_dict(),
+            "response": response.label}
     if cfg.active_learning:
         info.update(al_history=history, al_stop_reason=reason)
     sur.info = info

@@ -106,7 +106,8 @@ def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarr
 def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndarray,
                      cfg: Any, limit: Any, *, rng: np.random.Generator, cache: Any = None,
                      counter: Any = None, progress: bool = False, tol: float | None = None,
-                     hyper: str = "warm") -> tuple[Any, dict[str, Any]]:
+                     hyper: str = "warm", response: Any = None
+                     ) -> tuple[Any, dict[str, Any]]:
     """FE at designs ``X`` (P, 3) × ``theta`` (M, m), the error there, and a refit.
 
     Returns ``(new_surrogate, stats)``. ``stats`` has the error of the surrogate given *before*
@@ -115,7 +116,8 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
     no refit is done and the input surrogate is returned (``stats["refit"] = False``).
     ``hyper``: how the refit treats the Kriging length scales of ``surrogate`` (smt
     Kriging): ``"warm"`` one local likelihood optimisation started from them, ``"keep"`` kept
-    (conditioning only), ``"refit"`` a fresh multistart optimisation.
+    (conditioning only), ``"refit"`` a fresh multistart optimisation. ``response``: the
+    ``ResponseSpec`` of ``y`` (default the peak amplitude).
     """
     check_choice("hyper", hyper, ("warm", "keep", "refit"))
     like_mode = "keep" if hyper == "keep" else "warm"
@@ -132,7 +134,8 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
                                   progress=progress)
         yn = Qn[:, 3]
     else:
-        Zn, yn = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress)
+        Zn, yn = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress,
+                           response=response)
     if Zn.shape[0] == 0:
         raise ValueError("refine: the FE model gave no finite value at any refinement point")
     y_hat = surrogate.response_points(Zn)

@@ -10,7 +10,10 @@ Config tables (every key optional unless stated; unknown keys raise):
 ``[spindle]``       see :func:`~surrogate_rbrdo.runner.config.spindle_from_config`
 ``[uncertainty]``   ``mean``, ``std`` (θ = bearing stiffness factors), optional ``corr``
 ``[limit]``         ``delta_lim_um`` (19.5)
-``[surrogate]``     the pipeline's ``SurrogateConfig`` schema (``n_doe``, ``surrogate``, …)
+``[response]``      ``kind`` ("peak": the peak over the speed range, default; "at_speed": the
+                    amplitude at ``speed_rpm``), :class:`~surrogate_rbrdo.spindle.evaluate.ResponseSpec`
+``[surrogate]``     the pipeline's ``SurrogateConfig`` schema (``n_doe``, ``surrogate``, …);
+                    ``structure = "fe"``: the full FE model in the loop (ground truth)
 ``[design_model]``  ``n_train``, ``n_validate``, ``n_jobs`` (:class:`DesignModelOptions`)
 ``[deterministic]`` ``stress``, ``yield_strength_pa``, ``resonance`` ("paper"|"separation"|
                     "none"), ``factor``, ``omega_max_rpm``, ``operating_speeds_rpm``, ``margin``
@@ -45,6 +48,7 @@ from surrogate_rbrdo.core.validate import (
 )
 from surrogate_rbrdo.runner.config import (
     limit_from_config,
+    response_from_config,
     spindle_from_config,
     uncertainty_from_config,
 )
@@ -52,11 +56,12 @@ from surrogate_rbrdo.runner.design_model import DesignModelOptions, fit_design_m
 from surrogate_rbrdo.runner.experiments import EXPERIMENTS
 from surrogate_rbrdo.runner.refine import RefineOptions, refine_surrogate, select_designs
 from surrogate_rbrdo.runner.runfolder import RunFolder
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 
 RPM = 2.0 * np.pi / 60.0
 DESIGN_NAMES = ("preload_N", "span_mm", "diameter_mm")
 TABLES = {"spindle", "uncertainty", "limit", "surrogate", "design_model", "deterministic",
-          "optimization", "verification", "report", "refine"}
+          "optimization", "verification", "report", "refine", "response"}
 DET_KEYS = {"stress", "yield_strength_pa", "resonance", "factor", "omega_max_rpm",
             "operating_speeds_rpm", "margin"}
 
@@ -163,6 +168,7 @@ class StudyConfig:
     baseline: np.ndarray
     seed: int
     refine: RefineOptions = RefineOptions()
+    response: ResponseSpec = ResponseSpec()
 
 
 def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
@@ -181,6 +187,11 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     limit = limit_from_config(config.get("limit", {}))
 
     surrogate = SurrogateConfig.from_dict(dict(config.get("surrogate", {})))
+    response = response_from_config(config.get("response", {}))
+    if surrogate.structure == "resonance" and response.kind != "peak":
+        raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
+                         f"= {response.kind!r}: it models the peak over the speed range; use "
+                         "'global' or 'fe'")
     dmo = _dataclass_from(DesignModelOptions, "[design_model]", config.get("design_model", {}))
 
     det = dict(config.get("deterministic", {}))
@@ -209,6 +220,9 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     ver = _dataclass_from(VerificationConfig, "[verification]", config.get("verification", {}))
     rep = _dataclass_from(ReportConfig, "[report]", config.get("report", {}))
     ref = _dataclass_from(RefineOptions, "[refine]", config.get("refine", {}))
+    if ref.rounds and surrogate.structure == "fe":
+        raise ValueError(f"refine.rounds = {ref.rounds} is not allowed with surrogate.structure "
+                         "= 'fe': there is no surrogate to refine (use rounds = 0)")
     try:
         base = spindle.design_map.check(np.asarray(
             rep.baseline if rep.baseline is not None else spindle.baseline, dtype=float))
@@ -216,19 +230,22 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
         raise ValueError(f"report.baseline: {exc}") from None
     return StudyConfig(spindle=spindle, inputs=inputs, limit=limit, surrogate=surrogate,
                        design_model=dmo, deterministic=det_opts, optimization=opt,
-                       verification=ver, report=rep, baseline=base, seed=seed, refine=ref)
+                       verification=ver, report=rep, baseline=base, seed=seed, refine=ref,
+                       response=response)
 
 
 # ----------------------------------------------------------------------------- verification
-def _fe_chunk(spindle, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
+def _fe_chunk(spindle, x: np.ndarray, theta: np.ndarray, response=None) -> np.ndarray:
+    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 
-    return PeakAmplitudeResponse(spindle)(x[None, :], theta)[0]
+    response = ResponseSpec() if response is None else response
+    return response.fe_response(spindle)(x[None, :], theta)[0]
 
 
 def fe_values(spindle, X: np.ndarray, theta: np.ndarray, *, n_jobs: int, chunk: int,
-              progress: bool) -> np.ndarray:
-    """Full-FE peak amplitudes of designs ``X`` (P, 3) on ``theta`` (N, m): (P, N) metres."""
+              progress: bool, response=None) -> np.ndarray:
+    """Full-FE ``y`` (default the peak amplitude; else the ``ResponseSpec`` ``response``) of
+    designs ``X`` (P, 3) on ``theta`` (N, m): (P, N) metres."""
     jobs = [(i, s) for i in range(X.shape[0]) for s in range(0, theta.shape[0], chunk)]
     out = np.empty((X.shape[0], theta.shape[0]))
     if n_jobs == 1:
@@ -238,12 +255,13 @@ def fe_values(spindle, X: np.ndarray, theta: np.ndarray, *, n_jobs: int, chunk: 
 
             it = tqdm(jobs, desc="FE verification", unit="chunk", leave=False)
         for i, s in it:
-            out[i, s:s + chunk] = _fe_chunk(spindle, X[i], theta[s:s + chunk])
+            out[i, s:s + chunk] = _fe_chunk(spindle, X[i], theta[s:s + chunk], response)
         return out
     from joblib import Parallel, delayed
 
     par = Parallel(n_jobs=n_jobs, backend="loky", return_as="generator")
-    gen = par(delayed(_fe_chunk)(spindle, X[i], theta[s:s + chunk]) for i, s in jobs)
+    gen = par(delayed(_fe_chunk)(spindle, X[i], theta[s:s + chunk], response)
+              for i, s in jobs)
     if progress:
         from tqdm.auto import tqdm
 
@@ -332,7 +350,8 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     with run.timed("surrogate"):
         surrogate, sinfo = train_peak_surrogate(sp, cfg.inputs, cfg.limit, cfg.surrogate,
                                                 rng=r_sur, cache_dir=cache_dir,
-                                                progress=progress)
+                                                progress=progress, response=cfg.response)
+    fe_loop = cfg.surrogate.structure == "fe"   # the FE model itself in the loop
     run.write_json("surrogate_info.json", sinfo)
     fe_calls = {"doe": int(sinfo.get("fe_calls", 0))}
 
@@ -405,7 +424,8 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
                     surrogate, sp, X_sel, cfg.inputs.sample(ref.theta, rng=r_th),
                     cfg.surrogate, cfg.limit, rng=r_fit,
                     cache=ref_cache, counter=ref_counter,
-                    progress=progress, tol=ref.tol, hyper=ref.hyper)
+                    progress=progress, tol=ref.tol, hyper=ref.hyper,
+                    response=cfg.response)
                 refine_rows.append({"round": rnd, **{k: v for k, v in st.items()
                                                      if not isinstance(v, list)}})
                 refine_meta.append({"round": rnd, "designs": X_sel.tolist(), **st})
@@ -436,7 +456,8 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     fig = plot_pareto_fronts(rb_fronts, compromises={lab: (comp[lab].mean, comp[lab].std)
                                                      for lab in rb if comp[lab] is not None},
                              clouds={lab: clouds[lab] for lab in rb})
-    fig.axes[0].set_title("RBRDO feasible Pareto fronts per P_target (surrogate, CRN sample)")
+    fig.axes[0].set_title("RBRDO feasible Pareto fronts per P_target "
+                          f"({'full FE' if fe_loop else 'surrogate'}, CRN sample)")
     _save_fig(fig, run.file("pareto_fronts.png"))
     all_fronts = {k: v for k, v in fronts.items()}
     fig = plot_pareto_fronts(all_fronts, compromises={k: (comp[k].mean, comp[k].std)
@@ -460,19 +481,18 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     theta_v = cfg.inputs.sample(ver.n_theta, rng=r_ver)
     with run.timed("verification_fe"):
         y_fe = fe_values(sp, Xc, theta_v, n_jobs=ver.n_jobs, chunk=ver.chunk,
-                         progress=progress)
+                         progress=progress, response=cfg.response)
     fe_calls["verification"] = int(y_fe.size)
-    y_sv = surrogate.response(Xc, theta_v)
+    y_sv = y_fe if fe_loop else surrogate.response(Xc, theta_v)
     est_fe = mc_from_values(y_fe, cfg.limit)
     est_sv = mc_from_values(y_sv, cfg.limit)
     pf_is = None
     if ver.pf_method == "is":
         from surrogate_rbrdo.estimators import get_estimator
-        from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 
         with run.timed("verification_is"):
             e = get_estimator("is", n_samples=ver.is_samples).estimate(
-                PeakAmplitudeResponse(sp), cfg.inputs, cfg.limit, Xc, rng=r_ver.spawn(1)[0])
+                cfg.response.fe_response(sp), cfg.inputs, cfg.limit, Xc, rng=r_ver.spawn(1)[0])
         pf_is = np.asarray(e.pf)
         fe_calls["verification_is"] = int(e.n_calls)
     ver_rows = []
@@ -551,8 +571,15 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
         _spindle_figures(run, sp, cfg, {"baseline": cfg.baseline,
                                         **({f"{pick} compromise": chosen[pick]} if pick else {})})
     opt_sur = int(sum(r.n_surrogate_calls for r in every_run))
-    total_sur = opt_sur + int(y_sv.size) + int(crn.n_calls)
-    extra = {"fe_calls": {**fe_calls, "total": int(sum(fe_calls.values()))},
+    if fe_loop:   # the "surrogate" calls were FE calls; y_sv is y_fe
+        fe_calls["optimization"] = opt_sur
+        fe_calls["crn_assessment"] = int(crn.n_calls)
+        opt_sur = total_sur = 0
+    else:
+        total_sur = opt_sur + int(y_sv.size) + int(crn.n_calls)
+    extra = {"model_in_loop": "fe" if fe_loop else "surrogate",
+             "response": cfg.response.label,
+             "fe_calls": {**fe_calls, "total": int(sum(fe_calls.values()))},
              "surrogate_calls": {"optimization": opt_sur, "total": int(total_sur)},
              "design_model_calls": int(sum(r.n_model_calls for r in every_run)),
              "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in res.items()},

@@ -1,4 +1,5 @@
-"""The spindle as a response ``y(x, θ)``: peak tool-tip amplitude, and per-design quantities.
+"""The spindle as a response ``y(x, θ)``: peak tool-tip amplitude (or the amplitude at one
+operating speed, :class:`ResponseSpec`), and per-design quantities.
 
 :class:`PeakAmplitudeResponse` implements the core ``Response`` protocol (designs ``(P, 3)`` ×
 θ ``(N, m)`` → ``(P, N)`` amplitudes in metres); it builds one FE model per design and solves all
@@ -65,6 +66,122 @@ class PointwisePeak:
         d = len(self.spindle.design_map.names)
         model = self.spindle.model(z[:d])
         return float(peak_tool_amplitude(model, z[None, d:], options=self.options).amplitude[0])
+
+
+@dataclass(frozen=True)
+class AtSpeedAmplitudeResponse:
+    """Tool-tip orbit amplitude (m) at one operating speed, for designs × θ samples.
+
+    The response of a spindle that runs at a rated speed (the paper validates at 24 000 rpm,
+    its Table 7): unlike the peak over the range, it sees the tool-tip *anti-resonance*, which
+    the design can tune to the operating speed (docs/paper-study.md, "rated-speed problem").
+
+    >>> import numpy as np
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> sp = reference_spindle()
+    >>> r = AtSpeedAmplitudeResponse(sp, 24000.0)
+    >>> y = r(np.array([[3000.0, 600.0, 80.0]]), np.array([[1.0, 1.0]]))
+    >>> bool(y[0, 0] <= PeakAmplitudeResponse(sp)(np.array([[3000.0, 600.0, 80.0]]),
+    ...                                           np.array([[1.0, 1.0]]))[0, 0])
+    True
+    """
+
+    spindle: ReferenceSpindle
+    speed_rpm: float = 24000.0
+
+    def __post_init__(self) -> None:
+        check_speed("speed_rpm", self.speed_rpm)
+
+    @property
+    def n_theta(self) -> int:
+        return len(self.spindle.theta_bearings)
+
+    def __call__(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        out = np.empty((x.shape[0], theta.shape[0]))
+        sp = np.array([float(self.speed_rpm)])
+        for i, xi in enumerate(x):
+            out[i] = tool_amplitude(self.spindle.model(xi), sp, theta)[:, 0]
+        return out
+
+
+@dataclass(frozen=True)
+class PointwiseAtSpeed:
+    """``f(z) -> y`` at one operating speed for one joint point ``z = [x, θ]`` (metres)."""
+
+    spindle: ReferenceSpindle
+    speed_rpm: float = 24000.0
+
+    def __post_init__(self) -> None:
+        check_speed("speed_rpm", self.speed_rpm)
+
+    def __call__(self, z: np.ndarray) -> float:
+        z = np.asarray(z, dtype=float)
+        d = len(self.spindle.design_map.names)
+        model = self.spindle.model(z[:d])
+        return float(tool_amplitude(model, np.array([float(self.speed_rpm)]), z[None, d:])[0, 0])
+
+
+def check_speed(name: str, value: object) -> float:
+    """A finite speed > 0 (rpm), else ``ValueError`` naming the field."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not np.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} = {value!r} is not allowed: must be a finite speed > 0 rpm")
+    return float(value)
+
+
+RESPONSE_KINDS = ("peak", "at_speed")
+
+
+@dataclass(frozen=True)
+class ResponseSpec:
+    """Which tool-tip amplitude ``y`` is: the config's ``[response]`` table.
+
+    ``kind = "peak"`` (default, the paper's definition): the peak over the speed range of the
+    geometry. ``kind = "at_speed"``: the amplitude at ``speed_rpm`` (the rated speed).
+
+    >>> ResponseSpec("at_speed", 24000.0).label
+    'amplitude at 24000 rpm'
+    >>> ResponseSpec("at_speed")
+    Traceback (most recent call last):
+    ...
+    ValueError: response.speed_rpm = None is not allowed: must be a finite speed > 0 rpm (required with kind = 'at_speed')
+    """
+
+    kind: str = "peak"
+    speed_rpm: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in RESPONSE_KINDS:
+            raise ValueError(f"response.kind = {self.kind!r} is not allowed: must be one of "
+                             f"{list(RESPONSE_KINDS)}")
+        if self.kind == "peak" and self.speed_rpm is not None:
+            raise ValueError(f"response.speed_rpm = {self.speed_rpm!r} is not allowed with kind "
+                             "= 'peak' (the peak is over the geometry's speed range)")
+        if self.kind == "at_speed":
+            try:
+                object.__setattr__(self, "speed_rpm",
+                                   check_speed("response.speed_rpm", self.speed_rpm))
+            except ValueError as exc:
+                raise ValueError(f"{exc} (required with kind = 'at_speed')") from None
+
+    @property
+    def label(self) -> str:
+        return ("peak amplitude" if self.kind == "peak"
+                else f"amplitude at {self.speed_rpm:.0f} rpm")
+
+    def fe_response(self, spindle: ReferenceSpindle):
+        """The full-FE ``Response`` (designs × θ → metres)."""
+        if self.kind == "peak":
+            return PeakAmplitudeResponse(spindle)
+        return AtSpeedAmplitudeResponse(spindle, self.speed_rpm)
+
+    def pointwise(self, spindle: ReferenceSpindle):
+        """The one-point FE function ``f([x, θ]) -> y`` used for DOE sampling."""
+        if self.kind == "peak":
+            return PointwisePeak(spindle)
+        return PointwiseAtSpeed(spindle, self.speed_rpm)
 
 
 @dataclass(frozen=True)

@@ -125,3 +125,57 @@ def test_rejects_non_config():
     with pytest.raises(ValueError, match="cfg"):
         train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, {"n_doe": 10},
                              rng=np.random.default_rng(0))
+
+
+# ---------------------------------------------------------------------- response kinds, "fe"
+def test_structure_fe_is_the_fe_model_itself():
+    from surrogate_rbrdo.runner.pipeline import FullModel
+    from surrogate_rbrdo.spindle.evaluate import AtSpeedAmplitudeResponse, ResponseSpec
+
+    sp = reference_spindle()
+    inputs = MultivariateNormal([1.0, 1.0], std=[0.06, 0.06])
+    counter = CallCounter()
+    fm, info = train_peak_surrogate(sp, inputs, LimitState(1.5e-6),
+                                    SurrogateConfig(structure="fe"), rng=np.random.default_rng(0),
+                                    counter=counter,
+                                    response=ResponseSpec("at_speed", 24000.0))
+    assert isinstance(fm, FullModel) and counter.calls == 0 and info["fe_calls"] == 0
+    X = np.array([[2000.0, 465.8, 65.0], [3000.0, 600.0, 80.0]])
+    th = np.array([[1.0, 1.0], [0.95, 1.08]])
+    np.testing.assert_array_equal(fm.response(X, th),
+                                  AtSpeedAmplitudeResponse(sp, 24000.0)(X, th))
+    Z = np.column_stack([np.repeat(X, 2, axis=0), np.tile(th, (2, 1))])
+    np.testing.assert_allclose(fm.response_points(Z), fm.response(X, th).ravel(), rtol=1e-12)
+
+
+def test_global_surrogate_trains_on_the_chosen_response(tmp_path):
+    """The DOE values are the at-speed FE amplitudes (an independent FE call per point)."""
+    from surrogate_rbrdo.spindle.evaluate import PointwiseAtSpeed, ResponseSpec
+
+    sp = reference_spindle()
+    inputs = MultivariateNormal([1.0, 1.0], std=[0.06, 0.06])
+    sur, _ = train_peak_surrogate(sp, inputs, LimitState(1.5e-6),
+                                  SurrogateConfig(n_doe=8, n_jobs=1, n_start=1),
+                                  rng=np.random.default_rng(1),
+                                  response=ResponseSpec("at_speed", 20000.0))
+    Z, t = sur.model.X_train_, sur.model.y_train_
+    f = PointwiseAtSpeed(sp, 20000.0)
+    np.testing.assert_allclose(np.exp(t), [f(z) for z in Z], rtol=1e-10)
+    assert sur.info["response"] == "amplitude at 20000 rpm"
+
+
+def test_resonance_structure_requires_the_peak_response():
+    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+
+    with pytest.raises(ValueError, match=r"structure = 'resonance' is not allowed with "
+                                         r"response.kind = 'at_speed'"):
+        train_peak_surrogate(reference_spindle(), MultivariateNormal([1.0, 1.0], std=[0.06, 0.06]),
+                             LimitState(1e-6), SurrogateConfig(structure="resonance"),
+                             rng=np.random.default_rng(0),
+                             response=ResponseSpec("at_speed", 24000.0))
+
+
+def test_structure_fe_refuses_active_learning():
+    with pytest.raises(ValueError, match=r"active_learning = True is not allowed with "
+                                         r"structure = 'fe'"):
+        SurrogateConfig(structure="fe", active_learning=True)

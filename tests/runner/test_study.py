@@ -91,6 +91,49 @@ def test_refine_round_evaluates_the_chosen_designs(tmp_path):
     assert meta["surrogate_calls"]["optimization"] == 2 * (5 * 8 * 4 * 40 - 8 * 4 * 39)
 
 
+TINY_FE = TINY.replace("""[surrogate]
+n_doe = 24
+n_jobs = 1
+n_start = 1
+""", """[surrogate]
+structure = "fe"
+
+[response]
+kind = "at_speed"
+speed_rpm = 24000.0
+
+[limit]
+delta_lim_um = 1.5
+""").replace("n_theta = 6\n", "n_theta = 400\nchunk = 400\n")
+
+
+def test_fe_in_the_loop_study_on_the_at_speed_response(tmp_path):
+    """No surrogate: the fronts' μ_y are FE values (checked against an independent FE
+    evaluation of the front designs on a fresh θ sample, within its MC error), every
+    optimisation call is counted as an FE call, and the verification is FE on both sides."""
+    from surrogate_rbrdo.spindle.evaluate import AtSpeedAmplitudeResponse
+    from surrogate_rbrdo.spindle.reference import reference_spindle
+
+    assert 'structure = "fe"' in TINY_FE and "chunk = 400" in TINY_FE
+    run = run_experiment(_write(tmp_path, TINY_FE), results_dir=tmp_path / "res", run_id="fe",
+                         progress=False)
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["model_in_loop"] == "fe" and meta["response"] == "amplitude at 24000 rpm"
+    assert meta["fe_calls"]["doe"] == 0
+    assert meta["fe_calls"]["optimization"] == 5 * 8 * 4 * 40 - 8 * 4 * 39
+    assert meta["surrogate_calls"]["optimization"] == 0
+    fr = np.genfromtxt(run.path / "pareto_fronts.csv", delimiter=",", names=True, dtype=None,
+                       encoding="utf-8")
+    X = np.column_stack([fr["preload_N"], fr["span_mm"], fr["diameter_mm"]])[:4]
+    theta = np.random.default_rng(99).normal(1.0, [0.0605, 0.0641], size=(2000, 2))
+    y = AtSpeedAmplitudeResponse(reference_spindle(), 24000.0)(X, theta) * 1e6
+    se = y.std(axis=1) / np.sqrt(40) + y.std(axis=1) / np.sqrt(2000)
+    assert np.all(np.abs(fr["mean_um"][:4] - y.mean(axis=1)) <= 5 * se)
+    ver = np.genfromtxt(run.path / "verification.csv", delimiter=",", names=True, dtype=None,
+                        encoding="utf-8")
+    np.testing.assert_array_equal(ver["mean_um_surrogate"], ver["mean_um_fe"])
+
+
 @pytest.mark.slow
 def test_same_seed_same_compromises(tmp_path):
     a = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="a")
@@ -121,6 +164,14 @@ def test_same_seed_same_compromises(tmp_path):
     ("n_modes = 2", "n_modes = 2\n[refine]\nrounds = 1\ntheta = 1",
      r"refine.theta = 1 is not allowed"),
     ("n_modes = 2", "n_modes = 2\n[refine]\nround = 1", r"unknown key\(s\) \['round'\]"),
+    ("n_start = 1", 'n_start = 1\nstructure = "resonance"\n[response]\nkind = "at_speed"\n'
+     "speed_rpm = 24000.0", r"surrogate.structure = 'resonance' is not allowed with "
+     r"response.kind = 'at_speed'"),
+    ("n_start = 1", 'n_start = 1\nstructure = "fe"\n[refine]\nrounds = 1',
+     r"refine.rounds = 1 is not allowed with surrogate.structure = 'fe'"),
+    ("n_start = 1", 'n_start = 1\n[response]\nkind = "at_speed"',
+     r"response.speed_rpm = None is not allowed"),
+    ("n_start = 1", 'n_start = 1\n[response]\nspeed = 3', r"unknown key\(s\) \['speed'\]"),
 ])
 def test_bad_config_fails_before_work(tmp_path, old, new, match):
     assert old in TINY
