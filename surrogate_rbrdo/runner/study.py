@@ -11,7 +11,7 @@ Config tables (every key optional unless stated; unknown keys raise):
 ``[uncertainty]``   ``mean``, ``std`` (θ = bearing stiffness factors), optional ``corr``
 ``[limit]``         ``delta_lim_um`` (19.5)
 ``[response]``      ``kind`` ("peak": the peak over the speed range, default; "at_speed": the
-                    amplitude at ``speed_rpm``), :class:`~surrogate_rbrdo.spindle.evaluate.ResponseSpec`
+                    amplitude at ``speed_rpm``): ``spindle.evaluate.ResponseSpec``
 ``[surrogate]``     the pipeline's ``SurrogateConfig`` schema (``n_doe``, ``surrogate``, …);
                     ``structure = "fe"``: the full FE model in the loop (ground truth)
 ``[design_model]``  ``n_train``, ``n_validate``, ``n_jobs`` (:class:`DesignModelOptions`)
