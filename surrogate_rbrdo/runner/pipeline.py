@@ -605,7 +605,9 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     """DOE (static or active) → FE sampling → fit; returns the surrogate and an info dict.
 
     ``response`` says what ``y`` is (default: the peak amplitude). With ``cfg.structure =
-    "fe"`` no surrogate is built: the returned :class:`FullModel` runs the FE model.
+    "fe"`` no surrogate is built: the returned :class:`FullModel` runs the FE model, and its
+    calls are *not* seen by ``counter`` (the caller counts them, as the study does with the
+    optimiser's call counts).
 
     With ``cfg.structure = "resonance"`` the returned surrogate is a
     :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (same interface:
@@ -639,7 +641,7 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
                          "the speed range; use 'global' or 'fe'")
     if cfg.structure == "fe":
         info = {"structure": "fe", "response": response.label, "fe_calls": 0,
-                "n_train": 0, "config": cfg.to_dict()}
+                "n_train": 0, "config": {"structure": "fe"}}
         return FullModel(response.fe_response(spindle), info=info), info
     rng = require_rng(rng)
     r_doe, r_fit = rng.spawn(2)

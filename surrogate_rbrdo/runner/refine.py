@@ -120,6 +120,13 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
     ``ResponseSpec`` of ``y`` (default the peak amplitude).
     """
     check_choice("hyper", hyper, ("warm", "keep", "refit"))
+    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+
+    label = (ResponseSpec() if response is None else response).label
+    trained = getattr(surrogate, "info", {}).get("response", label)
+    if trained != label:
+        raise ValueError(f"response = {label!r} is not allowed: the surrogate was trained on "
+                         f"{trained!r} (pass that response to refine_surrogate)")
     like_mode = "keep" if hyper == "keep" else "warm"
     like = None if hyper == "refit" else surrogate
     from surrogate_rbrdo.runner.pipeline import fit_surrogate, sample_fe, sample_resonance

@@ -188,6 +188,12 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
 
     surrogate = SurrogateConfig.from_dict(dict(config.get("surrogate", {})))
     response = response_from_config(config.get("response", {}))
+    g = spindle.geometry
+    if response.kind == "at_speed" and not g.speed_min_rpm <= response.speed_rpm \
+            <= g.speed_max_rpm:
+        raise ValueError(f"response.speed_rpm = {response.speed_rpm} is not allowed: must lie "
+                         f"in the spindle's speed range [{g.speed_min_rpm}, "
+                         f"{g.speed_max_rpm}] rpm (the bearing laws are fitted there)")
     if surrogate.structure == "resonance" and response.kind != "peak":
         raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
                          f"= {response.kind!r}: it models the peak over the speed range; use "
@@ -477,15 +483,23 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
     Xc = np.array([chosen[k] for k in names])
     ref_form = forms[0]
     crn = ref_form.assess(Xc)
-    G = ref_form.evaluate(Xc).G
+    ev_c = ref_form.evaluate(Xc)
+    G = ev_c.G
     theta_v = cfg.inputs.sample(ver.n_theta, rng=r_ver)
     with run.timed("verification_fe"):
         y_fe = fe_values(sp, Xc, theta_v, n_jobs=ver.n_jobs, chunk=ver.chunk,
                          progress=progress, response=cfg.response)
     fe_calls["verification"] = int(y_fe.size)
-    y_sv = y_fe if fe_loop else surrogate.response(Xc, theta_v)
+    # FE in the loop: no surrogate columns (NaN), not a copy of the FE ones
+    y_sv = np.full_like(y_fe, np.nan) if fe_loop else surrogate.response(Xc, theta_v)
     est_fe = mc_from_values(y_fe, cfg.limit)
-    est_sv = mc_from_values(y_sv, cfg.limit)
+    if fe_loop:
+        from types import SimpleNamespace
+
+        nan = np.full(Xc.shape[0], np.nan)
+        est_sv = SimpleNamespace(mean=nan, std=nan, pf=nan)
+    else:
+        est_sv = mc_from_values(y_sv, cfg.limit)
     pf_is = None
     if ver.pf_method == "is":
         from surrogate_rbrdo.estimators import get_estimator
@@ -571,9 +585,9 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
         _spindle_figures(run, sp, cfg, {"baseline": cfg.baseline,
                                         **({f"{pick} compromise": chosen[pick]} if pick else {})})
     opt_sur = int(sum(r.n_surrogate_calls for r in every_run))
-    if fe_loop:   # the "surrogate" calls were FE calls; y_sv is y_fe
+    if fe_loop:   # the "surrogate" calls were FE calls; there is no surrogate
         fe_calls["optimization"] = opt_sur
-        fe_calls["crn_assessment"] = int(crn.n_calls)
+        fe_calls["crn_assessment"] = int(crn.n_calls) + int(ev_c.n_surrogate_calls)
         opt_sur = total_sur = 0
     else:
         total_sur = opt_sur + int(y_sv.size) + int(crn.n_calls)

@@ -194,6 +194,9 @@ COST_HEADER = ["variant", "active_learning", "transform", "fe_calls_train", "n_t
 @EXPERIMENTS.register("surrogate_validation")
 def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                              progress: bool = False) -> dict[str, Any]:
+    top = {k for k in config if not k.startswith("_") and k != "experiment"}
+    check_keys("surrogate_validation config (tables)", {k: None for k in top},
+               {"spindle", "uncertainty", "limit", "surrogate", "validation"})
     val = dict(config.get("validation", {}))
     check_keys("[validation]", val, VALIDATION_KEYS)
     n_test = check_int("validation.n_test", val.get("n_test", 120), minimum=2)
@@ -216,6 +219,11 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
             variants[name] = SurrogateConfig.from_dict({**base.to_dict(), **over})
         except ValueError as exc:
             raise ValueError(f"validation.variants.{name}: {exc}") from None
+    for name, v in variants.items():
+        if v.structure == "fe":
+            where = "surrogate" if name == "main" else f"validation.variants.{name}"
+            raise ValueError(f"{where}.structure = 'fe' is not allowed here: a surrogate "
+                             "validation needs a surrogate (use 'global' or 'resonance')")
     designs = {}
     for label, xv in dict(val.get("designs", DEFAULT_DESIGNS)).items():
         try:

@@ -90,7 +90,7 @@ class AtSpeedAmplitudeResponse:
     speed_rpm: float = 24000.0
 
     def __post_init__(self) -> None:
-        check_speed("speed_rpm", self.speed_rpm)
+        object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
 
     @property
     def n_theta(self) -> int:
@@ -114,7 +114,7 @@ class PointwiseAtSpeed:
     speed_rpm: float = 24000.0
 
     def __post_init__(self) -> None:
-        check_speed("speed_rpm", self.speed_rpm)
+        object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
 
     def __call__(self, z: np.ndarray) -> float:
         z = np.asarray(z, dtype=float)
@@ -125,7 +125,7 @@ class PointwiseAtSpeed:
 
 def check_speed(name: str, value: object) -> float:
     """A finite speed > 0 (rpm), else ``ValueError`` naming the field."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)) \
             or not np.isfinite(value) or value <= 0:
         raise ValueError(f"{name} = {value!r} is not allowed: must be a finite speed > 0 rpm")
     return float(value)

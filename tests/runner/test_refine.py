@@ -131,3 +131,14 @@ def test_band_flags_survive_two_rounds(tmp_path, monkeypatch):
     assert [b.size for b in seen] == [22, 24]
     for b in seen:
         assert b[16:20].all() and not b[:16].any() and not b[20:].any()
+
+
+def test_refine_refuses_a_response_other_than_the_trained_one():
+    """A surrogate trained on the at-speed amplitude cannot be refit on peak data."""
+    from types import SimpleNamespace
+
+    sur = SimpleNamespace(info={"response": "amplitude at 24000 rpm"})
+    with pytest.raises(ValueError, match=r"response = 'peak amplitude' is not allowed: the "
+                                         r"surrogate was trained on 'amplitude at 24000 rpm'"):
+        refine_surrogate(sur, reference_spindle(), np.array([[2000.0, 465.8, 65.0]]),
+                         np.ones((1, 2)), None, None, rng=np.random.default_rng(0))

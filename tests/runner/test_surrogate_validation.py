@@ -107,12 +107,22 @@ def test_fe_calls_counted_and_rerun_hits_cache(tiny_run):
 @pytest.mark.parametrize("extra,match", [
     ("[limit]\ndelta_lim = 19.5", "delta_lim"),
     ("[uncertainty]\nstd = [0.06, -0.06]", "std"),
+    ('[response]\nkind = "at_speed"\nspeed_rpm = 24000.0',
+     r"unknown key\(s\) \['response'\] in surrogate_validation config \(tables\)"),
 ])
 def test_bad_config_names_key(tmp_path, extra, match):
     cfg = tmp_path / "bad.toml"
     cfg.write_text(TINY.format(extra=extra))
     with pytest.raises(ValueError, match=match):
         run_experiment(cfg, results_dir=tmp_path / "res", progress=False)
+
+
+def test_structure_fe_is_refused_before_any_work(tmp_path):
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text(TINY.format(extra="").replace("active_learning = true", 'structure = "fe"'))
+    with pytest.raises(ValueError, match=r"variants\.al\.structure = 'fe' is not allowed"):
+        run_experiment(cfg, results_dir=tmp_path / "res", progress=False)
+    assert not any((tmp_path / "res").rglob("*.csv"))   # nothing computed
 
 
 def test_bad_variant_names_variant(tmp_path):
