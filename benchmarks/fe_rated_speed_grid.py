@@ -7,8 +7,8 @@ The peak over 1000–24 000 rpm has none (``fe_design_lines.py``, ``fe_uncertain
 that speed. This script evaluates the FE amplitude at several candidate rated speeds on a grid
 over the whole design box (5 preloads × 46 spans × 7 diameters = 1610 designs) with common
 stiffness samples (Table 4 CoVs), and prints, per speed, the designs that are non-dominated in
-(μ_y, σ_y) among the grid, and for ``--delta-lim-um`` values how many of them stay feasible at
-P_target 10 / 5 / 1 %. ~45 s on 2 cores with 100 θ samples.
+(μ_y, σ_y) among the grid, and for ``--delta-lim-um`` values the size of the non-dominated set
+among the designs that are feasible at P_target 10 / 5 / 1 %. ~45 s on 2 cores with 100 θ samples.
 """
 
 from __future__ import annotations
