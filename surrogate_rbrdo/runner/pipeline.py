@@ -7,7 +7,8 @@ dict (DOE size, FE calls, fit time, hyperparameters, AL history).
 
 Response definition and transform
 ---------------------------------
-``y`` is the peak tool-tip amplitude (m) over the speed range (``PeakAmplitudeResponse``).
+``y`` is the peak tool-tip amplitude (m) over the speed range (``PeakAmplitudeResponse``) by
+default, or the amplitude at one speed (``response=ResponseSpec("at_speed", n)``).
 With ``transform = "log"`` (default) the Kriging model is fitted to ``log y`` and the response
 returns ``exp(μ_log)`` (the median of the lognormal predictive distribution; a monotone map, so
 ``P[y > δ_lim]`` from the surrogate equals ``P[μ_log > log δ_lim]``). ``predict(Z)`` returns the

@@ -1,6 +1,8 @@
 """Experiment kind ``study``: the paper's RBRDO study end to end.
 
-DOE → Kriging of the peak tool-tip amplitude over (x, θ) (``runner.pipeline``) → g_det design
+DOE → Kriging of the tool-tip amplitude ``y`` over (x, θ) (``runner.pipeline``; ``y`` is the
+peak over the speed range or, with ``[response]``, the amplitude at one speed; or no
+surrogate: ``structure = "fe"``) → g_det design
 model (``runner.design_model``) → RBRDO at every P_target → RDO, RBDO, deterministic → ASF
 compromises, MBR → verification of every chosen design with the full FE model → tables,
 figures, ``meta.json``. All formulations share one θ sample (common random numbers).
