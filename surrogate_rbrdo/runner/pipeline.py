@@ -369,9 +369,7 @@ class FullModel:
 
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """FE ``y`` (m) at joint points ``Z = [x, θ]``."""
-        Z = np.atleast_2d(np.asarray(Z, dtype=float))
-        d = Z.shape[1] - self.fe.n_theta
-        return np.array([self.fe(z[None, :d], z[None, d:])[0, 0] for z in Z])
+        return np.array([self.fe.point(z) for z in np.atleast_2d(np.asarray(Z, dtype=float))])
 
 
 # ---------------------------------------------------------------------- building blocks

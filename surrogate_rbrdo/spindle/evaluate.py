@@ -33,12 +33,13 @@ from surrogate_rbrdo.spindle.reference import ReferenceSpindle
 from surrogate_rbrdo.spindle.stress import max_von_mises
 
 
-@dataclass(frozen=True)
-class PeakAmplitudeResponse:
-    """Peak tool-tip amplitude (m) over the speed range, for designs × θ samples."""
+class _PerDesign:
+    """Designs × θ by one FE model per design: subclasses give ``_amplitudes(model, θ)``."""
 
     spindle: ReferenceSpindle
-    options: PeakOptions = field(default_factory=PeakOptions)
+
+    def _amplitudes(self, model, theta: np.ndarray) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
 
     @property
     def n_theta(self) -> int:
@@ -49,9 +50,25 @@ class PeakAmplitudeResponse:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         out = np.empty((x.shape[0], theta.shape[0]))
         for i, xi in enumerate(x):
-            model = self.spindle.model(xi)
-            out[i] = peak_tool_amplitude(model, theta, options=self.options).amplitude
+            out[i] = self._amplitudes(self.spindle.model(xi), theta)
         return out
+
+    def point(self, z: np.ndarray) -> float:
+        """``y`` at one joint point ``z = [x, θ]``."""
+        z = np.asarray(z, dtype=float)
+        d = len(self.spindle.design_map.names)
+        return float(self._amplitudes(self.spindle.model(z[:d]), z[None, d:])[0])
+
+
+@dataclass(frozen=True)
+class PeakAmplitudeResponse(_PerDesign):
+    """Peak tool-tip amplitude (m) over the speed range, for designs × θ samples."""
+
+    spindle: ReferenceSpindle
+    options: PeakOptions = field(default_factory=PeakOptions)
+
+    def _amplitudes(self, model, theta: np.ndarray) -> np.ndarray:
+        return peak_tool_amplitude(model, theta, options=self.options).amplitude
 
 
 @dataclass(frozen=True)
@@ -62,14 +79,11 @@ class PointwisePeak:
     options: PeakOptions = field(default_factory=PeakOptions)
 
     def __call__(self, z: np.ndarray) -> float:
-        z = np.asarray(z, dtype=float)
-        d = len(self.spindle.design_map.names)
-        model = self.spindle.model(z[:d])
-        return float(peak_tool_amplitude(model, z[None, d:], options=self.options).amplitude[0])
+        return PeakAmplitudeResponse(self.spindle, self.options).point(z)
 
 
 @dataclass(frozen=True)
-class AtSpeedAmplitudeResponse:
+class AtSpeedAmplitudeResponse(_PerDesign):
     """Tool-tip orbit amplitude (m) at one operating speed, for designs × θ samples.
 
     The response of a spindle that runs at a rated speed (the paper validates at 24 000 rpm,
@@ -92,18 +106,8 @@ class AtSpeedAmplitudeResponse:
     def __post_init__(self) -> None:
         object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
 
-    @property
-    def n_theta(self) -> int:
-        return len(self.spindle.theta_bearings)
-
-    def __call__(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        out = np.empty((x.shape[0], theta.shape[0]))
-        sp = np.array([float(self.speed_rpm)])
-        for i, xi in enumerate(x):
-            out[i] = tool_amplitude(self.spindle.model(xi), sp, theta)[:, 0]
-        return out
+    def _amplitudes(self, model, theta: np.ndarray) -> np.ndarray:
+        return tool_amplitude(model, np.array([self.speed_rpm]), theta)[:, 0]
 
 
 @dataclass(frozen=True)
@@ -117,10 +121,7 @@ class PointwiseAtSpeed:
         object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
 
     def __call__(self, z: np.ndarray) -> float:
-        z = np.asarray(z, dtype=float)
-        d = len(self.spindle.design_map.names)
-        model = self.spindle.model(z[:d])
-        return float(tool_amplitude(model, np.array([float(self.speed_rpm)]), z[None, d:])[0, 0])
+        return AtSpeedAmplitudeResponse(self.spindle, self.speed_rpm).point(z)
 
 
 def check_speed(name: str, value: object) -> float:
