@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate_rbrdo.spindle.assembly import build_model
+from surrogate_rbrdo.spindle.assembly import RPM, build_model
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 STEEL = {"E_Pa": 2.1e11, "nu": 0.3, "rho_kg_m3": 7850.0}
@@ -89,3 +89,18 @@ def rigid_rotor_properties():
 
 def build(geometry, effects=(), **kw):
     return build_model(geometry, effects, **kw)
+
+
+def dense_response(model, speeds_rpm, theta=None):
+    """Independent solve of the full dense system (rotor + housing DOFs)."""
+    out = []
+    for s in speeds_rpm:
+        Om = s * RPM
+        M, C, K = model.system_matrices(Om, theta)
+        F = np.zeros(M.shape[0], dtype=complex)
+        for node, u in zip(model.unbalance_nodes, model.unbalance, strict=True):
+            F[4 * node] += u * Om**2
+            F[4 * node + 1] += -1j * u * Om**2
+        Q = np.linalg.solve(K - Om**2 * M + 1j * Om * C, F)
+        out.append(Q[: model.n_dof].reshape(-1, 4))
+    return np.array(out)

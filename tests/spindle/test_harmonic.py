@@ -36,7 +36,7 @@ from surrogate_rbrdo.spindle.harmonic import (
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
-from .conftest import build, rigid_rotor_geometry, rigid_rotor_properties
+from .conftest import build, dense_response, rigid_rotor_geometry, rigid_rotor_properties
 
 K_B = 1e7
 U = 1e-4  # kg m
@@ -99,22 +99,6 @@ def test_peak_search_below_and_above_the_resonance():
     assert pk.amplitude[0] == pytest.approx(jeffcott_amplitude(0.5 * wn_rpm, 0.01), rel=1e-5)
     pk = peak_tool_amplitude(mod, speed_range_rpm=(1.5 * wn_rpm, 3 * wn_rpm))
     assert pk.speed_rpm[0] == pytest.approx(1.5 * wn_rpm)
-
-
-# --------------------------------------------------------------------------- dense check
-def dense_response(model, speeds_rpm, theta=None):
-    """Independent solve of the full dense system (rotor + housing DOFs)."""
-    out = []
-    for s in speeds_rpm:
-        Om = s * RPM
-        M, C, K = model.system_matrices(Om, theta)
-        F = np.zeros(M.shape[0], dtype=complex)
-        for node, u in zip(model.unbalance_nodes, model.unbalance, strict=True):
-            F[4 * node] += u * Om**2
-            F[4 * node + 1] += -1j * u * Om**2
-        Q = np.linalg.solve(K - Om**2 * M + 1j * Om * C, F)
-        out.append(Q[: model.n_dof].reshape(-1, 4))
-    return np.array(out)
 
 
 @pytest.mark.parametrize(

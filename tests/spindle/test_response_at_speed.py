@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.evaluate import (
     AtSpeedAmplitudeResponse,
     PeakAmplitudeResponse,
@@ -15,18 +14,13 @@ from surrogate_rbrdo.spindle.evaluate import (
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
+from .conftest import dense_response
+
 
 def _dense_tool_amplitude(model, speed_rpm, theta):
-    """Independent path: dense ``(K + iΩC − Ω²M) q = f`` from ``system_matrices``
-    (not the block-tridiagonal solver), orbit semi-major axis at the tool node."""
-    w = speed_rpm * RPM
-    M, C, K = model.system_matrices(w, theta)
-    f = np.zeros(M.shape[0], dtype=complex)
-    for node, U in zip(model.unbalance_nodes, model.unbalance, strict=True):
-        f[4 * node] += U * w**2
-        f[4 * node + 1] += -1j * U * w**2
-    q = np.linalg.solve(K + 1j * w * C - w**2 * M, f)
-    X, Y = q[4 * model.tool_node], q[4 * model.tool_node + 1]
+    """Independent path: the dense solve of ``conftest.dense_response`` (not the
+    block-tridiagonal solver), orbit semi-major axis at the tool node."""
+    X, Y = dense_response(model, [speed_rpm], theta)[0, model.tool_node, :2]
     return 0.5 * (abs(X + 1j * Y) + abs(X - 1j * Y))
 
 
