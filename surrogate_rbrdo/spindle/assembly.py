@@ -148,33 +148,19 @@ class SpindleModel:
         """Stiffness and damping of every bearing at spin speeds ``omega`` (rad/s).
 
         ``omega`` has shape ``(B, S)`` and ``theta`` ``(B, m)``; returns ``K`` and ``C`` of
-        shape ``(B, S, nb, 2, 2)``. Damping is ``C = η K_sym`` (the paper's Eq. 2) unless the
-        law gives a damping matrix; cross-coupled stiffness adds no damping.
+        shape ``(B, S, nb, 2, 2)`` (:func:`bearing_coefficients`).
         """
         omega = np.asarray(omega, dtype=float)
         th = self.check_theta(theta, omega.shape[0])
-        Ks, Cs = [], []
-        for b in self.geometry.bearings:
-            law = b.law
-            if isinstance(law, PreloadLaw):
-                F = np.full(omega.shape, law.preload_N)
-                for e in self.effects:
-                    F = e.preload(b.name, omega, F)
-                K = law.stiffness(F)[..., None, None] * np.eye(2)
-            else:
-                K = np.broadcast_to(law.stiffness_matrix(), omega.shape + (2, 2))
-            for e in self.effects:
-                K = e.bearing(b.name, omega, K)
-            if b.name in self.theta_bearings:
-                j = self.theta_bearings.index(b.name)
-                K = K * th[:, j][:, None, None, None]
-            if isinstance(law, ConstantLaw) and law.c_matrix_Ns_per_m is not None:
-                C = np.broadcast_to(np.asarray(law.c_matrix_Ns_per_m, float), K.shape)
-            else:
-                C = law.damping_eta_s * 0.5 * (K + np.swapaxes(K, -1, -2))
-            Ks.append(np.broadcast_to(K, omega.shape + (2, 2)))
-            Cs.append(np.broadcast_to(C, omega.shape + (2, 2)))
-        return np.stack(Ks, axis=-3), np.stack(Cs, axis=-3)
+        return bearing_coefficients(self.geometry, self.effects, self.theta_bearings, omega, th)
+
+    def bearing_impedance(self, omega: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """Dynamic stiffness ``(B, S, nb, 2, 2)`` each bearing puts on its rotor node
+        (:func:`bearing_impedance`)."""
+        omega = np.asarray(omega, dtype=float)
+        th = self.check_theta(theta, omega.shape[0])
+        return bearing_impedance(self.geometry, self.effects, self.theta_bearings, omega, th,
+                                 self.supports)
 
     # ------------------------------------------------------------------ full matrices
     def system_matrices(
@@ -213,6 +199,82 @@ class SpindleModel:
                 A[np.ix_(hd, hd)] += B + extra * np.eye(2)
             M[np.ix_(hd, hd)] += sup.m_kg * np.eye(2)
         return M, C, K
+
+
+def bearing_coefficients(
+    geometry: SpindleGeometry, effects: Sequence[Effect], theta_bearings: Sequence[str],
+    omega: np.ndarray, theta: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stiffness and damping of every bearing of ``geometry`` at spin speeds ``omega`` (rad/s).
+
+    Needs the geometry and the effects only, not an assembled rotor. ``omega`` has shape
+    ``(B, S)`` and ``theta`` ``(B, m)`` (checked by the caller: factors on the stiffness of
+    ``theta_bearings``); returns ``K`` and ``C`` of shape ``(B, S, nb, 2, 2)``. Damping is
+    ``C = η K_sym`` (the paper's Eq. 2) unless the law gives a damping matrix; cross-coupled
+    stiffness adds no damping.
+    """
+    th = theta
+    Ks, Cs = [], []
+    for b in geometry.bearings:
+        law = b.law
+        if isinstance(law, PreloadLaw):
+            F = np.full(omega.shape, law.preload_N)
+            for e in effects:
+                F = e.preload(b.name, omega, F)
+            K = law.stiffness(F)[..., None, None] * np.eye(2)
+        else:
+            K = np.broadcast_to(law.stiffness_matrix(), omega.shape + (2, 2))
+        for e in effects:
+            K = e.bearing(b.name, omega, K)
+        if b.name in theta_bearings:
+            j = list(theta_bearings).index(b.name)
+            K = K * th[:, j][:, None, None, None]
+        if isinstance(law, ConstantLaw) and law.c_matrix_Ns_per_m is not None:
+            C = np.broadcast_to(np.asarray(law.c_matrix_Ns_per_m, float), K.shape)
+        else:
+            C = law.damping_eta_s * 0.5 * (K + np.swapaxes(K, -1, -2))
+        Ks.append(np.broadcast_to(K, omega.shape + (2, 2)))
+        Cs.append(np.broadcast_to(C, omega.shape + (2, 2)))
+    return np.stack(Ks, axis=-3), np.stack(Cs, axis=-3)
+
+
+def bearing_supports(geometry: SpindleGeometry, effects: Sequence[Effect]
+                     ) -> tuple[Support | None, ...]:
+    """The housing stage (or ``None``) in series with each bearing; at most one per bearing."""
+    supports = []
+    for b in geometry.bearings:
+        sup = [s for e in effects if (s := e.support(b.name)) is not None]
+        if len(sup) > 1:
+            raise ValueError(f"bearing {b.name!r}: more than one effect adds a support stage")
+        supports.append(sup[0] if sup else None)
+    return tuple(supports)
+
+
+def bearing_impedance(
+    geometry: SpindleGeometry, effects: Sequence[Effect], theta_bearings: Sequence[str],
+    omega: np.ndarray, theta: np.ndarray,
+    supports: Sequence[Support | None] | None = None,
+) -> np.ndarray:
+    """Dynamic stiffness ``Z = K + iΩC`` each bearing puts on its rotor node, ``(B, S, nb, 2, 2)``.
+
+    A housing stage ``z_h = k + iΩc − Ω²m`` in series with a bearing is condensed into it:
+    ``Z ← Z − Z (Z + z_h I)⁻¹ Z``. Arguments as :func:`bearing_coefficients`; ``supports``
+    defaults to :func:`bearing_supports`.
+    """
+    Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, omega, theta)
+    Zb = Kb + 1j * omega[..., None, None, None] * Cb
+    supports = bearing_supports(geometry, effects) if supports is None else supports
+    if all(s is None for s in supports):
+        return Zb
+    out = []
+    for j, sup in enumerate(supports):
+        Z = Zb[..., j, :, :]
+        if sup is not None:
+            zh = sup.k_N_per_m + 1j * omega * sup.c_Ns_per_m - omega**2 * sup.m_kg
+            Zs = Z + zh[..., None, None] * np.eye(2)
+            Z = Z - Z @ np.linalg.solve(Zs, Z)
+        out.append(Z)
+    return np.stack(out, axis=-3)
 
 
 def build_model(
@@ -292,12 +354,7 @@ def build_model(
     bearing_nodes = np.array([_node_of(z, b.position_mm) for b in geometry.bearings])
     if len(set(bearing_nodes.tolist())) != len(bearing_nodes):
         raise ValueError("bearings: two bearings share one node; place them apart")
-    supports = []
-    for b in geometry.bearings:
-        sup = [s for e in effects if (s := e.support(b.name)) is not None]
-        if len(sup) > 1:
-            raise ValueError(f"bearing {b.name!r}: more than one effect adds a support stage")
-        supports.append(sup[0] if sup else None)
+    supports = bearing_supports(geometry, effects)
     U = np.array([u.magnitude_kgm * np.exp(1j * np.deg2rad(u.phase_deg))
                   for u in geometry.unbalances], dtype=complex)
     for e in effects:
@@ -313,7 +370,7 @@ def build_model(
         G=G,
         blocks={"M": split(M), "K": split(K), "G": split(G)},
         bearing_nodes=bearing_nodes,
-        supports=tuple(supports),
+        supports=supports,
         unbalance_nodes=np.array([_node_of(z, u.position_mm) for u in geometry.unbalances],
                                  dtype=int),
         unbalance=U,

@@ -98,16 +98,9 @@ def _blocks(model: SpindleModel, omega: np.ndarray, theta: np.ndarray):
     D = aK * Kd + aM * Md + aG * Gd
     Up = aK * Ku + aM * Mu + aG * Gu
     Lo = aK * Kl + aM * Ml + aG * Gl
-    Kb, Cb = model.bearing_coefficients(omega, theta)
-    Zb = Kb + 1j * omega[..., None, None, None] * Cb  # (B, S, nb, 2, 2)
+    Zb = model.bearing_impedance(omega, theta)  # (B, S, nb, 2, 2), housing condensed in
     for j, node in enumerate(model.bearing_nodes):
-        Z = Zb[..., j, :, :]
-        sup = model.supports[j]
-        if sup is not None:
-            zh = sup.k_N_per_m + 1j * omega * sup.c_Ns_per_m - omega**2 * sup.m_kg
-            Zs = Z + zh[..., None, None] * np.eye(2)
-            Z = Z - Z @ np.linalg.solve(Zs, Z)
-        D[..., node, :2, :2] += Z
+        D[..., node, :2, :2] += Zb[..., j, :, :]
     f = np.zeros(D.shape[:-1], dtype=complex)
     w2 = omega**2
     for node, U in zip(model.unbalance_nodes, model.unbalance, strict=True):

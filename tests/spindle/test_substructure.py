@@ -1,0 +1,124 @@
+"""The condensed rotor coupled with its bearings reproduces the full model exactly.
+
+Known answer: the independent dense solve of the whole system (``dense_response``: rotor,
+bearings and housing DOFs in one matrix, no block elimination, no condensation).
+"""
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.spindle.assembly import RPM
+from surrogate_rbrdo.spindle.effects import (
+    Anisotropy,
+    CrossCoupling,
+    Gyroscopics,
+    HousingFlexibility,
+    SpeedSoftening,
+)
+from surrogate_rbrdo.spindle.harmonic import orbit_amplitude
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.spindle.substructure import (
+    PointwiseCondensed,
+    condensed_from_vector,
+    condensed_rotor,
+    condensed_vector,
+    coupled_tool_amplitude,
+    retained_layout,
+    unbalance_force,
+)
+
+from .conftest import dense_response
+
+SP = reference_spindle()
+DESIGNS = [[3000.0, 442.5, 65.7], [2000.0, 500.0, 65.0], [1000.0, 750.0, 50.0],
+           [3000.0, 300.0, 80.0]]
+
+
+def _dense_tool(model, speed, theta):
+    out = []
+    for th in theta:
+        q = dense_response(model, [speed], th)[0, model.tool_node]
+        out.append(orbit_amplitude(q[0], q[1]))
+    return np.array(out)
+
+
+def _coupled(model, speed, theta):
+    lay = retained_layout(model)
+    S = condensed_rotor(model, np.array([speed]), lay)[0]
+    Z = model.bearing_impedance(np.full((len(theta), 1), speed * RPM), theta)[:, 0]
+    return coupled_tool_amplitude(lay, S, Z, unbalance_force(model, speed, lay))
+
+
+@pytest.mark.parametrize("x", DESIGNS)
+@pytest.mark.parametrize("speed", [1500.0, 21783.0, 24000.0])
+def test_coupled_equals_dense_solve(x, speed):
+    m = SP.model(np.array(x))
+    theta = np.array([[1.0, 1.0], [0.8, 1.2], [1.3, 0.7]])
+    y = _coupled(m, speed, theta)
+    np.testing.assert_allclose(y, _dense_tool(m, speed, theta), rtol=1e-8)
+
+
+@pytest.mark.parametrize("effect", [
+    HousingFlexibility(k_N_per_m=2e8, m_kg=15.0, c_Ns_per_m=2000.0),
+    CrossCoupling(kappa=0.2), Anisotropy(s=0.3)])
+def test_coupled_equals_dense_solve_with_bearing_effects(effect):
+    """Housing stages, cross-coupled and anisotropic bearings go through the impedance."""
+    effects = (SpeedSoftening(bearings=("front",), a=0.19, exponent=1.25),
+               Gyroscopics(g=0.0), effect)
+    m = SP.model(np.array([2000.0, 600.0, 70.0]), effects=effects)
+    theta = np.array([[1.0, 1.0], [0.9, 1.15]])
+    for speed in (5000.0, 24000.0):
+        np.testing.assert_allclose(_coupled(m, speed, theta), _dense_tool(m, speed, theta),
+                                   rtol=1e-8)
+
+
+def test_retained_layout_of_the_reference_spindle():
+    m = SP.model(SP.baseline)
+    lay = retained_layout(m)
+    assert [lay.nodes[lay.tool]] == [m.tool_node]
+    assert [lay.nodes[k] for k in lay.bearings] == m.bearing_nodes.tolist()
+    assert [lay.nodes[k] for k in lay.unbalance] == m.unbalance_nodes.tolist()
+    assert lay.n_dof == 4 * len(lay.nodes)
+
+
+def test_condensed_stiffness_is_static_condensation_at_low_speed():
+    """As Ω → 0 the condensation is Guyan's: S = K_RR − K_RI K_II⁻¹ K_IR (independent)."""
+    m = SP.model(SP.baseline)
+    lay = retained_layout(m)
+    R = lay.dofs
+    Ii = np.setdiff1d(np.arange(m.n_dof), R)
+    K = m.K
+    guyan = K[np.ix_(R, R)] - K[np.ix_(R, Ii)] @ np.linalg.solve(K[np.ix_(Ii, Ii)],
+                                                                K[np.ix_(Ii, R)])
+    S = condensed_rotor(m, np.array([1e-3]), lay)[0]
+    np.testing.assert_allclose(S, guyan, rtol=0, atol=1e-9 * np.abs(guyan).max())
+
+
+def test_vector_round_trip_and_pointwise_call():
+    m = SP.model(np.array(DESIGNS[0]))
+    lay = retained_layout(m)
+    S = condensed_rotor(m, np.array([12000.0, 24000.0]), lay)
+    np.testing.assert_array_equal(condensed_from_vector(condensed_vector(S), lay.n_dof), S)
+    f = PointwiseCondensed(SP, (12000.0, 24000.0))
+    v = f(np.array(DESIGNS[0]))
+    assert v.shape == (f.n_outputs(lay.n_dof),)
+    np.testing.assert_array_equal(
+        condensed_from_vector(v.reshape(2, -1), lay.n_dof), S)
+
+
+def test_bad_speeds_are_refused():
+    m = SP.model(SP.baseline)
+    with pytest.raises(ValueError, match="speeds_rpm"):
+        condensed_rotor(m, np.array([0.0]))
+    with pytest.raises(ValueError, match="speeds_rpm"):
+        condensed_rotor(m, np.array([np.nan]))
+
+
+def test_singular_rotor_is_reported():
+    m = SP.model(SP.baseline)
+    lay = retained_layout(m)
+    Z = np.zeros((1, 2, 2, 2), dtype=complex)
+    with pytest.raises(ModelError, match="singular"):
+        coupled_tool_amplitude(lay, np.zeros((lay.n_dof, lay.n_dof), complex), Z,
+                               unbalance_force(m, 24000.0, lay))
