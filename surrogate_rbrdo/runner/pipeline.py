@@ -57,7 +57,7 @@ from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
 
 TRANSFORMS = ("log", "none")
 THETA_BOXES = ("sigma", "bounds")
-STRUCTURES = ("global", "resonance", "fe")
+STRUCTURES = ("global", "resonance", "fe", "substructure")
 
 
 @dataclass(frozen=True)
@@ -100,6 +100,11 @@ class SurrogateConfig:
         ``"fe"``: no surrogate: the full FE model in the loop (:class:`FullModel`), the
         ground truth a surrogate study is compared with (cheap for ``at_speed`` responses,
         ~15 ms per design for 200 θ; no DOE, no training).
+        ``"substructure"``: a Kriging of the rotor's condensed dynamic stiffness over the
+        design box (``n_doe`` designs, one FE call each; θ needs no DOE) coupled exactly with
+        the bearing laws
+        (:class:`~surrogate_rbrdo.runner.substructure_surrogate.SubstructureSurrogate`;
+        ``transform`` and ``surrogate`` are ignored; static DOE only).
         ``"resonance"``: the physics-structured
         :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (critical
         speed, resonance height, flank, background; ``transform`` is ignored, every sub-model
@@ -137,6 +142,9 @@ class SurrogateConfig:
         background Kriging alone, which is fitted to ``y`` itself there) wherever
         ``r̂ <= res_bg_only_r``; must not exceed ``res_bg_r_max``. Removes the SDOF flank's
         overshoot where resonance tail and background interfere (``subcritical_edge``).
+    sub_n_speeds : int
+        Structure ``"substructure"`` with the peak response: Chebyshev speed nodes at which
+        the condensed stiffness is trained and between which it is interpolated.
     res_ares_local : float
         ``0`` (default): off. Otherwise a second, *local* Kriging of ``log A_res`` fitted only
         on the training points with the resonance in the range (``r >= 1``) and
@@ -176,6 +184,7 @@ class SurrogateConfig:
     res_nc_local: float = 0.0
     res_bg_only_r: float = 0.0
     res_ares_local: float = 0.0
+    sub_n_speeds: int = 12
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -224,6 +233,10 @@ class SurrogateConfig:
         if self.structure == "fe" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = 'fe': "
                              "there is no surrogate to enrich")
+        check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
+        if self.structure == "substructure" and self.active_learning:
+            raise ValueError("active_learning = True is not allowed with structure = "
+                             "'substructure': its DOE is over the designs only (θ is exact)")
         if self.structure == "resonance" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'resonance': the structured surrogate uses a static DOE")
@@ -595,6 +608,38 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, cfg: Surrogate
     return Z, y, history, reason
 
 
+def _train_substructure(spindle: Any, cfg: SurrogateConfig, response: ResponseSpec, *,
+                        rng: tuple[np.random.Generator, np.random.Generator], cache: Any,
+                        counter: CallCounter, progress: bool, t0: float, start: int
+                        ) -> tuple[Any, dict[str, Any]]:
+    """Structure ``"substructure"``: LHS over the designs → FE condensations → fit."""
+    from surrogate_rbrdo.runner.substructure_surrogate import (
+        fit_substructure_surrogate,
+        speed_nodes,
+    )
+    from surrogate_rbrdo.spindle.substructure import PointwiseCondensed, retained_layout
+
+    r_doe, r_fit = rng
+    xb = np.asarray(spindle.design_map.bounds, dtype=float)
+    nodes = speed_nodes(spindle, response.kind, response.speed_rpm, cfg.sub_n_speeds)
+    lay = retained_layout(spindle.model(spindle.baseline))
+    func = PointwiseCondensed(spindle, tuple(float(s) for s in nodes), lay.nodes)
+    X = build_doe(cfg.n_doe, xb, rng=r_doe)
+    res = evaluate_points(
+        func, X, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache, counter=counter,
+        on_nonfinite="raise", progress=progress, n_outputs=func.n_outputs(lay.n_dof),
+        client="local" if cfg.backend == "dask" else None)
+    sample_s = time.perf_counter() - t0
+    sur = fit_substructure_surrogate(spindle, X, res.y, kind=response.kind,
+                                     speed_rpm=response.speed_rpm, nodes_rpm=nodes, rng=r_fit,
+                                     n_start=cfg.n_start)
+    info = {**sur.info, "fe_calls": counter.calls - start, "sampling_time_s": sample_s,
+            "bounds": xb.tolist(), "active_learning": False, "config": cfg.to_dict(),
+            "response": response.label}
+    sur.info = info
+    return sur, info
+
+
 # ---------------------------------------------------------------------- entry point
 def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: SurrogateConfig,
                          *, rng: np.random.Generator, cache_dir: str | Path | None = None,
@@ -649,6 +694,9 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     cache = fe_cache(cache_dir)
     d = spindle.design_map.bounds.shape[0]
     t0 = time.perf_counter()
+    if cfg.structure == "substructure":
+        return _train_substructure(spindle, cfg, response, rng=(r_doe, r_fit), cache=cache,
+                                   counter=counter, progress=progress, t0=t0, start=start)
     history: list[dict[str, Any]] = []
     reason = ""
     if cfg.structure == "resonance":

@@ -120,6 +120,9 @@ def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndar
     ``ResponseSpec`` of ``y`` (default the peak amplitude).
     """
     check_choice("hyper", hyper, ("warm", "keep", "refit"))
+    if getattr(surrogate, "info", {}).get("structure") in ("substructure", "fe"):
+        raise ValueError(f"surrogate structure {surrogate.info['structure']!r} is not allowed "
+                         "in refine_surrogate: it adds (x, θ) FE points to a Kriging of y")
     from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 
     label = (ResponseSpec() if response is None else response).label

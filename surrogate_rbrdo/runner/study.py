@@ -228,9 +228,12 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     ver = _dataclass_from(VerificationConfig, "[verification]", config.get("verification", {}))
     rep = _dataclass_from(ReportConfig, "[report]", config.get("report", {}))
     ref = _dataclass_from(RefineOptions, "[refine]", config.get("refine", {}))
-    if ref.rounds and surrogate.structure == "fe":
+    if ref.rounds and surrogate.structure in ("fe", "substructure"):
+        why = ("there is no surrogate to refine" if surrogate.structure == "fe" else
+               "the refinement loop adds (x, θ) points, and this surrogate is trained on "
+               "designs only")
         raise ValueError(f"refine.rounds = {ref.rounds} is not allowed with surrogate.structure "
-                         "= 'fe': there is no surrogate to refine (use rounds = 0)")
+                         f"= {surrogate.structure!r}: {why} (use rounds = 0)")
     try:
         base = spindle.design_map.check(np.asarray(
             rep.baseline if rep.baseline is not None else spindle.baseline, dtype=float))

@@ -15,6 +15,10 @@ train_peak_surrogate` and writes
 * ``cost.csv``: FE calls of training, fit time and the P_f accuracy per variant (the
   active-learning comparison);
 * ``parity_<variant>.png`` (µm) and ``parity_log_<variant>.png`` (log10 y);
+* variants with ``structure = "substructure"`` (Kriging of the condensed rotor over the
+  designs, exact bearing coupling) train on ``n_doe`` *designs*; their LOO row
+  (``closed_form_condensed``) is the closed-form LOO of that Kriging at the training designs,
+  coupled at nominal θ, against the exact coupling of their FE condensation;
 * for variants with ``structure = "resonance"`` (the physics-structured surrogate):
   ``resonance_submodels.csv`` (each ingredient — ``n_c``, ``A_res``, background ``y`` — against
   the FE resonance quantities at the test points, relative errors; ``n_c`` also within
@@ -66,6 +70,7 @@ from surrogate_rbrdo.runner.pipeline import (
 )
 from surrogate_rbrdo.runner.resonance_surrogate import ResonanceSurrogate
 from surrogate_rbrdo.runner.runfolder import RunFolder
+from surrogate_rbrdo.runner.substructure_surrogate import SubstructureSurrogate
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 from surrogate_rbrdo.surrogates.validation import compare_mc, loo_cv, validation_metrics
 
@@ -223,7 +228,8 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
         if v.structure == "fe":
             where = "surrogate" if name == "main" else f"validation.variants.{name}"
             raise ValueError(f"{where}.structure = 'fe' is not allowed here: a surrogate "
-                             "validation needs a surrogate (use 'global' or 'resonance')")
+                             "validation needs a surrogate (use 'global', 'resonance' or "
+                             "'substructure')")
     designs = {}
     for label, xv in dict(val.get("designs", DEFAULT_DESIGNS)).items():
         try:
@@ -277,6 +283,12 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                 y_tr, y_lo = sur.loo_points(sub_loo)
                 lm = validation_metrics(np.log(y_tr), np.log(y_lo))
                 loo_method, loo_r2, loo_rmse = "closed_form_combined", lm.r2, lm.rmse
+            elif isinstance(sur, SubstructureSurrogate):
+                # LOO of the Kriging of S at the training designs, y at nominal θ
+                y_tr, y_lo = sur.loo_points()
+                lm = validation_metrics(np.log(y_tr), np.log(y_lo))
+                loo_method, loo_r2, loo_rmse = "closed_form_condensed", lm.r2, lm.rmse
+                sub_loo = {}
             else:
                 loo = loo_cv(sur.model, method="closed_form")
                 y_tr = inverse(loo.y_true, sur.transform)
@@ -322,7 +334,8 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                 round(cmp.pf_true[i], 4), round(cmp.pf_sur[i], 4), round(pf_err[i], 4),
                 round(cmp.pf_tol[i], 4), bool(cmp.ok_pf[i])])
         cost_rows.append([name, cfg.active_learning,
-                          "resonance" if cfg.structure == "resonance" else cfg.transform,
+                          cfg.structure if cfg.structure in ("resonance", "substructure")
+                          else cfg.transform,
                           fe_train, sur.n_train,
                           round(info["fit_time_s"], 2), round(train_s, 2),
                           round(float(pf_err.max()), 4), round(float(pf_err.mean()), 4),

@@ -251,16 +251,25 @@ def peak_tool_amplitude(
         raise ValueError(f"speed_range_rpm = ({lo}, {hi}) is not allowed: need 0 < lo < hi")
     amps, speeds = [], []
     for s in range(0, th.shape[0], chunk):
-        a, sp = _peak_batch(model, th[s:s + chunk], lo, hi, options)
+        a, sp = peak_search(lambda spd, t: tool_amplitude(model, spd, t), th[s:s + chunk],
+                            lo, hi, options)
         amps.append(a)
         speeds.append(sp)
     return PeakResult(np.concatenate(amps), np.concatenate(speeds))
 
 
-def _peak_batch(model, th, lo, hi, opt: PeakOptions):
+def peak_search(amplitude, th: np.ndarray, lo: float, hi: float, opt: PeakOptions
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Peak of ``amplitude(speeds, θ)`` over ``[lo, hi]`` rpm for each row of ``th`` (B, m).
+
+    ``amplitude(speeds, th)`` takes speeds ``(S,)`` (one grid for all rows) or ``(B, S)`` (a
+    grid per row) and returns ``(B, S)``: the FE model (:func:`peak_tool_amplitude`) or any
+    model of the same response (the substructure surrogate). The search is
+    :class:`PeakOptions`'; returns the peak amplitudes and speeds, ``(B,)`` each.
+    """
     B = th.shape[0]
     grid = np.geomspace(lo, hi, opt.n_grid)
-    A = tool_amplitude(model, grid, th)  # (B, S)
+    A = amplitude(grid, th)  # (B, S)
     left = np.concatenate([np.full((B, 1), -np.inf), A[:, :-1]], axis=1)
     right = np.concatenate([A[:, 1:], np.full((B, 1), -np.inf)], axis=1)
     is_max = (A >= left) & (A >= right)
@@ -275,7 +284,7 @@ def _peak_batch(model, th, lo, hi, opt: PeakOptions):
     t = np.linspace(0.0, 1.0, opt.n_refine)
     for _ in range(opt.n_zoom):
         pts = blo[..., None] + (bhi - blo)[..., None] * t  # (B, K, R)
-        Ar = tool_amplitude(model, pts.reshape(B, -1), th).reshape(B, K, -1)
+        Ar = amplitude(pts.reshape(B, -1), th).reshape(B, K, -1)
         j = np.argmax(Ar, axis=-1)
         jl = np.maximum(j - 1, 0)
         jh = np.minimum(j + 1, opt.n_refine - 1)

@@ -208,18 +208,25 @@ class PointwiseCondensed:
     """FE call for sampling: design ``x`` → ``condensed_vector`` of ``S`` at ``speeds_rpm``.
 
     One call condenses the rotor of one design at every speed (``2 S r²`` outputs, speeds
-    outermost). It pickles cheaply (the spindle description and the speeds).
+    outermost). It pickles cheaply (the spindle description and the speeds). With ``nodes``
+    it refuses a design whose retained nodes differ (a ``ModelError``).
     """
 
     spindle: object
     speeds_rpm: tuple[float, ...]
+    nodes: tuple[int, ...] | None = None
 
     def n_outputs(self, r: int) -> int:
         return 2 * len(self.speeds_rpm) * r * r
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         m = self.spindle.model(np.asarray(x, dtype=float))
-        return condensed_vector(condensed_rotor(m, np.asarray(self.speeds_rpm))).ravel()
+        lay = retained_layout(m)
+        if self.nodes is not None and lay.nodes != tuple(self.nodes):
+            raise ModelError(f"design {np.asarray(x).tolist()}: retained nodes {lay.nodes} differ "
+                             f"from {tuple(self.nodes)} (the mesh changes with the design); the "
+                             "substructure surrogate needs one layout over the design box")
+        return condensed_vector(condensed_rotor(m, np.asarray(self.speeds_rpm), lay)).ravel()
 
 
 __all__ = [
