@@ -220,16 +220,18 @@ class SubstructureSurrogate:
 
     def _amplitude(self, x: np.ndarray, Snodes: np.ndarray, speeds: np.ndarray,
                    theta: np.ndarray) -> np.ndarray:
-        """Amplitude of one design at speeds ``(S,)`` or ``(B, S)`` for θ ``(B, m)``."""
+        """Amplitude of one design at speeds ``(S,)`` (shared by all θ rows: the rotor part
+        is solved once per speed) or ``(B, S)`` (a row per θ) for θ ``(B, m)`` → ``(B, S)``."""
         B = theta.shape[0]
-        spd = np.broadcast_to(np.asarray(speeds, dtype=float), (B, np.shape(speeds)[-1]))
+        rows = np.atleast_2d(np.asarray(speeds, dtype=float))           # (1 or B, S)
         if self.nodes_rpm.size == 1:
             S = Snodes[0]
         else:
-            W = barycentric_weights(self.nodes_rpm, spd.ravel())
-            S = np.einsum("kn,nij->kij", W, Snodes).reshape(B, spd.shape[1], *Snodes.shape[1:])
-        Z = self._impedance(x, spd * RPM, theta)
-        f = self.force_per_w2 * (spd * RPM)[..., None] ** 2
+            W = barycentric_weights(self.nodes_rpm, rows.ravel())
+            S = np.einsum("kn,nij->kij", W, Snodes).reshape(*rows.shape, *Snodes.shape[1:])
+        w = rows * RPM
+        Z = self._impedance(x, np.broadcast_to(w, (B, rows.shape[1])), theta)
+        f = self.force_per_w2 * w[..., None] ** 2
         return coupled_tool_amplitude(self.layout, S, Z, f)
 
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:

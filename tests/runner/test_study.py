@@ -145,6 +145,27 @@ def test_fe_in_the_loop_study_on_the_at_speed_response(tmp_path):
     assert meta["fe_calls"]["verification"] == 6 * 400
 
 
+TINY_SUB = TINY_FE.replace('structure = "fe"', 'structure = "substructure"\nn_doe = 40\n'
+                           'n_jobs = 1\nn_start = 1')
+
+
+def test_substructure_surrogate_study_on_the_at_speed_response(tmp_path):
+    """The substructure surrogate in the loop: 40 FE calls of training (designs only), and at
+    every chosen design its μ, σ and P_f on the verification θ sample agree with the FE
+    model's on the same sample (the known answer) within 2 % and 1 point."""
+    run = run_experiment(_write(tmp_path, TINY_SUB), results_dir=tmp_path / "res",
+                         run_id="sub", progress=False)
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["fe_calls"]["doe"] == 40 and meta["response"] == "amplitude at 24000 rpm"
+    ver = np.genfromtxt(run.path / "verification.csv", delimiter=",", names=True, dtype=None,
+                        encoding="utf-8")
+    np.testing.assert_allclose(ver["mean_um_surrogate"], ver["mean_um_fe"], rtol=0.02)
+    np.testing.assert_allclose(ver["std_um_surrogate"], ver["std_um_fe"], rtol=0.02)
+    assert np.all(np.abs(ver["pf_pct_surrogate"] - ver["pf_pct_fe"]) <= 1.0)
+    info = json.loads((run.path / "surrogate_info.json").read_text())
+    assert info["structure"] == "substructure" and info["n_train"] == 40
+
+
 @pytest.mark.slow
 def test_same_seed_same_compromises(tmp_path):
     a = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="a")
@@ -180,6 +201,8 @@ def test_same_seed_same_compromises(tmp_path):
      r"response.kind = 'at_speed'"),
     ("n_start = 1", 'n_start = 1\nstructure = "fe"\n[refine]\nrounds = 1',
      r"refine.rounds = 1 is not allowed with surrogate.structure = 'fe'"),
+    ("n_start = 1", 'n_start = 1\nstructure = "substructure"\n[refine]\nrounds = 1',
+     r"refine.rounds = 1 is not allowed with surrogate.structure = 'substructure'"),
     ("n_start = 1", 'n_start = 1\n[response]\nkind = "at_speed"',
      r"response.speed_rpm = None is not allowed"),
     ("n_start = 1", 'n_start = 1\n[response]\nspeed = 3', r"unknown key\(s\) \['speed'\]"),
