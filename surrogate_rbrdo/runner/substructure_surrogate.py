@@ -81,7 +81,7 @@ def barycentric_weights(nodes: np.ndarray, at: np.ndarray) -> np.ndarray:
 
     >>> nodes = chebyshev_nodes(-1.0, 1.0, 5)
     >>> W = barycentric_weights(nodes, np.array([0.3]))
-    >>> round(float(W @ nodes**3), 12)      # a cubic is reproduced exactly
+    >>> round(float((W @ nodes**3)[0]), 12)      # a cubic is reproduced exactly
     0.027
     """
     n = nodes.size
