@@ -22,7 +22,8 @@ import numpy as np
 def plot_pareto_fronts(fronts: Mapping[str, np.ndarray], *,
                        compromises: Mapping[str, tuple[float, float]] | None = None,
                        clouds: Mapping[str, np.ndarray] | None = None,
-                       scale: float = 1e6, unit: str = "μm", ax=None):
+                       scale: float = 1e6, unit: str = "μm", quantity: str = "peak amplitude",
+                       ax=None):
     """Plot μ_y–σ_y Pareto fronts, one per label (e.g. per P_target or per strategy).
 
     Parameters
@@ -35,6 +36,8 @@ def plot_pareto_fronts(fronts: Mapping[str, np.ndarray], *,
         All feasible evaluated points, drawn faintly behind the fronts.
     scale, unit : float, str
         Axis scaling and unit name.
+    quantity : str
+        What y is, for the axis labels (``ResponseSpec.label``).
     ax : matplotlib Axes, optional
 
     Returns
@@ -59,7 +62,7 @@ def plot_pareto_fronts(fronts: Mapping[str, np.ndarray], *,
             m, s = compromises[label]
             ax.plot([m * scale], [s * scale], "*", ms=14, color=color, mec="k",
                     label=f"{label}: ASF compromise")
-    ax.set_xlabel(f"mean peak amplitude μ_y [{unit}]")
+    ax.set_xlabel(f"mean μ_y of the {quantity} [{unit}]")
     ax.set_ylabel(f"standard deviation σ_y [{unit}]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)

@@ -464,15 +464,17 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
         write_csv(run.file("pareto_fronts.csv"), front_rows)
     rb = [lab for (n, _), lab in zip(runs, labels, strict=True) if n == "rbrdo"]
     rb_fronts = {lab: fronts[lab] for lab in rb}
-    fig = plot_pareto_fronts(rb_fronts, compromises={lab: (comp[lab].mean, comp[lab].std)
-                                                     for lab in rb if comp[lab] is not None},
+    fig = plot_pareto_fronts(rb_fronts, quantity=cfg.response.label,
+                             compromises={lab: (comp[lab].mean, comp[lab].std)
+                                          for lab in rb if comp[lab] is not None},
                              clouds={lab: clouds[lab] for lab in rb})
     fig.axes[0].set_title("RBRDO feasible Pareto fronts per P_target "
                           f"({'full FE' if fe_loop else 'surrogate'}, CRN sample)")
     _save_fig(fig, run.file("pareto_fronts.png"))
     all_fronts = {k: v for k, v in fronts.items()}
-    fig = plot_pareto_fronts(all_fronts, compromises={k: (comp[k].mean, comp[k].std)
-                                                      for k in all_fronts if comp[k]})
+    fig = plot_pareto_fronts(all_fronts, quantity=cfg.response.label,
+                             compromises={k: (comp[k].mean, comp[k].std)
+                                          for k in all_fronts if comp[k]})
     _save_fig(fig, run.file("pareto_fronts_with_rdo.png"))
     plot_front_designs({lab: front_designs[lab] for lab in rb}, run.file("front_designs.png"),
                        baseline=cfg.baseline)
