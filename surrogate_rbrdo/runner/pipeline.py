@@ -622,8 +622,10 @@ def _train_substructure(spindle: Any, cfg: SurrogateConfig, response: ResponseSp
     r_doe, r_fit = rng
     xb = np.asarray(spindle.design_map.bounds, dtype=float)
     nodes = speed_nodes(spindle, response.kind, response.speed_rpm, cfg.sub_n_speeds)
-    lay = retained_layout(spindle.model(spindle.baseline))
-    func = PointwiseCondensed(spindle, tuple(float(s) for s in nodes), lay.nodes)
+    m0 = spindle.model(spindle.baseline)
+    lay = retained_layout(m0)
+    func = PointwiseCondensed(spindle, tuple(float(s) for s in nodes), lay.nodes,
+                              tuple(complex(u) for u in m0.unbalance))
     X = build_doe(cfg.n_doe, xb, rng=r_doe)
     res = evaluate_points(
         func, X, n_jobs=cfg.n_jobs, backend=cfg.backend, cache=cache, counter=counter,
@@ -652,6 +654,10 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     "fe"`` no surrogate is built: the returned :class:`FullModel` runs the FE model, and its
     calls are *not* seen by ``counter`` (the caller counts them, as the study does with the
     optimiser's call counts).
+
+    With ``cfg.structure = "substructure"`` the returned surrogate is a
+    :class:`~surrogate_rbrdo.runner.substructure_surrogate.SubstructureSurrogate` trained on
+    ``n_doe`` designs (one FE condensation each; θ is coupled exactly, so the DOE has none).
 
     With ``cfg.structure = "resonance"`` the returned surrogate is a
     :class:`~surrogate_rbrdo.runner.resonance_surrogate.ResonanceSurrogate` (same interface:
@@ -682,7 +688,7 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     if cfg.structure == "resonance" and response.kind != "peak":
         raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
                          f"= {response.kind!r}: the resonance structure models the peak over "
-                         "the speed range; use 'global' or 'fe'")
+                         "the speed range; use 'global', 'substructure' or 'fe'")
     if cfg.structure == "fe":
         info = {"structure": "fe", "response": response.label, "fe_calls": 0,
                 "n_train": 0, "config": {"structure": "fe"}}

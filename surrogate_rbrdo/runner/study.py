@@ -199,7 +199,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     if surrogate.structure == "resonance" and response.kind != "peak":
         raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
                          f"= {response.kind!r}: it models the peak over the speed range; use "
-                         "'global' or 'fe'")
+                         "'global', 'substructure' or 'fe'")
     dmo = _dataclass_from(DesignModelOptions, "[design_model]", config.get("design_model", {}))
 
     det = dict(config.get("deterministic", {}))

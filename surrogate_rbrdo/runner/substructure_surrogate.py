@@ -68,14 +68,15 @@ def chebyshev_nodes(lo: float, hi: float, n: int) -> np.ndarray:
     >>> chebyshev_nodes(0.0, 2.0, 3).tolist()
     [0.0, 1.0, 2.0]
     """
-    if n == 1:
-        return np.array([0.5 * (lo + hi)])
+    if n < 2:
+        raise ValueError(f"n = {n} is not allowed: Chebyshev nodes need n >= 2")
     k = np.arange(n)[::-1]
     return 0.5 * (lo + hi) + 0.5 * (hi - lo) * np.cos(np.pi * k / (n - 1))
 
 
 def barycentric_weights(nodes: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """Interpolation weights ``(len(at), n)`` of Chebyshev nodes of the second kind.
+    """Interpolation weights ``(len(at), n)`` of Chebyshev nodes of the second kind
+    (:func:`chebyshev_nodes`; the weights are wrong for other nodes).
 
     Barycentric formula (Berrut & Trefethen 2004, Eq. 5.1): ``w_j = (-1)^j``, halved at the ends.
 
@@ -86,8 +87,6 @@ def barycentric_weights(nodes: np.ndarray, at: np.ndarray) -> np.ndarray:
     """
     n = nodes.size
     at = np.asarray(at, dtype=float).reshape(-1)
-    if n == 1:
-        return np.ones((at.size, 1))
     w = (-1.0) ** np.arange(n)
     w[0] *= 0.5
     w[-1] *= 0.5
@@ -110,9 +109,10 @@ class MultiOutputKriging:
     """Kriging of many outputs with one anisotropic squared-exponential correlation.
 
     Inputs are scaled to the unit box ``bounds``; every output column is centred and scaled
-    (columns that do not vary are kept as constants). Model per column ``c``:
-    ``y_c = μ_c + s_c (σ_c² GP(0, R_θ))``; the correlation parameters ``θ`` are shared and
-    maximise the concentrated likelihood summed over the ``k`` columns,
+    (columns that do not vary are kept as constants). Model: each standardised column
+    ``(y_c − μ_c) / s_c`` is a zero-mean Gaussian process with covariance ``σ² R_θ``, one
+    ``σ²`` and one correlation ``θ`` for all columns, chosen to maximise the concentrated
+    likelihood summed over the ``k`` columns,
 
         ℓ(θ) = −(n k / 2) log σ̂² − (k / 2) log |R_θ|,   σ̂² = tr(R_θ⁻¹ Y Yᵀ) / (n k),
 
@@ -134,7 +134,7 @@ class MultiOutputKriging:
     const_: np.ndarray | None = None
     U_: np.ndarray | None = field(default=None, repr=False)
     W_: np.ndarray | None = field(default=None, repr=False)
-    Rinv_: np.ndarray | None = field(default=None, repr=False)
+    Rinv_diag_: np.ndarray | None = field(default=None, repr=False)
     Yn_: np.ndarray | None = field(default=None, repr=False)
     nugget_used_: float | None = None
 
@@ -152,9 +152,10 @@ class MultiOutputKriging:
             L = np.linalg.cholesky(R)
         except np.linalg.LinAlgError:
             return np.inf, np.zeros_like(log_theta)
-        Li = np.linalg.inv(L)
-        Ri = Li.T @ Li
-        RiYY = Ri @ YY
+        from scipy.linalg import cho_solve
+
+        Ri = cho_solve((L, True), np.eye(n))
+        RiYY = cho_solve((L, True), YY)
         s2 = np.trace(RiYY) / (n * k)
         if not s2 > 0:
             return np.inf, np.zeros_like(log_theta)
@@ -181,11 +182,14 @@ class MultiOutputKriging:
         self.vary_ = sd > 1e-13 * np.where(scale > 0, scale, 1.0)
         self.std_ = np.where(self.vary_, sd, 1.0)
         self.const_ = self.mean_.copy()
+        if not self.vary_.any():
+            raise ModelError("MultiOutputKriging: no output varies over the training designs "
+                             "(the condensed rotor does not depend on the design variables)")
         Yn = (Y[:, self.vary_] - self.mean_[self.vary_]) / self.std_[self.vary_]
         U = self._u(X)
         D2 = (U[:, None, :] - U[None, :, :]) ** 2
         YY = Yn @ Yn.T
-        k = max(Yn.shape[1], 1)
+        k = Yn.shape[1]
         starts = [np.zeros(d)] + [rng.uniform(-2.0, 2.0, d) for _ in range(self.n_start - 1)]
         best = None
         with blas_threads(1):
@@ -220,7 +224,7 @@ class MultiOutputKriging:
                              "(duplicate designs?)")
         self.nugget_used_ = float(nug)
         self.W_ = cho_solve(c, self.Yn_)
-        self.Rinv_ = cho_solve(c, np.eye(n))
+        self.Rinv_diag_ = np.diag(cho_solve(c, np.eye(n))).copy()
 
     def _u(self, X: np.ndarray) -> np.ndarray:
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
@@ -237,10 +241,12 @@ class MultiOutputKriging:
     def loo(self) -> np.ndarray:
         """Closed-form leave-one-out predictions of the training outputs, ``(n, n_out)``.
 
-        With the correlation fixed at the full-data fit (Dubrule 1983, here for the centred
-        columns): ``e_i = (R⁻¹ y)_i / (R⁻¹)_ii``.
+        Simple-Kriging identity ``e_i = (R⁻¹ y)_i / (R⁻¹)_ii`` (Dubrule 1983), with the
+        correlation, the column means and the scaling all fixed at the full-data fit (Dubrule's
+        ordinary-Kriging form re-estimates the mean; measured: it changes S by ≤ 1.4e-6 and
+        the LOO y by ≤ 3e-6 relative at n = 30).
         """
-        e = self.W_ / np.diag(self.Rinv_)[:, None]
+        e = self.W_ / self.Rinv_diag_[:, None]
         out = np.tile(self.const_, (self.U_.shape[0], 1))
         out[:, self.vary_] = (self.Yn_ - e) * self.std_[self.vary_] + self.mean_[self.vary_]
         return out
@@ -304,10 +310,20 @@ class SubstructureSurrogate:
         f = self.force_per_w2 * w[..., None] ** 2
         return coupled_tool_amplitude(self.layout, S, Z, f)
 
+    def _check(self, x: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Designs inside the box and θ of the right width, finite and > 0, else ValueError."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        d = self.X_train.shape[1]
+        if x.ndim != 2 or x.shape[1] != d:
+            raise ValueError(f"x has shape {np.shape(x)}: must be (P, {d}) = designs "
+                             f"{list(self.spindle.design_map.names)}")
+        for xi in x:
+            self.spindle.design_map.check(xi)
+        return x, _check_theta(self.spindle, theta)
+
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted ``y`` (m), designs ``(P, d)`` × θ ``(N, m)`` → ``(P, N)``."""
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        x, theta = self._check(x, theta)
         return self._y_from_nodes(x, self.condensed(x), theta)
 
     __call__ = response
@@ -344,6 +360,21 @@ class SubstructureSurrogate:
         Z = np.atleast_2d(np.asarray(Z, dtype=float))
         d = self.X_train.shape[1]
         return np.array([self.response(z[None, :d], z[None, d:])[0, 0] for z in Z])
+
+
+def _check_theta(spindle: Any, theta: np.ndarray) -> np.ndarray:
+    """θ as ``(N, m)``: ``m`` = the spindle's θ bearings, finite and > 0 (as the FE model)."""
+    m = len(spindle.theta_bearings)
+    th = np.asarray(theta, dtype=float)
+    th = th[None, :] if th.ndim == 1 else th
+    if th.ndim != 2 or th.shape[1] != m:
+        raise ValueError(f"theta has shape {np.shape(theta)}: must be ({m},) or (N, {m}) — "
+                         f"stiffness factors of bearings {list(spindle.theta_bearings)}")
+    bad = ~np.all(np.isfinite(th) & (th > 0), axis=1)
+    if bad.any():
+        raise ValueError(f"theta = {th[bad][0].tolist()} is not allowed: stiffness factors "
+                         "must be finite and > 0")
+    return th
 
 
 def speed_nodes(spindle: Any, kind: str, speed_rpm: float | None, n_speeds: int) -> np.ndarray:
@@ -385,7 +416,7 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
     info = {"structure": "substructure", "n_train": int(X.shape[0]), "fit_time_s": fit_s,
             "speed_nodes_rpm": nodes_rpm.tolist(), "retained_nodes": list(layout.nodes),
             "n_outputs": int(krg.vary_.sum()), "n_structural_zeros": int(zero.sum()),
-            "length_scales_unit_box": krg.length_scales}
+            "length_scales_unit_box": krg.length_scales, "nugget": krg.nugget_used_}
     return SubstructureSurrogate(spindle=spindle, layout=layout, kind=kind,
                                  speed_rpm=speed_rpm, nodes_rpm=np.asarray(nodes_rpm, float),
                                  kriging=krg, force_per_w2=force, X_train=X, V_fit=Vc,

@@ -213,7 +213,6 @@ def bearing_coefficients(
     ``C = η K_sym`` (the paper's Eq. 2) unless the law gives a damping matrix; cross-coupled
     stiffness adds no damping.
     """
-    th = theta
     Ks, Cs = [], []
     for b in geometry.bearings:
         law = b.law
@@ -228,7 +227,7 @@ def bearing_coefficients(
             K = e.bearing(b.name, omega, K)
         if b.name in theta_bearings:
             j = list(theta_bearings).index(b.name)
-            K = K * th[:, j][:, None, None, None]
+            K = K * theta[:, j][:, None, None, None]
         if isinstance(law, ConstantLaw) and law.c_matrix_Ns_per_m is not None:
             C = np.broadcast_to(np.asarray(law.c_matrix_Ns_per_m, float), K.shape)
         else:

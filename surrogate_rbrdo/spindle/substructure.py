@@ -209,12 +209,14 @@ class PointwiseCondensed:
 
     One call condenses the rotor of one design at every speed (``2 S r²`` outputs, speeds
     outermost). It pickles cheaply (the spindle description and the speeds). With ``nodes``
-    it refuses a design whose retained nodes differ (a ``ModelError``).
+    (``unbalance``) it refuses a design whose retained nodes (unbalance) differ from them, with
+    a ``ModelError``: the surrogate takes both from the baseline design.
     """
 
     spindle: object
     speeds_rpm: tuple[float, ...]
     nodes: tuple[int, ...] | None = None
+    unbalance: tuple[complex, ...] | None = None
 
     def n_outputs(self, r: int) -> int:
         return 2 * len(self.speeds_rpm) * r * r
@@ -226,6 +228,11 @@ class PointwiseCondensed:
             raise ModelError(f"design {np.asarray(x).tolist()}: retained nodes {lay.nodes} differ "
                              f"from {tuple(self.nodes)} (the mesh changes with the design); the "
                              "substructure surrogate needs one layout over the design box")
+        if self.unbalance is not None and not np.allclose(m.unbalance, self.unbalance,
+                                                          rtol=1e-12, atol=0.0):
+            raise ModelError(f"design {np.asarray(x).tolist()}: unbalance {m.unbalance.tolist()} "
+                             f"differs from {list(self.unbalance)}; the substructure surrogate "
+                             "needs an unbalance that does not change with the design")
         return condensed_vector(condensed_rotor(m, np.asarray(self.speeds_rpm), lay)).ravel()
 
 

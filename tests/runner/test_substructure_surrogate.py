@@ -90,18 +90,48 @@ def test_loo_points_are_exact_at_training_designs(at_speed):
     assert np.median(np.abs(y_loo / y_true - 1)) < 1e-2
 
 
-def test_response_points_equal_the_grid_response(at_speed):
+def test_response_points_match_the_fe_model(at_speed):
     sur, _ = at_speed
     Z = np.column_stack([DESIGNS, THETA[:5]])
-    np.testing.assert_allclose(sur.response_points(Z),
-                               np.diag(sur(DESIGNS, THETA[:5])), rtol=1e-5)
+    fe = np.array([AtSpeedAmplitudeResponse(SP, 24000.0).point(z) for z in Z])
+    np.testing.assert_allclose(sur.response_points(Z), fe, rtol=5e-2)
+    np.testing.assert_allclose(sur.response_points(Z)[1:], fe[1:], rtol=5e-3)   # 2e-3 seen
 
 
 def test_peak_surrogate_matches_the_fe_peak():
+    """30 designs, 10 speed nodes (measured: 0.65 % max; 3.4e-4 with 60 designs and 12)."""
     sur, info = _train(30, ResponseSpec(), sub_n_speeds=10)
     assert len(info["speed_nodes_rpm"]) == 10
     X, th = DESIGNS[[0, 2, 3]], THETA[:8]
-    np.testing.assert_allclose(sur(X, th), PeakAmplitudeResponse(SP)(X, th), rtol=2e-2)
+    np.testing.assert_allclose(sur(X, th), PeakAmplitudeResponse(SP)(X, th), rtol=1e-2)
+
+
+def test_likelihood_gradient_matches_finite_differences():
+    from scipy.optimize import approx_fprime
+
+    rng = np.random.default_rng(2)
+    X = rng.random((18, 3))
+    Y = np.column_stack([np.sin(3 * X[:, 0]), X[:, 1] ** 2, X[:, 2] * X[:, 0]])
+    Yn = (Y - Y.mean(0)) / Y.std(0)
+    k = MultiOutputKriging(bounds=np.array([[0.0, 1.0]] * 3))
+    D2 = (X[:, None, :] - X[None]) ** 2
+    for t in (np.zeros(3), np.array([-1.0, 0.5, -2.0])):
+        g = k._nll(t, D2, Yn @ Yn.T, 3)[1]
+        fd = approx_fprime(t, lambda u: k._nll(u, D2, Yn @ Yn.T, 3)[0], 1e-6)
+        np.testing.assert_allclose(g, fd, rtol=1e-4, atol=1e-4)
+
+
+@pytest.mark.parametrize("x,theta,match", [
+    (DESIGNS[:1], np.ones((2, 3)), r"theta has shape \(2, 3\): must be \(2,\) or \(N, 2\)"),
+    (DESIGNS[:1], np.array([[1.0, 0.0]]), r"theta = \[1.0, 0.0\] is not allowed"),
+    (DESIGNS[:1], np.array([[1.0, np.nan]]), r"theta = \[1.0, nan\] is not allowed"),
+    (DESIGNS[:1, :2], np.ones((1, 2)), r"x has shape \(1, 2\): must be \(P, 3\)"),
+    (np.array([[3000.0, 800.0, 60.0]]), np.ones((1, 2)), r"span_mm = 800.0 is not allowed"),
+])
+def test_bad_designs_and_theta_are_refused(at_speed, x, theta, match):
+    sur, _ = at_speed
+    with pytest.raises(ValueError, match=match):
+        sur(x, theta)
 
 
 @pytest.mark.parametrize("kw,match", [

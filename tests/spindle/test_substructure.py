@@ -122,3 +122,55 @@ def test_singular_rotor_is_reported():
     with pytest.raises(ModelError, match="singular"):
         coupled_tool_amplitude(lay, np.zeros((lay.n_dof, lay.n_dof), complex), Z,
                                unbalance_force(m, 24000.0, lay))
+
+
+def test_coupling_of_a_general_rotor():
+    """Three bearings (one preloaded, one with a housing stage), θ on two of them in reverse
+    order, an unbalance plane on a bearing node, the tool tip inside the shaft."""
+    from surrogate_rbrdo.spindle.assembly import build_model
+    from surrogate_rbrdo.spindle.geometry import SpindleGeometry
+
+    from .conftest import STEEL, constant_bearing
+
+    data = {
+        "sections": [{"length_mm": 120.0, "outer_diameter_mm": 60.0, "inner_diameter_mm": 20.0,
+                      "elements": 3, "material": "m"},
+                     {"length_mm": 400.0, "outer_diameter_mm": 50.0, "elements": 8,
+                      "material": "m"}],
+        "materials": {"m": dict(STEEL)},
+        "disks": [{"name": "d", "position_mm": 300.0, "mass_kg": 4.0,
+                   "polar_inertia_kgm2": 6e-3, "diametral_inertia_kgm2": 9e-3}],
+        "bearings": [
+            {"name": "a", "position_mm": 120.0, "law": {
+                "type": "preload", "k_ref_N_per_m": 2e8, "preload_ref_N": 1000.0,
+                "preload_N": 1500.0, "exponent": 1 / 3, "damping_eta_s": 5e-6}},
+            constant_bearing("b", 330.0, 1.5e8, eta=3e-6),
+            constant_bearing("c", 520.0, 1e8, c=800.0)],
+        "unbalances": [{"position_mm": 330.0, "magnitude_kgm": 2e-5, "phase_deg": 30.0},
+                       {"position_mm": 300.0, "magnitude_kgm": 1e-5}],
+        "tool_tip_mm": 40.0,
+        "rayleigh_alpha_per_s": 2.0, "rayleigh_beta_s": 1e-6,
+        "speed_min_rpm": 1000.0, "speed_max_rpm": 30000.0,
+    }
+    geom = SpindleGeometry.from_dict(data)
+    effects = (Gyroscopics(g=0.0), CrossCoupling(kappa=0.1),
+               HousingFlexibility(bearings=("c",), k_N_per_m=5e7, m_kg=3.0, c_Ns_per_m=500.0))
+    m = build_model(geom, effects, theta_bearings=("c", "a"))
+    lay = retained_layout(m)
+    assert lay.nodes[lay.tool] != 0 and len(lay.bearings) == 3   # tool tip not the end node
+    theta = np.array([[1.0, 1.0], [1.2, 0.85], [0.7, 1.1]])
+    for speed in (3000.0, 17000.0, 29000.0):
+        np.testing.assert_allclose(_coupled(m, speed, theta), _dense_tool(m, speed, theta),
+                                   rtol=1e-8)
+
+
+def test_pointwise_condensed_refuses_another_layout_or_unbalance():
+    m = SP.model(SP.baseline)
+    lay = retained_layout(m)
+    x = np.array(DESIGNS[0])
+    with pytest.raises(ModelError, match="retained nodes"):
+        PointwiseCondensed(SP, (24000.0,), tuple(n + 1 for n in lay.nodes))(x)
+    with pytest.raises(ModelError, match="unbalance"):
+        PointwiseCondensed(SP, (24000.0,), lay.nodes, tuple(2 * m.unbalance))(x)
+    v = PointwiseCondensed(SP, (24000.0,), lay.nodes, tuple(m.unbalance))(x)
+    assert np.all(np.isfinite(v))
