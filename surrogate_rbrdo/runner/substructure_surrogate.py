@@ -45,7 +45,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance
+from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.substructure import (
     RetainedLayout,
@@ -319,7 +319,7 @@ class SubstructureSurrogate:
                              f"{list(self.spindle.design_map.names)}")
         for xi in x:
             self.spindle.design_map.check(xi)
-        return x, _check_theta(self.spindle, theta)
+        return x, check_theta(self.spindle.theta_bearings, theta)
 
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted ``y`` (m), designs ``(P, d)`` × θ ``(N, m)`` → ``(P, N)``."""
@@ -360,21 +360,6 @@ class SubstructureSurrogate:
         Z = np.atleast_2d(np.asarray(Z, dtype=float))
         d = self.X_train.shape[1]
         return np.array([self.response(z[None, :d], z[None, d:])[0, 0] for z in Z])
-
-
-def _check_theta(spindle: Any, theta: np.ndarray) -> np.ndarray:
-    """θ as ``(N, m)``: ``m`` = the spindle's θ bearings, finite and > 0 (as the FE model)."""
-    m = len(spindle.theta_bearings)
-    th = np.asarray(theta, dtype=float)
-    th = th[None, :] if th.ndim == 1 else th
-    if th.ndim != 2 or th.shape[1] != m:
-        raise ValueError(f"theta has shape {np.shape(theta)}: must be ({m},) or (N, {m}) — "
-                         f"stiffness factors of bearings {list(spindle.theta_bearings)}")
-    bad = ~np.all(np.isfinite(th) & (th > 0), axis=1)
-    if bad.any():
-        raise ValueError(f"theta = {th[bad][0].tolist()} is not allowed: stiffness factors "
-                         "must be finite and > 0")
-    return th
 
 
 def speed_nodes(spindle: Any, kind: str, speed_rpm: float | None, n_speeds: int) -> np.ndarray:

@@ -123,24 +123,8 @@ class SpindleModel:
 
     # ------------------------------------------------------------------ bearings
     def check_theta(self, theta: np.ndarray | None, batch: int | None = None) -> np.ndarray:
-        """Return θ as an array of shape (B, m); ``None`` means nominal (all ones)."""
-        m = len(self.theta_bearings)
-        if theta is None:
-            return np.ones((batch or 1, m))
-        th = np.asarray(theta, dtype=float)
-        if th.ndim == 1:
-            th = th[None, :]
-        if th.ndim != 2 or th.shape[1] != m:
-            raise ValueError(
-                f"theta has shape {np.shape(theta)}: must be ({m},) or (B, {m}) — stiffness "
-                f"factors of bearings {list(self.theta_bearings)}"
-            )
-        if not np.all(np.isfinite(th)) or np.any(th <= 0):
-            raise ValueError(
-                f"theta = {th[~np.all(np.isfinite(th) & (th > 0), axis=1)][0].tolist()} is not "
-                "allowed: stiffness factors must be finite and > 0"
-            )
-        return th
+        """Return θ as an array of shape (N, m); ``None`` means nominal (all ones)."""
+        return check_theta(self.theta_bearings, theta, batch)
 
     def bearing_coefficients(
         self, omega: np.ndarray, theta: np.ndarray | None = None
@@ -199,6 +183,32 @@ class SpindleModel:
                 A[np.ix_(hd, hd)] += B + extra * np.eye(2)
             M[np.ix_(hd, hd)] += sup.m_kg * np.eye(2)
         return M, C, K
+
+
+def check_theta(theta_bearings: Sequence[str], theta: np.ndarray | None,
+                batch: int | None = None) -> np.ndarray:
+    """θ as ``(N, m)`` for the ``m`` bearings ``theta_bearings``: finite factors > 0, else a
+    ``ValueError`` naming the value; ``None`` means nominal (``batch`` rows of ones).
+
+    >>> check_theta(("front", "rear"), [1.0, 0.9]).tolist()
+    [[1.0, 0.9]]
+    """
+    m = len(theta_bearings)
+    if theta is None:
+        return np.ones((batch or 1, m))
+    th = np.asarray(theta, dtype=float)
+    if th.ndim == 1:
+        th = th[None, :]
+    if th.ndim != 2 or th.shape[1] != m:
+        raise ValueError(
+            f"theta has shape {np.shape(theta)}: must be ({m},) or (N, {m}) — stiffness "
+            f"factors of bearings {list(theta_bearings)}"
+        )
+    bad = ~np.all(np.isfinite(th) & (th > 0), axis=1)
+    if bad.any():
+        raise ValueError(f"theta = {th[bad][0].tolist()} is not allowed: stiffness factors "
+                         "must be finite and > 0")
+    return th
 
 
 def bearing_coefficients(

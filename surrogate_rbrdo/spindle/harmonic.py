@@ -88,12 +88,29 @@ def solve_block_tridiagonal(
     return x
 
 
+def dynamic_coefficients(model: SpindleModel, omega: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Factors ``(a_K, a_M, a_G)`` of the rotor's dynamic stiffness ``a_K K + a_M M + a_G G``
+    at spin speeds ``omega`` (rad/s): ``1 + iΩβ``, ``−Ω² + iΩα`` and ``i g Ω²`` (Rayleigh
+    damping, synchronous whirl, gyroscopic scale ``g``)."""
+    w = np.asarray(omega, dtype=float)
+    return (1.0 + 1j * w * model.beta, -(w**2) + 1j * w * model.alpha,
+            1j * model.gyro_scale * w**2)
+
+
+def unbalance_load(model: SpindleModel, omega: np.ndarray) -> np.ndarray:
+    """Complex unbalance forces ``U Ω² [1, −i, 0, 0]`` per node, ``omega.shape + (nn, 4)``."""
+    w2 = np.asarray(omega, dtype=float) ** 2
+    f = np.zeros(w2.shape + (model.n_nodes, 4), dtype=complex)
+    for node, U in zip(model.unbalance_nodes, model.unbalance, strict=True):
+        f[..., node, 0] += U * w2
+        f[..., node, 1] += -1j * U * w2
+    return f
+
+
 def _blocks(model: SpindleModel, omega: np.ndarray, theta: np.ndarray):
     """Block arrays of the dynamic stiffness at speeds ``omega`` (B, S) and θ (B, m)."""
-    w = omega[..., None, None, None]
-    aK = 1.0 + 1j * w * model.beta
-    aM = -(w**2) + 1j * w * model.alpha
-    aG = 1j * model.gyro_scale * w**2
+    aK, aM, aG = (a[..., None, None, None] for a in dynamic_coefficients(model, omega))
     (Kd, Ku, Kl), (Md, Mu, Ml), (Gd, Gu, Gl) = (model.blocks[k] for k in ("K", "M", "G"))
     D = aK * Kd + aM * Md + aG * Gd
     Up = aK * Ku + aM * Mu + aG * Gu
@@ -101,12 +118,7 @@ def _blocks(model: SpindleModel, omega: np.ndarray, theta: np.ndarray):
     Zb = model.bearing_impedance(omega, theta)  # (B, S, nb, 2, 2), housing condensed in
     for j, node in enumerate(model.bearing_nodes):
         D[..., node, :2, :2] += Zb[..., j, :, :]
-    f = np.zeros(D.shape[:-1], dtype=complex)
-    w2 = omega**2
-    for node, U in zip(model.unbalance_nodes, model.unbalance, strict=True):
-        f[..., node, 0] += U * w2
-        f[..., node, 1] += -1j * U * w2
-    return D, Up, Lo, f
+    return D, Up, Lo, unbalance_load(model, omega)
 
 
 def unbalance_response(

@@ -40,7 +40,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
-from surrogate_rbrdo.spindle.harmonic import orbit_amplitude
+from surrogate_rbrdo.spindle.harmonic import dynamic_coefficients, orbit_amplitude, unbalance_load
 
 
 @dataclass(frozen=True)
@@ -88,11 +88,11 @@ def rotor_dynamic_stiffness(model: SpindleModel, omega: np.ndarray) -> np.ndarra
     """Dense dynamic stiffness of the rotor alone (no bearings) at speeds ``omega`` (rad/s).
 
     Returns ``(S, n, n)`` complex, the operator of ``harmonic.unbalance_response`` without the
-    bearing blocks: ``(1 + iΩβ)K − Ω²M + iΩαM + iΩ² g G``.
+    bearing blocks (:func:`~surrogate_rbrdo.spindle.harmonic.dynamic_coefficients`).
     """
-    w = np.asarray(omega, dtype=float).reshape(-1)[:, None, None]
-    return ((1.0 + 1j * w * model.beta) * model.K + (-(w**2) + 1j * w * model.alpha) * model.M
-            + 1j * model.gyro_scale * w**2 * model.G)
+    aK, aM, aG = (a[:, None, None] for a in dynamic_coefficients(
+        model, np.asarray(omega, dtype=float).reshape(-1)))
+    return aK * model.K + aM * model.M + aG * model.G
 
 
 def condensed_rotor(model: SpindleModel, speeds_rpm: np.ndarray,
@@ -127,14 +127,12 @@ def condensed_rotor(model: SpindleModel, speeds_rpm: np.ndarray,
 
 def unbalance_force(model: SpindleModel, speed_rpm: float | np.ndarray,
                     layout: RetainedLayout | None = None) -> np.ndarray:
-    """Unbalance force on the retained DOFs, ``U Ω² [1, −i]`` per plane: ``(..., r)``."""
+    """Unbalance force on the retained DOFs, ``U Ω² [1, −i]`` per plane: ``(..., r)``
+    (:func:`~surrogate_rbrdo.spindle.harmonic.unbalance_load` at the retained nodes)."""
     layout = retained_layout(model) if layout is None else layout
-    w = np.asarray(speed_rpm, dtype=float)[..., None] * RPM
-    f = np.zeros(w.shape[:-1] + (layout.n_dof,), dtype=complex)
-    for k, U in zip(layout.unbalance, model.unbalance, strict=True):
-        f[..., 4 * k] += U * w[..., 0] ** 2
-        f[..., 4 * k + 1] += -1j * U * w[..., 0] ** 2
-    return f
+    w = np.asarray(speed_rpm, dtype=float) * RPM
+    f = unbalance_load(model, w)[..., list(layout.nodes), :]
+    return f.reshape(*w.shape, layout.n_dof)
 
 
 def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
@@ -164,12 +162,14 @@ def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
     r = layout.n_dof
     pb = np.concatenate([[4 * k, 4 * k + 1] for k in layout.bearings])
     pt = np.array([4 * layout.tool, 4 * layout.tool + 1])
+    nb2 = pb.size
+    rhs0 = np.concatenate([f[..., None], np.broadcast_to(np.eye(r)[:, pb],
+                                                         f.shape[:-1] + (r, nb2))], axis=-1)
     try:
-        Hf = np.linalg.solve(S, f[..., None])[..., 0]                         # (.., r)
-        HP = np.linalg.solve(S, np.eye(r)[:, pb])                             # (.., r, 2nb)
+        X = np.linalg.solve(S, rhs0)           # one factorisation of S for [f | P]: (.., r, 1+2nb)
     except np.linalg.LinAlgError as exc:
         raise ModelError("coupled_tool_amplitude: singular condensed rotor stiffness") from exc
-    nb2 = pb.size
+    Hf, HP = X[..., 0], X[..., 1:]
     Zfull = np.zeros(Z.shape[:-3] + (nb2, nb2), dtype=complex)
     for j in range(Z.shape[-3]):
         Zfull[..., 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[..., j, :, :]
