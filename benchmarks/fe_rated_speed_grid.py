@@ -23,6 +23,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 from joblib import Parallel, delayed  # noqa: E402
 
+from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
 from surrogate_rbrdo.spindle.harmonic import tool_amplitude  # noqa: E402
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
 
@@ -36,9 +37,8 @@ def amplitudes(x, speeds, k):
 
 def front(mu, sd):
     """Indices of the (μ, σ)-non-dominated designs, sorted by μ."""
-    nd = [i for i in range(mu.size)
-          if not np.any((mu <= mu[i]) & (sd <= sd[i]) & ((mu < mu[i]) | (sd < sd[i])))]
-    return np.array(sorted(nd, key=lambda i: mu[i]), dtype=int)
+    idx = np.flatnonzero(nondominated(np.column_stack([mu, sd])))
+    return idx[np.argsort(mu[idx], kind="stable")]
 
 
 def main() -> None:

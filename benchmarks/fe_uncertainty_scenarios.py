@@ -39,6 +39,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 from joblib import Parallel, delayed  # noqa: E402
 
+from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
 from surrogate_rbrdo.spindle.assembly import build_model  # noqa: E402
 from surrogate_rbrdo.spindle.harmonic import (  # noqa: E402
     _parabola_peak,
@@ -93,9 +94,8 @@ def grid_peak(amp, speeds):
 
 def front(mu, sd):
     """Indices of the (μ, σ)-non-dominated designs, sorted by μ."""
-    nd = [i for i in range(mu.size)
-          if not np.any((mu <= mu[i]) & (sd <= sd[i]) & ((mu < mu[i]) | (sd < sd[i])))]
-    return sorted(nd, key=lambda i: mu[i])
+    idx = np.flatnonzero(nondominated(np.column_stack([mu, sd])))
+    return idx[np.argsort(mu[idx], kind="stable")]
 
 
 def report(name, X, y_um, delta_lim_um):
