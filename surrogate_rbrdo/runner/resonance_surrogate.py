@@ -123,6 +123,21 @@ def combine(nc: np.ndarray, ares: np.ndarray, zeta: np.ndarray, bg: np.ndarray |
     return flank if bg is None else np.maximum(flank, bg)
 
 
+def nc_band(nc: np.ndarray, n_max: float, band: float) -> np.ndarray:
+    """Where the local n_c model applies: ``|n_max / nc - 1| <= band``."""
+    return np.abs(n_max / np.asarray(nc, dtype=float) - 1.0) <= band
+
+
+def local_band(ln_glob: np.ndarray, center: float, band: float) -> np.ndarray:
+    """Where a local model of ``log glob`` applies: ``|log glob - center| <= band``."""
+    return np.abs(np.asarray(ln_glob, dtype=float) - center) <= band
+
+
+def bg_only(nc: np.ndarray, n_max: float, bg_only_r: float) -> np.ndarray:
+    """Where the background alone is used: ``n_max / nc <= bg_only_r``."""
+    return n_max / np.asarray(nc, dtype=float) <= bg_only_r
+
+
 def select_nc(nc: np.ndarray, nc_local: np.ndarray | None, n_max: float,
               band: float) -> np.ndarray:
     """``nc_local`` where ``|n_max / nc - 1| <= band`` (the global model's band), else ``nc``.
@@ -133,7 +148,7 @@ def select_nc(nc: np.ndarray, nc_local: np.ndarray | None, n_max: float,
     nc = np.asarray(nc, dtype=float)
     if nc_local is None or band <= 0:
         return nc
-    return np.where(np.abs(n_max / nc - 1.0) <= band, nc_local, nc)
+    return np.where(nc_band(nc, n_max, band), nc_local, nc)
 
 
 def select_local(glob: np.ndarray, local: np.ndarray | None, center: float,
@@ -146,7 +161,7 @@ def select_local(glob: np.ndarray, local: np.ndarray | None, center: float,
     glob = np.asarray(glob, dtype=float)
     if local is None or band <= 0:
         return glob
-    return np.where(np.abs(np.log(glob) - center) <= band, local, glob)
+    return np.where(local_band(np.log(glob), center, band), local, glob)
 
 
 def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max: float,
@@ -159,7 +174,7 @@ def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max:
     """
     if bg is None or bg_only_r <= 0:
         return y
-    return np.where(n_max / np.asarray(nc) <= bg_only_r, bg, y)
+    return np.where(bg_only(nc, n_max, bg_only_r), bg, y)
 
 
 # ---------------------------------------------------------------------- the fitted model
@@ -219,17 +234,9 @@ class ResonanceSurrogate:
 
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted ``y`` (m) for designs ``x`` (P, 3) × θ ``(N, 2)`` → ``(P, N)``."""
-        nc = self._grid("nc", x, theta)
-        if "nc_local" in self.subs:
-            nc = select_nc(nc, self._grid("nc_local", x, theta), self.n_max_rpm,
-                           self.nc_local_band)
-        ares = self._grid("ares", x, theta)
-        if "ares_local" in self.subs:
-            ares = select_local(ares, self._grid("ares_local", x, theta),
-                                self.ares_local_center, self.ares_local_band)
-        zeta = self._grid("zeta", x, theta) if "zeta" in self.subs else self.zeta_const
-        bg = self._grid("bg", x, theta) if "bg" in self.subs else None
-        return self._combine(nc, ares, zeta, bg)
+        s = {k: self._grid(k, x, theta) for k in self.subs}
+        return self._combine(self.nc_of(s), self._ares_of(s), s.get("zeta", self.zeta_const),
+                             s.get("bg"))
 
     def _combine(self, nc: np.ndarray, ares: np.ndarray, zeta: Any,
                  bg: np.ndarray | None) -> np.ndarray:
@@ -250,7 +257,8 @@ class ResonanceSurrogate:
         out.setdefault("zeta", np.full(np.atleast_2d(Z).shape[0], self.zeta_const))
         return out
 
-    def _nc_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
+    def nc_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
+        """``n̂_c`` as used by the combination, from sub-model medians ``s``."""
         return select_nc(s["nc"], s.get("nc_local"), self.n_max_rpm, self.nc_local_band)
 
     def _ares_of(self, s: dict[str, np.ndarray]) -> np.ndarray:
@@ -259,12 +267,12 @@ class ResonanceSurrogate:
 
     def nc_points(self, Z: np.ndarray) -> np.ndarray:
         """``n̂_c`` (rpm) at joint points as used by the combination (local model in band)."""
-        return self._nc_of(self.sub_predictions(Z))
+        return self.nc_of(self.sub_predictions(Z))
 
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """``ŷ`` (m) at joint points ``Z = [x, θ]`` (n, 5): the quantity of ``response``."""
         s = self.sub_predictions(Z)
-        return self._combine(self._nc_of(s), self._ares_of(s), s["zeta"], s.get("bg"))
+        return self._combine(self.nc_of(s), self._ares_of(s), s["zeta"], s.get("bg"))
 
     def predict(self, Z: np.ndarray) -> Prediction:
         """Mean and std (m) at joint points: delta method in ``log ŷ``, lognormal moments.
@@ -277,12 +285,12 @@ class ResonanceSurrogate:
         p = self._points(Z)
         ln_nc, s_nc = p["nc"].mean, p["nc"].std
         if "nc_local" in p and self.nc_local_band > 0:
-            loc = np.abs(self.n_max_rpm / np.exp(ln_nc) - 1.0) <= self.nc_local_band
+            loc = nc_band(np.exp(ln_nc), self.n_max_rpm, self.nc_local_band)
             ln_nc = np.where(loc, p["nc_local"].mean, ln_nc)
             s_nc = np.where(loc, p["nc_local"].std, s_nc)
         ln_a, s_a = p["ares"].mean, p["ares"].std
         if "ares_local" in p and self.ares_local_band > 0:
-            loc = np.abs(ln_a - self.ares_local_center) <= self.ares_local_band
+            loc = local_band(ln_a, self.ares_local_center, self.ares_local_band)
             ln_a = np.where(loc, p["ares_local"].mean, ln_a)
             s_a = np.where(loc, p["ares_local"].std, s_a)
         if "zeta" in p:
@@ -302,7 +310,7 @@ class ResonanceSurrogate:
         if "bg" in p:
             use_bg = p["bg"].mean > mu
             if self.bg_only_r > 0:
-                use_bg |= self.n_max_rpm / np.exp(ln_nc) <= self.bg_only_r
+                use_bg |= bg_only(np.exp(ln_nc), self.n_max_rpm, self.bg_only_r)
             mu = np.where(use_bg, p["bg"].mean, mu)
             s2 = np.where(use_bg, p["bg"].std ** 2, s2)
         mean = np.exp(mu + 0.5 * s2)
@@ -329,7 +337,7 @@ class ResonanceSurrogate:
         for k, lo in sub_loo.items():
             vals[k] = vals[k].copy()
             vals[k][self.rows[k]] = np.exp(lo.y_loo)
-        y_loo = self._combine(self._nc_of(vals), self._ares_of(vals), vals["zeta"],
+        y_loo = self._combine(self.nc_of(vals), self._ares_of(vals), vals["zeta"],
                               vals.get("bg"))
         return self.Q_train[:, 3].copy(), y_loo
 
@@ -381,10 +389,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
     rows = {"nc": all_rows, "ares": np.flatnonzero(ares_ok),
             "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
-    targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc}
+    targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc, "ares_local": ares}
     if cfg.res_nc_local > 0:
         rows["nc_local"] = np.flatnonzero(np.abs(r - 1.0) <= cfg.res_nc_local)
-    targets["ares_local"] = ares
     if cfg.res_ares_local > 0:
         if threshold_m is None or not threshold_m > 0:
             raise ValueError(f"threshold_m = {threshold_m!r} is not allowed with "
@@ -417,6 +424,9 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                                 n_design=n_design,
                                 like=like.subs.get(k) if like is not None else None,
                                 like_mode=like_mode)
+    opts = {"nc_local_band": float(cfg.res_band) if "nc_local" in subs else 0.0,
+            "bg_only_r": float(cfg.res_bg_only_r),
+            "ares_local_band": float(cfg.res_band_lim) if "ares_local" in subs else 0.0}
     info = {
         "structure": "resonance", "n_train": int(Z.shape[0]),
         "fit_time_s": float(sum(s.info["fit_time_s"] for s in subs.values())),
@@ -424,20 +434,14 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                            "hyperparameters": s.info["hyperparameters"]}
                        for k, s in subs.items()},
         "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
-        "nc_local_band": float(cfg.res_band) if "nc_local" in subs else 0.0,
-        "bg_only_r": float(cfg.res_bg_only_r),
-        "ares_local_band": float(cfg.res_band_lim) if "ares_local" in subs else 0.0,
+        **opts,
         "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
         "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
     }
     return ResonanceSurrogate(subs=subs, rows={k: rows[k] for k in subs},
                               zeta_const=zeta_const, n_max_rpm=float(n_max_rpm),
-                              Z_train=Z, Q_train=Q, info=info,
-                              nc_local_band=float(cfg.res_band) if "nc_local" in subs else 0.0,
-                              bg_only_r=float(cfg.res_bg_only_r),
+                              Z_train=Z, Q_train=Q, info=info, **opts,
                               ares_local_center=float(np.log(threshold_m))
-                              if "ares_local" in subs else 0.0,
-                              ares_local_band=float(cfg.res_band_lim)
                               if "ares_local" in subs else 0.0)
 
 

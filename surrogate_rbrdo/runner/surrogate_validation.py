@@ -147,7 +147,7 @@ def _resonance_tables(name: str, sur: ResonanceSurrogate, Z_t: np.ndarray, Q_t: 
                       n_th: int) -> tuple[list[list[Any]], list[list[Any]]]:
     n_max = sur.n_max_rpm
     p = sur.sub_predictions(Z_t)
-    p["nc"] = sur.nc_points(Z_t)  # the n_c the combination uses (local model in its band)
+    p["nc"] = sur.nc_of(p)  # the n_c the combination uses (local model in its band)
     r = n_max / Q_t[:, 0]
     near = np.abs(r - 1) <= 0.05
     rows = [_rel_row(name, "critical_rpm", "all", Q_t[:, 0], p["nc"], 1.0, "rpm"),

@@ -342,3 +342,28 @@ def test_local_ares_model_interpolates_and_is_used_near_the_threshold():
     glob_in = np.abs(np.log(sur.sub_predictions(Z[res])["ares"] / thr)) <= 0.2
     assert glob_in.sum() >= 1
     assert np.allclose(sur.response_points(Z[res[glob_in]]), Q[res[glob_in], 1], rtol=1e-5)
+
+
+def test_predict_median_is_the_combined_response_with_every_option():
+    """``predict`` (delta method, lognormal moments) has its median at ``exp(μ)``:
+    ``mean / sqrt(1 + (std/mean)²)`` must be the combined response of ``response_points``
+    (local n_c, local A_res and background-only rules all on)."""
+    Z, Q = _synthetic(60, seed=4)
+    thr = float(np.median(Q[:, 1]))
+    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+                          res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
+                          res_nc_local=0.15, res_band=0.1, res_bg_only_r=0.9,
+                          res_ares_local=0.3, res_band_lim=0.2)
+    sur = fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX,
+                                  threshold_m=thr)
+    assert {"nc_local", "ares_local"} <= set(sur.subs)
+    rng = np.random.default_rng(9)
+    joint = np.column_stack([Z[:, :3] + rng.normal(0, 1, (60, 3)),
+                             1.0 + 0.05 * rng.standard_normal((60, 2))])
+    s = sur.sub_predictions(joint)        # every rule is exercised by some point
+    assert np.any(np.abs(N_MAX / s["nc"] - 1) <= 0.1)
+    assert np.any(np.abs(np.log(s["ares"] / thr)) <= 0.2)
+    assert np.any(N_MAX / s["nc"] <= 0.9)
+    p = sur.predict(joint)
+    median = p.mean / np.sqrt(1.0 + (p.std / p.mean) ** 2)
+    np.testing.assert_allclose(median, sur.response_points(joint), rtol=1e-9)
