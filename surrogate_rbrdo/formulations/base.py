@@ -139,16 +139,14 @@ class Formulation:
 
     # ------------------------------------------------------------------ evaluation
     def estimate(self, x: np.ndarray, response: Response | None = None,
-                 limit: LimitState | None = None, *, theta: np.ndarray | None = None
-                 ) -> Estimate:
+                 limit: LimitState | None = None) -> Estimate:
         """μ_y, σ_y, P_f of ``response`` (default: the primary one) on the fixed sample."""
         response = self.response if response is None else response
         limit = self.limit if limit is None else limit
         no_limit = limit is None
         limit = _NO_FAILURE if no_limit else limit
         if self.estimator is None:  # fast path: values on the CRN sample
-            th = self.theta if theta is None else theta
-            y = np.asarray(response(x, th), dtype=float)
+            y = np.asarray(response(x, self.theta), dtype=float)
             est = _values_to_estimate()(y, limit, ci_level=self.options.ci_level)
         else:
             est = self.estimator.estimate(

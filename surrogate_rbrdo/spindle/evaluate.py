@@ -23,6 +23,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.validate import check_choice, check_positive
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_tool_amplitude, tool_amplitude
 from surrogate_rbrdo.spindle.modal import (
     critical_speeds,
@@ -104,7 +105,7 @@ class AtSpeedAmplitudeResponse(_PerDesign):
     speed_rpm: float = 24000.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
+        object.__setattr__(self, "speed_rpm", check_positive("speed_rpm", self.speed_rpm))
 
     def _amplitudes(self, model, theta: np.ndarray) -> np.ndarray:
         return tool_amplitude(model, np.array([self.speed_rpm]), theta)[:, 0]
@@ -118,18 +119,10 @@ class PointwiseAtSpeed:
     speed_rpm: float = 24000.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "speed_rpm", check_speed("speed_rpm", self.speed_rpm))
+        object.__setattr__(self, "speed_rpm", check_positive("speed_rpm", self.speed_rpm))
 
     def __call__(self, z: np.ndarray) -> float:
         return AtSpeedAmplitudeResponse(self.spindle, self.speed_rpm).point(z)
-
-
-def check_speed(name: str, value: object) -> float:
-    """A finite speed > 0 (rpm), else ``ValueError`` naming the field."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)) \
-            or not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} = {value!r} is not allowed: must be a finite speed > 0 rpm")
-    return float(value)
 
 
 RESPONSE_KINDS = ("peak", "at_speed")
@@ -155,16 +148,14 @@ class ResponseSpec:
     speed_rpm: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in RESPONSE_KINDS:
-            raise ValueError(f"response.kind = {self.kind!r} is not allowed: must be one of "
-                             f"{list(RESPONSE_KINDS)}")
+        check_choice("response.kind", self.kind, RESPONSE_KINDS)
         if self.kind == "peak" and self.speed_rpm is not None:
             raise ValueError(f"response.speed_rpm = {self.speed_rpm!r} is not allowed with kind "
                              "= 'peak' (the peak is over the geometry's speed range)")
         if self.kind == "at_speed":
             try:
                 object.__setattr__(self, "speed_rpm",
-                                   check_speed("response.speed_rpm", self.speed_rpm))
+                                   check_positive("response.speed_rpm", self.speed_rpm))
             except ValueError as exc:
                 raise ValueError(f"{exc} (required with kind = 'at_speed')") from None
 
