@@ -24,15 +24,16 @@ import numpy as np  # noqa: E402
 from joblib import Parallel, delayed  # noqa: E402
 
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
+from surrogate_rbrdo.runner.config import TABLE4_STD  # noqa: E402
 from surrogate_rbrdo.spindle.harmonic import tool_amplitude  # noqa: E402
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
 
-STD = np.array([0.0605, 0.0641])
+STD = np.array(TABLE4_STD)   # the paper's Table 4 CoVs of the bearing stiffness
 
 
-def amplitudes(x, speeds, k):
+def amplitudes(sp, x, speeds, k):
     """Tool-tip amplitude (µm) of design ``x`` at ``speeds`` for stiffness samples ``k``."""
-    return tool_amplitude(reference_spindle().model(np.asarray(x, float)), speeds, k) * 1e6
+    return tool_amplitude(sp.model(np.asarray(x, float)), speeds, k) * 1e6
 
 
 def front(mu, sd):
@@ -54,7 +55,8 @@ def main() -> None:
     X = np.array([[F, L, D] for F in (1000, 1500, 2000, 2500, 3000)
                   for L in np.arange(300.0, 751.0, 10.0) for D in np.arange(50.0, 80.1, 5.0)])
     t = time.time()
-    Y = np.array(Parallel(n_jobs=args.n_jobs)(delayed(amplitudes)(x, speeds, k) for x in X))
+    sp = reference_spindle()
+    Y = np.array(Parallel(n_jobs=args.n_jobs)(delayed(amplitudes)(sp, x, speeds, k) for x in X))
     print(f"{len(X)} designs x {args.n_theta} θ x {speeds.size} speeds: FE {time.time() - t:.0f} s")
     for s, spd in enumerate(speeds):
         y = Y[:, :, s]

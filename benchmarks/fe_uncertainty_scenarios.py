@@ -40,6 +40,7 @@ import numpy as np  # noqa: E402
 from joblib import Parallel, delayed  # noqa: E402
 
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
+from surrogate_rbrdo.runner.config import TABLE4_STD  # noqa: E402
 from surrogate_rbrdo.spindle.assembly import build_model  # noqa: E402
 from surrogate_rbrdo.spindle.harmonic import (  # noqa: E402
     _parabola_peak,
@@ -49,12 +50,11 @@ from surrogate_rbrdo.spindle.harmonic import (  # noqa: E402
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
 
-STD = np.array([0.0605, 0.0641])
+STD = np.array(TABLE4_STD)   # the paper's Table 4 CoVs of the bearing stiffness
 
 
-def plane_responses(x, k, speeds):
+def plane_responses(sp, x, k, speeds):
     """Complex tool-tip (X, Y) per unit unbalance in each plane: (planes, N_k, S, 2)."""
-    sp = reference_spindle()
     m = sp.model(np.asarray(x, float))
     out = []
     for j in range(m.unbalance.size):
@@ -65,9 +65,8 @@ def plane_responses(x, k, speeds):
     return np.stack(out), m.unbalance.real.copy(), m.rotor_mass_kg
 
 
-def damping_samples(x, k, c):
+def damping_samples(sp, x, k, c):
     """Peak tool amplitude (m) with bearing damping factors ``c`` (N, 2) and stiffness ``k``."""
-    sp = reference_spindle()
     g = sp.geometry_for(np.asarray(x, float))
     y = np.empty(k.shape[0])
     for i in range(k.shape[0]):
@@ -142,7 +141,8 @@ def main() -> None:
     X = np.array([[F, L, D] for F in args.preloads for L in spans for D in diams])
     speeds = np.geomspace(1000.0, 24000.0, args.n_speeds)
     t = time.time()
-    out = Parallel(n_jobs=args.n_jobs)(delayed(plane_responses)(x, k, speeds) for x in X)
+    sp = reference_spindle()
+    out = Parallel(n_jobs=args.n_jobs)(delayed(plane_responses)(sp, x, k, speeds) for x in X)
     H = np.stack([o[0] for o in out])  # (P, planes, N_k, S, 2)
     U = out[0][1]
     print(f"grid {len(X)} designs x {args.n_k} stiffness samples x {args.n_speeds} speeds; "
@@ -157,7 +157,7 @@ def main() -> None:
     y_k = peaks(U[1] * ones, U[0] * ones)
     report("stiffness", X, y_k, args.delta_lim_um)
     mass = np.array([o[2] for o in out])
-    m_base = reference_spindle().model(reference_spindle().baseline).rotor_mass_kg
+    m_base = sp.model(sp.baseline).rotor_mass_kg
     report(f"iso_mass (U per design's rotor mass {mass.min():.1f}-{mass.max():.1f} kg, "
            f"baseline {m_base:.1f} kg)", X, y_k * (mass / m_base)[:, None], args.delta_lim_um)
     s = args.tool_ratio * U[0] / np.sqrt(2.0)
@@ -170,7 +170,7 @@ def main() -> None:
     if not args.skip_damping:
         t = time.time()
         c = np.exp(args.damping_cov * rng.standard_normal((args.n_k, 2)))
-        y = np.array(Parallel(n_jobs=args.n_jobs)(delayed(damping_samples)(x, k, c) for x in X))
+        y = np.array(Parallel(n_jobs=args.n_jobs)(delayed(damping_samples)(sp, x, k, c) for x in X))
         report(f"bearing_damping (CoV {args.damping_cov})", X, y * 1e6, args.delta_lim_um)
         print(f"  ({time.time() - t:.0f} s)")
 
