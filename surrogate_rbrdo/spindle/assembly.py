@@ -18,7 +18,7 @@ off-diagonal blocks), which the harmonic solver uses to treat many speeds at onc
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -214,6 +214,7 @@ def check_theta(theta_bearings: Sequence[str], theta: np.ndarray | None,
 def bearing_coefficients(
     geometry: SpindleGeometry, effects: Sequence[Effect], theta_bearings: Sequence[str],
     omega: np.ndarray, theta: np.ndarray,
+    preloads: Mapping[str, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and damping of every bearing of ``geometry`` at spin speeds ``omega`` (rad/s).
 
@@ -221,13 +222,21 @@ def bearing_coefficients(
     ``(B, S)`` and ``theta`` ``(B, m)`` (checked by the caller: factors on the stiffness of
     ``theta_bearings``); returns ``K`` and ``C`` of shape ``(B, S, nb, 2, 2)``. Damping is
     ``C = η K_sym`` (the paper's Eq. 2) unless the law gives a damping matrix; cross-coupled
-    stiffness adds no damping.
+    stiffness adds no damping. ``preloads`` (bearing name → preload in N, broadcast against
+    ``omega``) replaces the ``preload_N`` of those bearings' preload laws, so a batch row can
+    stand for another design (``DesignMap.bearing_preloads``).
     """
+    preloads = {} if preloads is None else preloads
+    for name in preloads:
+        law = next((b.law for b in geometry.bearings if b.name == name), None)
+        if not isinstance(law, PreloadLaw):
+            raise ValueError(f"preloads: bearing {name!r} is not a bearing with a 'preload' law")
     Ks, Cs = [], []
     for b in geometry.bearings:
         law = b.law
         if isinstance(law, PreloadLaw):
-            F = np.full(omega.shape, law.preload_N)
+            F = np.broadcast_to(np.asarray(preloads.get(b.name, law.preload_N), dtype=float),
+                                omega.shape)
             for e in effects:
                 F = e.preload(b.name, omega, F)
             K = law.stiffness(F)[..., None, None] * np.eye(2)
@@ -263,14 +272,17 @@ def bearing_impedance(
     geometry: SpindleGeometry, effects: Sequence[Effect], theta_bearings: Sequence[str],
     omega: np.ndarray, theta: np.ndarray,
     supports: Sequence[Support | None] | None = None,
+    preloads: Mapping[str, np.ndarray] | None = None,
 ) -> np.ndarray:
     """Dynamic stiffness ``Z = K + iΩC`` each bearing puts on its rotor node, ``(B, S, nb, 2, 2)``.
 
     A housing stage ``z_h = k + iΩc − Ω²m`` in series with a bearing is condensed into it:
     ``Z ← Z − Z (Z + z_h I)⁻¹ Z``. Arguments as :func:`bearing_coefficients`; ``supports``
-    defaults to :func:`bearing_supports`.
+    defaults to :func:`bearing_supports`. Without a stage, a θ bearing's impedance is affine in
+    its factor, ``Z_j(θ) = θ_j (K_j + iΩC_j) (+ iΩC_j for a law's own damping matrix)``
+    (:func:`theta_affine`).
     """
-    Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, omega, theta)
+    Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, omega, theta, preloads)
     Zb = Kb + 1j * omega[..., None, None, None] * Cb
     supports = bearing_supports(geometry, effects) if supports is None else supports
     if all(s is None for s in supports):
@@ -284,6 +296,19 @@ def bearing_impedance(
             Z = Z - Z @ np.linalg.solve(Zs, Z)
         out.append(Z)
     return np.stack(out, axis=-3)
+
+
+def theta_affine(geometry: SpindleGeometry, effects: Sequence[Effect],
+                 theta_bearings: Sequence[str]) -> bool:
+    """Whether every bearing impedance is affine in θ: no housing stage in series with a θ
+    bearing (a stage makes the condensed impedance rational in θ_j).
+
+    θ scales a bearing's stiffness after every effect and its damping is either proportional
+    to that stiffness or a constant matrix, so without a stage ``Z_j = θ_j A_j + B_j``.
+    """
+    supports = bearing_supports(geometry, effects)
+    return all(s is None for b, s in zip(geometry.bearings, supports, strict=True)
+               if b.name in theta_bearings)
 
 
 def build_model(

@@ -370,6 +370,30 @@ class DesignMap:
                 )
         return x
 
+    def bearing_preloads(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        """Bearing preloads (N) that designs ``X`` (P, 3) set: ``{preload_bearing: X[:, 0]}``.
+
+        :meth:`apply` changes no other property of a bearing than this preload and its
+        position, so ``assembly.bearing_coefficients(geometry, ..., preloads=...)`` gives
+        every design's bearing coefficients in one vectorised call.
+
+        >>> DesignMap().bearing_preloads(np.array([[1500.0, 400.0, 60.0]]))
+        {'front': array([1500.])}
+        """
+        X = self.check_batch(X)
+        return {self.preload_bearing: X[:, 0].copy()}
+
+    def check_batch(self, X: np.ndarray) -> np.ndarray:
+        """Validate designs ``X`` (P, 3) at once; the first bad row raises :meth:`check`'s
+        error."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if X.ndim != 2 or X.shape[1] != 3:
+            raise ValueError(f"designs have shape {X.shape}: must be (P, 3) = {self.names}")
+        ok = np.all(np.isfinite(X) & (X >= self.lower) & (X <= self.upper), axis=1)
+        if not ok.all():
+            self.check(X[int(np.argmin(ok))])
+        return X
+
     def apply(self, geometry: SpindleGeometry, x: np.ndarray) -> SpindleGeometry:
         """Return the geometry of design ``x``."""
         preload, span, diam = self.check(x)

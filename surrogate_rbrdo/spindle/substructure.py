@@ -34,6 +34,7 @@ True
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -135,6 +136,31 @@ def unbalance_force(model: SpindleModel, speed_rpm: float | np.ndarray,
     return f.reshape(*w.shape, layout.n_dof)
 
 
+def _rotor_solve(layout: RetainedLayout, S: np.ndarray, f: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``H f`` and ``H P`` with ``H = S⁻¹`` (one factorisation of ``S``), and the bearing and
+    tool DOF indices ``pb``, ``pt`` among the retained DOFs."""
+    r = layout.n_dof
+    pb = np.concatenate([[4 * k, 4 * k + 1] for k in layout.bearings])
+    pt = np.array([4 * layout.tool, 4 * layout.tool + 1])
+    rhs0 = np.concatenate([f[..., None], np.broadcast_to(np.eye(r)[:, pb],
+                                                         f.shape[:-1] + (r, pb.size))], axis=-1)
+    try:
+        X = np.linalg.solve(S, rhs0)           # (.., r, 1 + 2nb)
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("coupled_tool_amplitude: singular condensed rotor stiffness") from exc
+    return X[..., 0], X[..., 1:], pb, pt
+
+
+def _block_diagonal(Z: np.ndarray) -> np.ndarray:
+    """``(..., nb, 2, 2)`` bearing blocks → ``(..., 2nb, 2nb)`` block-diagonal matrix."""
+    nb = Z.shape[-3]
+    out = np.zeros(Z.shape[:-3] + (2 * nb, 2 * nb), dtype=complex)
+    for j in range(nb):
+        out[..., 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[..., j, :, :]
+    return out
+
+
 def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
                            f: np.ndarray) -> np.ndarray:
     """Tool-tip orbit amplitude of the rotor ``S`` coupled with the bearing impedances ``Z``.
@@ -159,23 +185,11 @@ def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
     each θ costs one ``2 nb``-square solve.
     """
     batch = np.broadcast_shapes(S.shape[:-2], Z.shape[:-3], f.shape[:-1])
-    r = layout.n_dof
-    pb = np.concatenate([[4 * k, 4 * k + 1] for k in layout.bearings])
-    pt = np.array([4 * layout.tool, 4 * layout.tool + 1])
-    nb2 = pb.size
-    rhs0 = np.concatenate([f[..., None], np.broadcast_to(np.eye(r)[:, pb],
-                                                         f.shape[:-1] + (r, nb2))], axis=-1)
-    try:
-        X = np.linalg.solve(S, rhs0)           # one factorisation of S for [f | P]: (.., r, 1+2nb)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("coupled_tool_amplitude: singular condensed rotor stiffness") from exc
-    Hf, HP = X[..., 0], X[..., 1:]
-    Zfull = np.zeros(Z.shape[:-3] + (nb2, nb2), dtype=complex)
-    for j in range(Z.shape[-3]):
-        Zfull[..., 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[..., j, :, :]
+    Hf, HP, pb, pt = _rotor_solve(layout, S, f)
+    Zfull = _block_diagonal(Z)
     G = HP[..., pb, :]                                                        # P'HP
     g = Hf[..., pb]                                                           # P'Hf
-    lhs = np.eye(nb2) + Zfull @ G
+    lhs = np.eye(pb.size) + Zfull @ G
     rhs = (Zfull @ g[..., None])[..., 0]
     try:
         u = np.linalg.solve(lhs, np.broadcast_to(rhs, np.broadcast_shapes(
@@ -185,6 +199,113 @@ def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
     q = Hf[..., pt] - (HP[..., pt, :] @ u[..., None])[..., 0]
     q = np.broadcast_to(q, batch + (2,))
     out = orbit_amplitude(q[..., 0], q[..., 1])
+    if not np.all(np.isfinite(out)):
+        raise ModelError("coupled_tool_amplitude: non-finite amplitude")
+    return out
+
+
+#: designs per block in the last step of :func:`coupled_tool_amplitude_theta` (measured: 16
+#: blocks of (6, 1 000) rows ran 4x faster than one (600, 1 000) array)
+_CHUNK = 16
+
+
+def theta_grid(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Interpolation nodes spanning a θ sample and the Lagrange basis of the sample on them.
+
+    Three nodes per component (its min, midpoint and max; ±5 % about a component that does not
+    vary), their tensor grid of ``K = 3^m`` nodes, and the tensor-product quadratic Lagrange
+    basis evaluated at every row of ``theta``.
+
+    Parameters
+    ----------
+    theta : ndarray (N, m)
+
+    Returns
+    -------
+    nodes : ndarray (K, m)
+    basis : ndarray (N, K)
+        ``p(θ_n) = Σ_k basis[n, k] p(nodes[k])`` for every polynomial ``p`` of degree ≤ 2 in
+        each component.
+
+    >>> nodes, basis = theta_grid(np.array([[0.9, 1.0], [1.1, 1.2], [1.0, 1.1]]))
+    >>> nodes.shape, basis.shape
+    ((9, 2), (3, 9))
+    >>> p = lambda t: 3 + t[:, 0] ** 2 * t[:, 1] - 2 * t[:, 0] * t[:, 1] ** 2
+    >>> th = np.array([[0.95, 1.17]])
+    >>> bool(np.isclose(theta_grid(np.vstack([nodes, th]))[1][-1] @ p(nodes), p(th)[0]))
+    True
+    """
+    th = np.atleast_2d(np.asarray(theta, dtype=float))
+    lo, hi = th.min(axis=0), th.max(axis=0)
+    c = 0.5 * (lo + hi)
+    h = np.maximum(0.5 * (hi - lo), 0.05 * np.abs(c))
+    t = c[:, None] + h[:, None] * np.array([-1.0, 0.0, 1.0])            # (m, 3)
+    L = np.ones(th.shape + (3,))                                         # (N, m, 3)
+    for a in range(3):
+        for b in range(3):
+            if a != b:
+                L[..., a] *= (th - t[:, b]) / (t[:, a] - t[:, b])
+    m = th.shape[1]
+    idx = np.array(list(itertools.product(range(3), repeat=m)), dtype=int).reshape(-1, m)
+    cols = np.arange(m)
+    nodes = t[cols, idx]                                                 # (K, m)
+    basis = np.prod(L[:, cols, idx], axis=-1)                            # (N, K)
+    return nodes, basis
+
+
+def coupled_tool_amplitude_theta(layout: RetainedLayout, S: np.ndarray, Z_nodes: np.ndarray,
+                                 f: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """:func:`coupled_tool_amplitude` for a whole θ sample from ``K`` exact solves per ``S``.
+
+    When every bearing impedance is affine in its θ factor
+    (:func:`~surrogate_rbrdo.spindle.assembly.theta_affine`), the rows of the coupled matrix
+    ``I + Z P'HP`` that belong to bearing ``j`` are affine in ``θ_j``, so by Cramer's rule the
+    tool displacement is ``q(θ) = n(θ) / d(θ)`` with ``d = det(I + Z P'HP)`` and ``n = q d``
+    polynomials of degree ≤ 2 in each ``θ_j``. Both are solved exactly at the nodes of
+    :func:`theta_grid` and interpolated exactly (up to round-off) to every θ: a sample of
+    ``N`` θ costs ``K = 3^m`` small solves and one ``(N, K)`` product instead of ``N`` solves.
+
+    Parameters
+    ----------
+    layout : RetainedLayout
+    S : ndarray (..., r, r)
+    Z_nodes : ndarray (..., K, nb, 2, 2)
+        Bearing impedances at ``theta_grid``'s nodes.
+    f : ndarray (..., r)
+    basis : ndarray (N, K)
+        ``theta_grid``'s basis of the sample.
+
+    Returns
+    -------
+    ndarray (..., N)
+        Tool-tip orbit semi-major axis (m); equal to :func:`coupled_tool_amplitude` at each θ.
+    """
+    Hf, HP, pb, pt = _rotor_solve(layout, S, f)
+    Zfull = _block_diagonal(Z_nodes)                                     # (..., K, 2nb, 2nb)
+    G = HP[..., None, pb, :]
+    g = Hf[..., None, pb, None]
+    lhs = np.eye(pb.size) + Zfull @ G
+    try:
+        u = np.linalg.solve(lhs, Zfull @ g)[..., 0]                      # (..., K, 2nb)
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("coupled_tool_amplitude: singular coupled system") from exc
+    d = np.linalg.det(lhs)                                               # (..., K)
+    q = Hf[..., None, pt] - (HP[..., None, pt, :] @ u[..., None])[..., 0]  # (..., K, 2)
+    # orbit semi-major axis = (|q_x + i q_y| + |q_x − i q_y|) / 2: interpolate the numerators
+    # of both circular components and the denominator, as real rows of one real product
+    nd = np.stack([d * (q[..., 0] + 1j * q[..., 1]), d * (q[..., 0] - 1j * q[..., 1]), d],
+                  axis=-2)                                               # (..., 3, K)
+    ri = np.stack([nd.real, nd.imag], axis=-2)                          # (..., 3, 2, K)
+    batch, K = ri.shape[:-3], ri.shape[-1]
+    ri = ri.reshape(-1, 6 * K)
+    bT = np.ascontiguousarray(np.asarray(basis, dtype=float).T)          # (K, N)
+    out = np.empty((ri.shape[0], bT.shape[1]))
+    for s in range(0, ri.shape[0], _CHUNK):     # blocks of designs: their (6, N) rows stay in cache
+        v = ri[s:s + _CHUNK].reshape(-1, K) @ bT
+        v *= v
+        v = np.sqrt(v[0::2] + v[1::2]).reshape(-1, 3, bT.shape[1])       # moduli |a|, |b|, |d|
+        np.divide(v[:, 0] + v[:, 1], 2.0 * v[:, 2], out=out[s:s + _CHUNK])
+    out = out.reshape(*batch, bT.shape[1])
     if not np.all(np.isfinite(out)):
         raise ModelError("coupled_tool_amplitude: non-finite amplitude")
     return out
@@ -243,7 +364,9 @@ __all__ = [
     "condensed_rotor",
     "condensed_vector",
     "coupled_tool_amplitude",
+    "coupled_tool_amplitude_theta",
     "retained_layout",
     "rotor_dynamic_stiffness",
+    "theta_grid",
     "unbalance_force",
 ]

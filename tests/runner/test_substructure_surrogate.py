@@ -82,6 +82,18 @@ def test_at_speed_surrogate_matches_the_fe_model_including_the_notch(at_speed):
     assert y_fe[0].mean() < 0.1 * y_fe[2].mean()          # the notch is there
 
 
+def test_theta_sample_path_equals_the_row_by_row_coupling(at_speed, monkeypatch):
+    """A θ sample goes through the θ-polynomial coupling (9 node solves per design, all
+    designs at once); known answer: the row-by-row coupling of the same predicted ``S``."""
+    import surrogate_rbrdo.runner.substructure_surrogate as mod
+
+    sur, _ = at_speed
+    assert sur.theta_affine and THETA.shape[0] >= mod.POLY_MIN_RATIO * 9
+    y_poly = sur(DESIGNS, THETA)
+    monkeypatch.setattr(mod, "POLY_MIN_RATIO", 10**9)
+    np.testing.assert_allclose(y_poly, sur(DESIGNS, THETA), rtol=1e-10)
+
+
 def test_loo_points_are_exact_at_training_designs(at_speed):
     sur, _ = at_speed
     y_true, y_loo = sur.loo_points()

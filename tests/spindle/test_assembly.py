@@ -118,3 +118,31 @@ def test_bad_model_arguments_raise(ref_model):
         build(geo, ["speed_softening"])
     with pytest.raises(ValueError, match=r"theta = \[0.0, 1.0\] is not allowed"):
         ref_model.system_matrices(0.0, np.array([0.0, 1.0]))
+
+
+def test_preload_override_equals_each_designs_own_bearings():
+    """Known answer: ``bearing_impedance`` of each design's own geometry (``geometry_for``);
+    the override gives all designs in one call, with preload-dependent effects too."""
+    from surrogate_rbrdo.spindle.assembly import bearing_impedance
+    from surrogate_rbrdo.spindle.effects import SpeedSoftening, ThermalPreload
+
+    sp = reference_spindle()
+    effects = (*sp.effects, ThermalPreload(bearings=("front",), b=0.3, q=1.5),
+               SpeedSoftening(bearings=("rear",), a=0.1, exponent=1.2))
+    X = np.array([[1000.0, 300.0, 50.0], [2417.0, 512.0, 71.3], [3000.0, 750.0, 80.0]])
+    omega = np.array([[500.0, 2513.0]])
+    theta = np.array([[1.1, 0.9], [0.95, 1.2], [1.0, 1.0]])
+    pre = {k: v[:, None] for k, v in sp.design_map.bearing_preloads(X).items()}
+    Z = bearing_impedance(sp.geometry, effects, sp.theta_bearings,
+                          np.repeat(omega, 3, axis=0), theta, preloads=pre)
+    for i, x in enumerate(X):
+        own = bearing_impedance(sp.geometry_for(x), effects, sp.theta_bearings, omega,
+                                theta[i:i + 1])
+        np.testing.assert_array_equal(Z[i], own[0])
+    with pytest.raises(ValueError, match="bearing 'nose' is not a bearing with a 'preload'"):
+        bearing_impedance(sp.geometry, effects, sp.theta_bearings, omega, theta[:1],
+                          preloads={"nose": 2000.0})
+    rigid = rigid_rotor_geometry(1e8)             # constant-law bearings: nothing to override
+    name = rigid.bearings[0].name
+    with pytest.raises(ValueError, match=f"bearing '{name}' is not a bearing with a 'preload'"):
+        bearing_impedance(rigid, (), (name,), omega, theta[:1, :1], preloads={name: 2000.0})

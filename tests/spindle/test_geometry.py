@@ -105,6 +105,26 @@ def test_design_vector_outside_bounds_raises(x, match):
         DesignMap().check(np.array(x))
 
 
+def test_batch_check_names_the_first_bad_design_and_preloads_come_from_x():
+    dm = DesignMap()
+    X = np.array([[2000.0, 500.0, 65.0], [2000.0, 800.0, 65.0], [999.0, 500.0, 65.0]])
+    with pytest.raises(ValueError, match=r"design span_mm = 800\.0 is not allowed"):
+        dm.check_batch(X)
+    with pytest.raises(ValueError, match=r"design preload_N = 999\.0"):
+        dm.bearing_preloads(X[[0, 2]])
+    with pytest.raises(ValueError, match=r"designs have shape \(1, 2\)"):
+        dm.check_batch(np.array([2000.0, 500.0]))
+    good = np.array([[1500.0, 400.0, 60.0], [2500.0, 700.0, 79.0]])
+    pre = dm.bearing_preloads(good)
+    assert list(pre) == ["front"]
+    np.testing.assert_array_equal(pre["front"], [1500.0, 2500.0])
+    # the geometry of each design has exactly this preload on that bearing
+    sp = reference_spindle()
+    for x, p in zip(good, pre["front"], strict=True):
+        law = {b.name: b.law for b in dm.apply(sp.geometry, x).bearings}["front"]
+        assert law.preload_N == p
+
+
 def test_design_map_bounds_must_be_ordered():
     with pytest.raises(ValueError, match=r"design bounds for span_mm = \[750\.0, 300\.0\]"):
         DesignMap(lower=(1000.0, 750.0, 50.0), upper=(3000.0, 300.0, 80.0))

@@ -24,7 +24,9 @@ from surrogate_rbrdo.spindle.substructure import (
     condensed_rotor,
     condensed_vector,
     coupled_tool_amplitude,
+    coupled_tool_amplitude_theta,
     retained_layout,
+    theta_grid,
     unbalance_force,
 )
 
@@ -123,9 +125,10 @@ def test_singular_rotor_is_reported():
                                unbalance_force(m, 24000.0, lay))
 
 
-def test_coupling_of_a_general_rotor():
-    """Three bearings (one preloaded, one with a housing stage), θ on two of them in reverse
-    order, an unbalance plane on a bearing node, the tool tip inside the shaft."""
+def _general_rotor(housing_on):
+    """Three bearings (one preloaded, one with its own damping matrix), θ on two of them in
+    reverse order, a housing stage on bearing ``housing_on``, an unbalance plane on a bearing
+    node, the tool tip inside the shaft."""
     from surrogate_rbrdo.spindle.assembly import build_model
     from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
@@ -153,14 +156,93 @@ def test_coupling_of_a_general_rotor():
     }
     geom = SpindleGeometry.from_dict(data)
     effects = (Gyroscopics(g=0.0), CrossCoupling(kappa=0.1),
-               HousingFlexibility(bearings=("c",), k_N_per_m=5e7, m_kg=3.0, c_Ns_per_m=500.0))
-    m = build_model(geom, effects, theta_bearings=("c", "a"))
+               HousingFlexibility(bearings=(housing_on,), k_N_per_m=5e7, m_kg=3.0,
+                                  c_Ns_per_m=500.0))
+    return build_model(geom, effects, theta_bearings=("c", "a"))
+
+
+def test_coupling_of_a_general_rotor():
+    m = _general_rotor("c")
     lay = retained_layout(m)
     assert lay.nodes[lay.tool] != 0 and len(lay.bearings) == 3   # tool tip not the end node
     theta = np.array([[1.0, 1.0], [1.2, 0.85], [0.7, 1.1]])
     for speed in (3000.0, 17000.0, 29000.0):
         np.testing.assert_allclose(_coupled(m, speed, theta), _dense_tool(m, speed, theta),
                                    rtol=1e-8)
+
+
+def test_theta_grid_interpolates_quadratics_in_each_component_exactly():
+    rng = np.random.default_rng(0)
+    for m in (1, 2, 3):
+        theta = rng.uniform(0.7, 1.3, size=(50, m))
+        nodes, basis = theta_grid(theta)
+        assert nodes.shape == (3**m, m) and basis.shape == (50, 3**m)
+        # nodes span the sample: every θ is interpolated, none extrapolated
+        np.testing.assert_allclose(nodes.min(0), theta.min(0))
+        np.testing.assert_allclose(nodes.max(0), theta.max(0))
+        c = rng.normal(size=(3,) * m)           # p(θ) = Σ c_{a..} θ_1^a θ_2^b ...
+
+        def p(t, c=c, m=m):
+            return sum(c[idx] * np.prod(t ** np.array(idx), axis=1)
+                       for idx in np.ndindex(*(3,) * m))
+
+        np.testing.assert_allclose(basis @ p(nodes), p(theta), rtol=1e-12, atol=1e-12)
+    # a component that does not vary still gets three distinct nodes
+    nodes, basis = theta_grid(np.array([[1.0, 0.9], [1.0, 1.1]]))
+    assert len(np.unique(nodes[:, 0])) == 3
+    np.testing.assert_allclose(basis.sum(axis=1), 1.0)
+
+
+def _poly(model, speed, theta):
+    lay = retained_layout(model)
+    S = condensed_rotor(model, np.array([speed]), lay)[0]
+    nodes, basis = theta_grid(theta)
+    Z = model.bearing_impedance(np.full((len(nodes), 1), speed * RPM), nodes)[:, 0]
+    return coupled_tool_amplitude_theta(lay, S, Z, unbalance_force(model, speed, lay), basis)
+
+
+THETA_SAMPLE = np.random.default_rng(5).normal(1.0, [0.0605, 0.0641], size=(40, 2))
+
+
+@pytest.mark.parametrize("x", DESIGNS)
+def test_theta_polynomial_coupling_equals_dense_solve(x):
+    """Known answer: the dense solve of the whole system at each of 40 θ (9 node solves)."""
+    m = SP.model(np.array(x))
+    for speed in (1500.0, 21783.0, 24000.0):
+        np.testing.assert_allclose(_poly(m, speed, THETA_SAMPLE),
+                                   _dense_tool(m, speed, THETA_SAMPLE), rtol=1e-8)
+
+
+@pytest.mark.parametrize("effect", [CrossCoupling(kappa=0.2), Anisotropy(s=0.3)])
+def test_theta_polynomial_coupling_with_bearing_effects(effect):
+    effects = (SpeedSoftening(bearings=("front",), a=0.19, exponent=1.25),
+               Gyroscopics(g=0.0), effect)
+    m = SP.model(np.array([2000.0, 600.0, 70.0]), effects=effects)
+    np.testing.assert_allclose(_poly(m, 24000.0, THETA_SAMPLE),
+                               _dense_tool(m, 24000.0, THETA_SAMPLE), rtol=1e-8)
+
+
+def test_theta_polynomial_coupling_of_a_general_rotor():
+    """Three bearings, θ on two in reverse order (one with its own damping matrix, so its
+    impedance is affine, not proportional, in θ), a housing stage on the θ-free bearing."""
+    m = _general_rotor("b")
+    theta = np.random.default_rng(6).uniform(0.6, 1.4, size=(30, 2))
+    for speed in (3000.0, 17000.0, 29000.0):
+        np.testing.assert_allclose(_poly(m, speed, theta), _dense_tool(m, speed, theta),
+                                   rtol=1e-8)
+
+
+def test_theta_affine_is_false_with_a_housing_stage_on_a_theta_bearing():
+    from surrogate_rbrdo.spindle.assembly import theta_affine
+
+    for housing_on, affine in (("b", True), ("c", False), ("a", False)):
+        m = _general_rotor(housing_on)
+        assert theta_affine(m.geometry, m.effects, m.theta_bearings) is affine
+    # and the polynomial really fails there: it is not a property we may skip
+    m = _general_rotor("c")
+    theta = np.random.default_rng(6).uniform(0.6, 1.4, size=(30, 2))
+    err = np.abs(_poly(m, 17000.0, theta) / _dense_tool(m, 17000.0, theta) - 1.0)
+    assert err.max() > 1e-6
 
 
 def test_pointwise_condensed_refuses_another_layout_or_unbalance():
