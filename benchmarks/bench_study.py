@@ -79,7 +79,8 @@ def main() -> None:
     n_gen = 20 if args.quick else 200
     forms, lo, hi, ss, info, dm, resp = build(args.problem)
     fe_calls = int(info["fe_calls"]) + int(dm.validation["n_fe_calls"])
-    print(f"problem {args.problem!r}: y = {resp.label}, surrogate {info.get('structure')!r} "
+    kind = info.get("structure", "global")
+    print(f"problem {args.problem!r}: y = {resp.label}, surrogate {kind!r} "
           f"trained on {info['n_train']} FE designs; FE calls of this run (DOE not cached + "
           f"g_det model): {fe_calls}; none inside the optimisation loop")
     seeds = ss.spawn(3)  # spawn once: the same three seeds for every configuration
