@@ -84,6 +84,15 @@ def spindle_from_config(section: Mapping[str, Any], base_dir: str | Path = ".") 
         sp = replace(sp, baseline=sp.design_map.check(np.asarray(section["baseline"], float)))
     if "theta_bearings" in section:
         sp = replace(sp, theta_bearings=tuple(section["theta_bearings"]))
+    # the design box: every check of DesignMap.apply (preload > 0, diameter > bore) is monotone
+    # in its variable, so the two corners stand for the whole box
+    dmap = sp.design_map
+    for name, corner in (("lower", dmap.lower), ("upper", dmap.upper)):
+        try:
+            sp.geometry_for(np.asarray(corner, dtype=float))
+        except ValueError as exc:
+            raise ValueError(f"[spindle.design_map] {name} = {list(corner)}: {exc}") from exc
+    sp.model(np.asarray(dmap.lower, dtype=float))     # effects and theta_bearings, checked
     return sp
 
 

@@ -354,15 +354,19 @@ class SubstructureSurrogate:
             w = np.array([self.speed_rpm * RPM])
             f = self.force_per_w2 * w[0] ** 2
             m = theta.shape[1]
+            rows = np.arange(X.shape[0])
+            out = np.empty((X.shape[0], theta.shape[0]))
             if self.theta_affine and theta.shape[0] >= POLY_MIN_RATIO * 3**m:
                 # all designs at once: 3^m exact solves per design, then an (N, 3^m) product
                 nodes, basis = theta_grid(theta)
                 Z = self._impedance(X, w, nodes)[:, :, 0]            # (P, 3^m, nb, 2, 2)
-                return coupled_tool_amplitude_theta(self.layout, Sn[:, 0], Z, f, basis)
-            # one design at a time (P·N·(2nb)² complex of memory otherwise)
-            Z = self._impedance(X, w, theta)[:, :, 0]                # (P, N, nb, 2, 2)
-            return np.array([coupled_tool_amplitude(self.layout, Sn[i, 0], Z[i], f)
-                             for i in range(X.shape[0])])
+                out[:], ok = coupled_tool_amplitude_theta(self.layout, Sn[:, 0], Z, f, basis)
+                rows = rows[~ok]            # round-off bound exceeded: those designs row by row
+            if rows.size:
+                Z = self._impedance(X[rows], w, theta)[:, :, 0]      # (p, N, nb, 2, 2)
+                for k, i in enumerate(rows):    # one design at a time: p·N·(2nb)² memory
+                    out[i] = coupled_tool_amplitude(self.layout, Sn[i, 0], Z[k], f)
+            return out
         out = np.empty((X.shape[0], theta.shape[0]))
         g = self.spindle.geometry
         for i, xi in enumerate(X):

@@ -227,10 +227,17 @@ def bearing_coefficients(
     stand for another design (``DesignMap.bearing_preloads``).
     """
     preloads = {} if preloads is None else preloads
-    for name in preloads:
-        law = next((b.law for b in geometry.bearings if b.name == name), None)
-        if not isinstance(law, PreloadLaw):
-            raise ValueError(f"preloads: bearing {name!r} is not a bearing with a 'preload' law")
+    laws = {b.name: b.law for b in geometry.bearings}
+    for name, F in preloads.items():
+        if name not in laws:
+            raise ValueError(f"preloads: {name!r} is not a bearing; bearings are {list(laws)}")
+        if not isinstance(laws[name], PreloadLaw):
+            raise ValueError(f"preloads: bearing {name!r} has a constant law; a preload needs "
+                             "a 'preload' law")
+        F = np.asarray(F, dtype=float)
+        if not np.all(np.isfinite(F) & (F > 0)):
+            raise ValueError(f"preloads[{name!r}] = {F[~(np.isfinite(F) & (F > 0))].flat[0]} "
+                             "is not allowed: must be finite and > 0 (N)")
     Ks, Cs = [], []
     for b in geometry.bearings:
         law = b.law
@@ -279,8 +286,8 @@ def bearing_impedance(
     A housing stage ``z_h = k + iΩc − Ω²m`` in series with a bearing is condensed into it:
     ``Z ← Z − Z (Z + z_h I)⁻¹ Z``. Arguments as :func:`bearing_coefficients`; ``supports``
     defaults to :func:`bearing_supports`. Without a stage, a θ bearing's impedance is affine in
-    its factor, ``Z_j(θ) = θ_j (K_j + iΩC_j) (+ iΩC_j for a law's own damping matrix)``
-    (:func:`theta_affine`).
+    its factor: ``Z_j(θ) = θ_j (K_j + iΩ η K_j,sym)`` with proportional damping, or
+    ``θ_j K_j + iΩ C_j`` with a law's own damping matrix (:func:`theta_affine`).
     """
     Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, omega, theta, preloads)
     Zb = Kb + 1j * omega[..., None, None, None] * Cb
@@ -305,6 +312,15 @@ def theta_affine(geometry: SpindleGeometry, effects: Sequence[Effect],
 
     θ scales a bearing's stiffness after every effect and its damping is either proportional
     to that stiffness or a constant matrix, so without a stage ``Z_j = θ_j A_j + B_j``.
+
+    >>> from surrogate_rbrdo.spindle.effects import HousingFlexibility
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> sp = reference_spindle()
+    >>> theta_affine(sp.geometry, sp.effects, ("front", "rear"))
+    True
+    >>> theta_affine(sp.geometry, (HousingFlexibility(bearings=("rear",), k_N_per_m=1e8,
+    ...                                               m_kg=10.0),), ("front", "rear"))
+    False
     """
     supports = bearing_supports(geometry, effects)
     return all(s is None for b, s in zip(geometry.bearings, supports, strict=True)
@@ -344,6 +360,9 @@ def build_model(
     for t in theta_bearings:
         if t not in names:
             raise ValueError(f"theta_bearings: {t!r} is not a bearing; bearings are {names}")
+    if len(set(theta_bearings)) != len(theta_bearings):
+        raise ValueError(f"theta_bearings = {list(theta_bearings)} is not allowed: each bearing "
+                         "may carry one θ factor (a name appears twice)")
 
     z, sec_idx = _mesh(geometry)
     nn = z.size

@@ -386,9 +386,10 @@ class DesignMap:
     def check_batch(self, X: np.ndarray) -> np.ndarray:
         """Validate designs ``X`` (P, 3) at once; the first bad row raises :meth:`check`'s
         error."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
+        X0 = np.asarray(X, dtype=float)
+        X = np.atleast_2d(X0)
         if X.ndim != 2 or X.shape[1] != 3:
-            raise ValueError(f"designs have shape {X.shape}: must be (P, 3) = {self.names}")
+            raise ValueError(f"designs have shape {X0.shape}: must be (P, 3) = {self.names}")
         ok = np.all(np.isfinite(X) & (X >= self.lower) & (X <= self.upper), axis=1)
         if not ok.all():
             self.check(X[int(np.argmin(ok))])

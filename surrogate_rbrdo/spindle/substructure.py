@@ -152,13 +152,21 @@ def _rotor_solve(layout: RetainedLayout, S: np.ndarray, f: np.ndarray
     return X[..., 0], X[..., 1:], pb, pt
 
 
-def _block_diagonal(Z: np.ndarray) -> np.ndarray:
-    """``(..., nb, 2, 2)`` bearing blocks → ``(..., 2nb, 2nb)`` block-diagonal matrix."""
-    nb = Z.shape[-3]
-    out = np.zeros(Z.shape[:-3] + (2 * nb, 2 * nb), dtype=complex)
-    for j in range(nb):
-        out[..., 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[..., j, :, :]
-    return out
+def _couple(Hf: np.ndarray, HP: np.ndarray, pb: np.ndarray, pt: np.ndarray, Z: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Tool displacement ``q = H_t f − H_tP (I + Z P'HP)⁻¹ Z P'H f`` (..., 2) and the coupled
+    matrix ``I + Z P'HP``, for bearing impedances ``Z`` (..., nb, 2, 2)."""
+    nb2 = pb.size
+    Zfull = np.zeros(Z.shape[:-3] + (nb2, nb2), dtype=complex)       # block diagonal
+    for j in range(Z.shape[-3]):
+        Zfull[..., 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[..., j, :, :]
+    lhs = np.eye(nb2) + Zfull @ HP[..., pb, :]
+    rhs = Zfull @ Hf[..., pb, None]
+    try:
+        u = np.linalg.solve(lhs, np.broadcast_to(rhs, lhs.shape[:-1] + (1,)))[..., 0]
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("coupled_tool_amplitude: singular coupled system") from exc
+    return Hf[..., pt] - (HP[..., pt, :] @ u[..., None])[..., 0], lhs
 
 
 def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
@@ -185,18 +193,7 @@ def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
     each θ costs one ``2 nb``-square solve.
     """
     batch = np.broadcast_shapes(S.shape[:-2], Z.shape[:-3], f.shape[:-1])
-    Hf, HP, pb, pt = _rotor_solve(layout, S, f)
-    Zfull = _block_diagonal(Z)
-    G = HP[..., pb, :]                                                        # P'HP
-    g = Hf[..., pb]                                                           # P'Hf
-    lhs = np.eye(pb.size) + Zfull @ G
-    rhs = (Zfull @ g[..., None])[..., 0]
-    try:
-        u = np.linalg.solve(lhs, np.broadcast_to(rhs, np.broadcast_shapes(
-            lhs.shape[:-1], rhs.shape))[..., None])[..., 0]
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("coupled_tool_amplitude: singular coupled system") from exc
-    q = Hf[..., pt] - (HP[..., pt, :] @ u[..., None])[..., 0]
+    q, _ = _couple(*_rotor_solve(layout, S, f), Z)
     q = np.broadcast_to(q, batch + (2,))
     out = orbit_amplitude(q[..., 0], q[..., 1])
     if not np.all(np.isfinite(out)):
@@ -212,13 +209,15 @@ _CHUNK = 16
 def theta_grid(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Interpolation nodes spanning a θ sample and the Lagrange basis of the sample on them.
 
-    Three nodes per component (its min, midpoint and max; ±5 % about a component that does not
-    vary), their tensor grid of ``K = 3^m`` nodes, and the tensor-product quadratic Lagrange
-    basis evaluated at every row of ``theta``.
+    Three nodes per component, ``c − h, c, c + h`` with ``c`` the midpoint of the component's
+    range and ``h`` its half-width, widened to 5 % of ``|c|`` for a component that varies less
+    (so the nodes stay distinct); their tensor grid of ``K = 3^m`` nodes; and the
+    tensor-product quadratic Lagrange basis at every row of ``theta``.
 
     Parameters
     ----------
     theta : ndarray (N, m)
+        Finite values.
 
     Returns
     -------
@@ -235,10 +234,14 @@ def theta_grid(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> bool(np.isclose(theta_grid(np.vstack([nodes, th]))[1][-1] @ p(nodes), p(th)[0]))
     True
     """
-    th = np.atleast_2d(np.asarray(theta, dtype=float))
+    th = np.asarray(theta, dtype=float)
+    if th.ndim != 2 or th.shape[0] == 0 or th.shape[1] == 0 or not np.all(np.isfinite(th)):
+        raise ValueError(f"theta of shape {th.shape} is not allowed: give finite values of "
+                         "shape (N, m), N ≥ 1, m ≥ 1")
     lo, hi = th.min(axis=0), th.max(axis=0)
     c = 0.5 * (lo + hi)
     h = np.maximum(0.5 * (hi - lo), 0.05 * np.abs(c))
+    h = np.where(h > 0, h, 1.0)                                          # constant 0 column
     t = c[:, None] + h[:, None] * np.array([-1.0, 0.0, 1.0])            # (m, 3)
     L = np.ones(th.shape + (3,))                                         # (N, m, 3)
     for a in range(3):
@@ -254,16 +257,26 @@ def theta_grid(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def coupled_tool_amplitude_theta(layout: RetainedLayout, S: np.ndarray, Z_nodes: np.ndarray,
-                                 f: np.ndarray, basis: np.ndarray) -> np.ndarray:
+                                 f: np.ndarray, basis: np.ndarray, *, rtol: float = 1e-9
+                                 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`coupled_tool_amplitude` for a whole θ sample from ``K`` exact solves per ``S``.
 
     When every bearing impedance is affine in its θ factor
     (:func:`~surrogate_rbrdo.spindle.assembly.theta_affine`), the rows of the coupled matrix
-    ``I + Z P'HP`` that belong to bearing ``j`` are affine in ``θ_j``, so by Cramer's rule the
-    tool displacement is ``q(θ) = n(θ) / d(θ)`` with ``d = det(I + Z P'HP)`` and ``n = q d``
-    polynomials of degree ≤ 2 in each ``θ_j``. Both are solved exactly at the nodes of
-    :func:`theta_grid` and interpolated exactly (up to round-off) to every θ: a sample of
+    ``I + Z P'HP`` that belong to bearing ``j``, and the entries of ``Z P'Hf``, are affine in
+    ``θ_j``; by Cramer's rule the tool displacement is ``q(θ) = n(θ) / d(θ)`` with
+    ``d = det(I + Z P'HP)`` and ``n = q d`` polynomials of degree ≤ 2 in each ``θ_j``. Both are
+    solved exactly at the nodes of :func:`theta_grid` and interpolated to every θ: a sample of
     ``N`` θ costs ``K = 3^m`` small solves and one ``(N, K)`` product instead of ``N`` solves.
+
+    The interpolation is exact in exact arithmetic; in floating point it amplifies the
+    round-off of the node values by ``Λ max_k |p_k| / min_n |p(θ_n)|`` (``Λ`` the Lebesgue
+    constant of ``basis``, ``p`` each of ``n``'s circular components and ``d``), which grows
+    with the spread of the sample. Where ``eps`` times that bound exceeds ``rtol``,
+    ``reliable`` is False and the caller should solve row by row. Measured on the reference
+    spindle against the row-by-row solve: ≤ 2e-12 for normal θ with CoV up to 0.15, ≤ 2e-10
+    with CoV 0.3 (θ from 0.13 to 1.94, all reliable), 1e-6 to 1e-2 for log-uniform θ over
+    0.01–100 or 0.001–1 000 (all flagged unreliable).
 
     Parameters
     ----------
@@ -274,41 +287,62 @@ def coupled_tool_amplitude_theta(layout: RetainedLayout, S: np.ndarray, Z_nodes:
     f : ndarray (..., r)
     basis : ndarray (N, K)
         ``theta_grid``'s basis of the sample.
+    rtol : float
+        Bound on the interpolation's relative round-off error.
 
     Returns
     -------
-    ndarray (..., N)
+    y : ndarray (..., N)
         Tool-tip orbit semi-major axis (m); equal to :func:`coupled_tool_amplitude` at each θ.
+    reliable : ndarray of bool (...)
+        Whether the round-off bound is below ``rtol`` for every θ of the batch item.
+
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> from surrogate_rbrdo.spindle.assembly import RPM
+    >>> m = reference_spindle().model(np.array([3000.0, 442.5, 65.7]))
+    >>> lay, w = retained_layout(m), 24000.0 * RPM
+    >>> S = condensed_rotor(m, np.array([24000.0]), lay)[0]
+    >>> f = unbalance_force(m, 24000.0, lay)
+    >>> th = np.random.default_rng(0).normal(1.0, 0.06, size=(200, 2))
+    >>> nodes, basis = theta_grid(th)                                # 9 nodes for 200 θ
+    >>> Zn = m.bearing_impedance(np.full((9, 1), w), nodes)[:, 0]
+    >>> y, ok = coupled_tool_amplitude_theta(lay, S, Zn, f, basis)
+    >>> y_rows = coupled_tool_amplitude(
+    ...     lay, S, m.bearing_impedance(np.full((200, 1), w), th)[:, 0], f)
+    >>> bool(ok), bool(np.allclose(y, y_rows, rtol=1e-12, atol=0))
+    (True, True)
     """
     Hf, HP, pb, pt = _rotor_solve(layout, S, f)
-    Zfull = _block_diagonal(Z_nodes)                                     # (..., K, 2nb, 2nb)
-    G = HP[..., None, pb, :]
-    g = Hf[..., None, pb, None]
-    lhs = np.eye(pb.size) + Zfull @ G
-    try:
-        u = np.linalg.solve(lhs, Zfull @ g)[..., 0]                      # (..., K, 2nb)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("coupled_tool_amplitude: singular coupled system") from exc
+    q, lhs = _couple(Hf[..., None, :], HP[..., None, :, :], pb, pt, Z_nodes)  # (..., K, 2)
     d = np.linalg.det(lhs)                                               # (..., K)
-    q = Hf[..., None, pt] - (HP[..., None, pt, :] @ u[..., None])[..., 0]  # (..., K, 2)
     # orbit semi-major axis = (|q_x + i q_y| + |q_x − i q_y|) / 2: interpolate the numerators
     # of both circular components and the denominator, as real rows of one real product
     nd = np.stack([d * (q[..., 0] + 1j * q[..., 1]), d * (q[..., 0] - 1j * q[..., 1]), d],
                   axis=-2)                                               # (..., 3, K)
+    big = np.abs(nd).max(axis=-1)                                        # (..., 3)
     ri = np.stack([nd.real, nd.imag], axis=-2)                          # (..., 3, 2, K)
     batch, K = ri.shape[:-3], ri.shape[-1]
-    ri = ri.reshape(-1, 6 * K)
-    bT = np.ascontiguousarray(np.asarray(basis, dtype=float).T)          # (K, N)
+    ri, big = ri.reshape(-1, 6 * K), big.reshape(-1, 3)
+    basis = np.asarray(basis, dtype=float)
+    bT = np.ascontiguousarray(basis.T)                                   # (K, N)
+    lebesgue = float(np.abs(basis).sum(axis=1).max())
     out = np.empty((ri.shape[0], bT.shape[1]))
+    bound = np.empty(ri.shape[0])
     for s in range(0, ri.shape[0], _CHUNK):     # blocks of designs: their (6, N) rows stay in cache
         v = ri[s:s + _CHUNK].reshape(-1, K) @ bT
         v *= v
         v = np.sqrt(v[0::2] + v[1::2]).reshape(-1, 3, bT.shape[1])       # moduli |a|, |b|, |d|
-        np.divide(v[:, 0] + v[:, 1], 2.0 * v[:, 2], out=out[s:s + _CHUNK])
+        ab = v[:, 0] + v[:, 1]
+        bl = big[s:s + _CHUNK]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            np.divide(ab, 2.0 * v[:, 2], out=out[s:s + _CHUNK])
+            bound[s:s + _CHUNK] = ((bl[:, 0] + bl[:, 1]) / ab.min(axis=1)
+                                   + bl[:, 2] / v[:, 2].min(axis=1))
     out = out.reshape(*batch, bT.shape[1])
-    if not np.all(np.isfinite(out)):
-        raise ModelError("coupled_tool_amplitude: non-finite amplitude")
-    return out
+    reliable = (np.finfo(float).eps * lebesgue * bound <= rtol).reshape(batch)
+    if not np.all(np.isfinite(out[reliable])):
+        raise ModelError("coupled_tool_amplitude_theta: non-finite amplitude")
+    return out, reliable
 
 
 def condensed_vector(S: np.ndarray) -> np.ndarray:

@@ -94,6 +94,37 @@ def test_theta_sample_path_equals_the_row_by_row_coupling(at_speed, monkeypatch)
     np.testing.assert_allclose(y_poly, sur(DESIGNS, THETA), rtol=1e-10)
 
 
+def test_falls_back_to_rows_without_theta_affinity_or_with_a_wide_sample(monkeypatch):
+    """With a housing stage on a θ bearing the impedance is rational in θ: the surrogate must
+    couple row by row (known answer: the FE model). A sample over 0.001–1 000 exceeds the
+    round-off bound and is coupled row by row too."""
+    from dataclasses import replace
+
+    import surrogate_rbrdo.runner.substructure_surrogate as mod
+    from surrogate_rbrdo.spindle.effects import HousingFlexibility
+
+    sp = replace(SP, effects=(*SP.effects, HousingFlexibility(
+        bearings=("front",), k_N_per_m=3e8, m_kg=12.0, c_Ns_per_m=3000.0)))
+    cfg = SurrogateConfig(structure="substructure", n_doe=40, n_jobs=1, backend="sequential",
+                          n_start=2)
+    sur, _ = train_peak_surrogate(sp, None, None, cfg, rng=np.random.default_rng(0),
+                                  response=AT)
+    assert not sur.theta_affine
+    y = sur(DESIGNS[:3], THETA)
+    y_fe = AtSpeedAmplitudeResponse(sp, 24000.0)(DESIGNS[:3], THETA)
+    np.testing.assert_allclose(y, y_fe, rtol=2e-2)
+    # forcing the polynomial path here would be wrong by more than the Kriging error
+    monkeypatch.setattr(sur, "theta_affine", True)
+    assert np.abs(sur(DESIGNS[:3], THETA) / y - 1).max() > 1e-4
+    # a wide sample on an affine spindle: flagged, then coupled row by row
+    wide = np.exp(np.random.default_rng(8).uniform(np.log(1e-3), np.log(1e3), size=(60, 2)))
+    sur2, _ = train_peak_surrogate(SP, None, None, cfg, rng=np.random.default_rng(0),
+                                   response=AT)
+    y_wide = sur2(DESIGNS[:2], wide)
+    monkeypatch.setattr(mod, "POLY_MIN_RATIO", 10**9)
+    np.testing.assert_array_equal(y_wide, sur2(DESIGNS[:2], wide))
+
+
 def test_loo_points_are_exact_at_training_designs(at_speed):
     sur, _ = at_speed
     y_true, y_loo = sur.loo_points()

@@ -114,6 +114,9 @@ def test_bad_model_arguments_raise(ref_model):
     geo = ref_model.geometry
     with pytest.raises(ValueError, match="theta_bearings: 'middle' is not a bearing"):
         build(geo, theta_bearings=("middle",))
+    name = geo.bearings[0].name
+    with pytest.raises(ValueError, match="a name appears twice"):
+        build(geo, theta_bearings=(name, name))
     with pytest.raises(ValueError, match="is not an Effect"):
         build(geo, ["speed_softening"])
     with pytest.raises(ValueError, match=r"theta = \[0.0, 1.0\] is not allowed"):
@@ -139,10 +142,13 @@ def test_preload_override_equals_each_designs_own_bearings():
         own = bearing_impedance(sp.geometry_for(x), effects, sp.theta_bearings, omega,
                                 theta[i:i + 1])
         np.testing.assert_array_equal(Z[i], own[0])
-    with pytest.raises(ValueError, match="bearing 'nose' is not a bearing with a 'preload'"):
+    with pytest.raises(ValueError, match=r"'nose' is not a bearing; bearings are \['front', "):
         bearing_impedance(sp.geometry, effects, sp.theta_bearings, omega, theta[:1],
                           preloads={"nose": 2000.0})
+    with pytest.raises(ValueError, match=r"preloads\['front'\] = 0.0 is not allowed"):
+        bearing_impedance(sp.geometry, effects, sp.theta_bearings, omega, theta[:1],
+                          preloads={"front": np.array([2000.0, 0.0])})
     rigid = rigid_rotor_geometry(1e8)             # constant-law bearings: nothing to override
     name = rigid.bearings[0].name
-    with pytest.raises(ValueError, match=f"bearing '{name}' is not a bearing with a 'preload'"):
+    with pytest.raises(ValueError, match=f"bearing '{name}' has a constant law"):
         bearing_impedance(rigid, (), (name,), omega, theta[:1, :1], preloads={name: 2000.0})

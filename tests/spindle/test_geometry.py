@@ -112,7 +112,7 @@ def test_batch_check_names_the_first_bad_design_and_preloads_come_from_x():
         dm.check_batch(X)
     with pytest.raises(ValueError, match=r"design preload_N = 999\.0"):
         dm.bearing_preloads(X[[0, 2]])
-    with pytest.raises(ValueError, match=r"designs have shape \(1, 2\)"):
+    with pytest.raises(ValueError, match=r"designs have shape \(2,\)"):
         dm.check_batch(np.array([2000.0, 500.0]))
     good = np.array([[1500.0, 400.0, 60.0], [2500.0, 700.0, 79.0]])
     pre = dm.bearing_preloads(good)
