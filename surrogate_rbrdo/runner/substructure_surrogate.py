@@ -435,7 +435,8 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
                              n_start=n_start).fit(X, Vc, rng=rng)
     fit_s = time.perf_counter() - t0
     force = unbalance_force(m0, 1.0 / RPM, layout)       # at Ω = 1 rad/s: scale by Ω² at use
-    info = {"structure": "substructure", "n_train": int(X.shape[0]), "fit_time_s": fit_s,
+    info = {"structure": "substructure", "transform": "none (S standardised per entry)",
+            "n_train": int(X.shape[0]), "fit_time_s": fit_s,
             "speed_nodes_rpm": nodes_rpm.tolist(), "retained_nodes": list(layout.nodes),
             "n_outputs": int(krg.vary_.sum()), "n_structural_zeros": int(zero.sum()),
             "length_scales_unit_box": krg.length_scales, "nugget": krg.nugget_used_}

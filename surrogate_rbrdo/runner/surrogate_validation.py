@@ -191,7 +191,8 @@ LOO_HEADER = ["variant", "method", "n_train", "r2_fitted_space", "rmse_fitted_sp
 MC_HEADER = ["variant", "design", "preload_N", "span_mm", "diameter_mm", "mean_fe_um",
              "mean_sur_um", "mean_rel_err", "ok_mean", "std_fe_um", "std_sur_um",
              "std_rel_err", "ok_std", "pf_fe", "pf_sur", "pf_abs_err", "pf_tol", "ok_pf"]
-COST_HEADER = ["variant", "active_learning", "transform", "fe_calls_train", "n_train",
+COST_HEADER = ["variant", "active_learning", "structure", "transform", "fe_calls_train",
+               "n_train",
                "fit_time_s", "train_time_s", "max_pf_abs_err", "mean_pf_abs_err", "n_pf_pass",
                "n_mean_pass", "n_std_pass", "n_designs"]
 
@@ -333,10 +334,8 @@ def run_surrogate_validation(config: Mapping[str, Any], run: RunFolder, *,
                 round(cmp.std_rel_err[i], 4), bool(cmp.ok_std[i]),
                 round(cmp.pf_true[i], 4), round(cmp.pf_sur[i], 4), round(pf_err[i], 4),
                 round(cmp.pf_tol[i], 4), bool(cmp.ok_pf[i])])
-        cost_rows.append([name, cfg.active_learning,
-                          cfg.structure if cfg.structure in ("resonance", "substructure")
-                          else cfg.transform,
-                          fe_train, sur.n_train,
+        cost_rows.append([name, cfg.active_learning, cfg.structure,
+                          info.get("transform", cfg.transform), fe_train, sur.n_train,
                           round(info["fit_time_s"], 2), round(train_s, 2),
                           round(float(pf_err.max()), 4), round(float(pf_err.mean()), 4),
                           int(cmp.ok_pf.sum()), int(cmp.ok_mean.sum()), int(cmp.ok_std.sum()),

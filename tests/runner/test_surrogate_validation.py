@@ -174,7 +174,8 @@ def test_tiny_run_with_resonance_variant(tmp_path):
     m = {r["variant"]: r for r in _read(run.path / "metrics.csv")}
     assert {k: v for k, v in m["copy"].items() if k != "variant"} == \
         {k: v for k, v in m["main"].items() if k != "variant"}
-    assert int(cost["res"]["n_train"]) == 20 and cost["res"]["transform"] == "resonance"
+    assert int(cost["res"]["n_train"]) == 20 and cost["res"]["structure"] == "resonance"
+    assert cost["res"]["transform"] == "log" and cost["copy"]["structure"] == "global"
     loo = [r for r in _read(run.path / "loo.csv") if r["variant"] == "res"]
     assert loo[0]["method"] == "closed_form_combined"
     assert {r["method"] for r in loo[1:]} >= {"closed_form:nc", "closed_form:ares"}
