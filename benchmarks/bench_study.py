@@ -27,6 +27,7 @@ timed loop). Prints wall time, surrogate calls and FE calls.
 from __future__ import annotations
 
 import argparse
+import resource
 import time
 from functools import partial
 
@@ -105,6 +106,9 @@ def main() -> None:
             same = all(np.array_equal(a, b) for a, b in
                        zip(archives[(engine, 1)], archives[(engine, 2)], strict=True))
             print(f"{engine}: 2-process archives == sequential (bit for bit): {same}")
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak memory (ru_maxrss) of this process, which ran the sequential runs: "
+          f"{rss:.0f} MB (the 2-process runs' workers are not included)")
     print("target: <= 10 s wall for the three runs")
 
 
