@@ -567,6 +567,16 @@ def run_study(config: Mapping[str, Any], run: RunFolder, *, progress: bool = Fal
                     if n == "rbrdo" and lab in idx]
         for r in mbr_table(levels_f):
             mbr_rows.append({"source": "fe_verification", **r})
+    # the ends of each feasible front (least μ, least σ: from different designs) do not jump
+    # between branches as a compromise can, and under CRN they can only worsen as P_target
+    # tightens (the feasible set shrinks; an optimiser's fronts only approximately so)
+    levels_e = [(pt, fronts[lab][:, 0].min(), fronts[lab][:, 1].min())
+                for (n, pt), lab in zip(runs, labels, strict=True)
+                if n == "rbrdo" and len(fronts[lab])]
+    if len(levels_e) >= 2:
+        for r in mbr_table(levels_e):
+            mbr_rows.append({"source": "front_ends_crn", **r})
+    if mbr_rows:
         write_csv(run.file("mbr.csv"), mbr_rows)
 
     comp_rows = []

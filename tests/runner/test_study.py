@@ -1,5 +1,6 @@
 """The ``study`` experiment end to end on a tiny config, and its config errors."""
 
+import csv
 import json
 from pathlib import Path
 
@@ -71,8 +72,21 @@ def test_tiny_study_writes_the_expected_files(tmp_path):
     ver = (run.path / "verification.csv").read_text().splitlines()
     assert ver[0].startswith("design,preload_N,span_mm,diameter_mm")
     assert len(ver) == 1 + 6
-    mbr = (run.path / "mbr.csv").read_text().splitlines()
-    assert len(mbr) == 1 + 2     # one step (10 % -> 1 %) from the surrogate and from the FE
+    mbr = list(csv.DictReader((run.path / "mbr.csv").open()))
+    # one step (10 % -> 1 %) from the surrogate's and the FE model's compromises, and from the
+    # ends of the two fronts
+    assert [r["source"] for r in mbr] == ["surrogate_crn", "fe_verification", "front_ends_crn"]
+    fronts = list(csv.DictReader((run.path / "pareto_fronts.csv").open()))
+
+    def end(run_label, col):
+        return min(float(r[col]) for r in fronts if r["run"] == run_label)
+
+    ends = mbr[2]
+    for col, key in (("mean_um", "delta_mean_um"), ("std_um", "delta_std_um")):
+        np.testing.assert_allclose(float(ends[key]),
+                                   end("rbrdo 1%", col) - end("rbrdo 10%", col), atol=1e-9)
+    np.testing.assert_allclose(float(ends["mbr_um_per_pp"]),
+                               abs(float(ends["delta_std_um"])) / 9.0, rtol=1e-9)
 
 
 def test_refine_round_evaluates_the_chosen_designs(tmp_path):
