@@ -51,7 +51,7 @@ from surrogate_rbrdo.core.validate import (
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling import evaluate_points
 from surrogate_rbrdo.sampling.evaluate import BACKENDS
-from surrogate_rbrdo.spindle.evaluate import PointwiseResonance, ResponseSpec
+from surrogate_rbrdo.spindle.evaluate import FE_METHODS, PointwiseResonance, ResponseSpec
 from surrogate_rbrdo.surrogates import SURROGATES, GPROptions, KrigingOptions
 from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
 
@@ -145,6 +145,11 @@ class SurrogateConfig:
     sub_n_speeds : int
         Structure ``"substructure"`` with the peak response: Chebyshev speed nodes at which
         the condensed stiffness is trained and between which it is interpolated.
+    fe_method : str
+        Structure ``"fe"``: how the FE model in the loop is solved (both exact;
+        ``AtSpeedAmplitudeResponse``). ``"auto"`` (default): ``"condensed"`` for the at-speed
+        response (rotor condensed once per design, the θ sample through 3^m node solves),
+        ``"direct"`` for the peak (the only method there).
     res_ares_local : float
         ``0`` (default): off. Otherwise a second, *local* Kriging of ``log A_res`` fitted only
         on the training points with the resonance in the range (``r >= 1``) and
@@ -185,6 +190,7 @@ class SurrogateConfig:
     res_bg_only_r: float = 0.0
     res_ares_local: float = 0.0
     sub_n_speeds: int = 12
+    fe_method: str = "auto"
 
     def __post_init__(self) -> None:
         check_int("n_doe", self.n_doe, minimum=7)
@@ -234,6 +240,7 @@ class SurrogateConfig:
             raise ValueError("active_learning = True is not allowed with structure = 'fe': "
                              "there is no surrogate to enrich")
         check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
+        check_choice("fe_method", self.fe_method, ("auto", *FE_METHODS))
         if self.structure == "substructure" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'substructure': its DOE is over the designs only (θ is exact)")
@@ -689,10 +696,15 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
         raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
                          f"= {response.kind!r}: the resonance structure models the peak over "
                          "the speed range; use 'global', 'substructure' or 'fe'")
+    if cfg.fe_method == "condensed" and response.kind == "peak":
+        raise ValueError("surrogate.fe_method = 'condensed' is not allowed with response.kind = "
+                         "'peak': only 'direct' or 'auto' (the peak is searched per θ)")
     if cfg.structure == "fe":
+        method = cfg.fe_method if cfg.fe_method != "auto" else (
+            "condensed" if response.kind == "at_speed" else "direct")
         info = {"structure": "fe", "response": response.label, "fe_calls": 0,
-                "n_train": 0, "config": {"structure": "fe"}}
-        return FullModel(response.fe_response(spindle), info=info), info
+                "n_train": 0, "config": {"structure": "fe", "fe_method": method}}
+        return FullModel(response.fe_response(spindle, method), info=info), info
     rng = require_rng(rng)
     r_doe, r_fit = rng.spawn(2)
     counter = counter if counter is not None else CallCounter()

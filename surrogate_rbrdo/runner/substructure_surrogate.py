@@ -50,6 +50,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.spindle import substructure
 from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta, theta_affine
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.substructure import (
@@ -67,10 +68,6 @@ from surrogate_rbrdo.surrogates._common import blas_threads
 #: entries of S smaller than this fraction of ``sqrt(|S_ii| |S_jj|)`` at every training design
 #: are round-off of exact zeros (e.g. x–y coupling without gyroscopics) and are set to zero
 STRUCTURAL_ZERO = 1e-8
-
-#: the θ-polynomial coupling (``3^m`` node solves per design) is used for a θ sample of at least
-#: this many times ``3^m`` rows; smaller samples are solved row by row
-POLY_MIN_RATIO = 4
 
 
 def chebyshev_nodes(lo: float, hi: float, n: int) -> np.ndarray:
@@ -356,7 +353,7 @@ class SubstructureSurrogate:
             m = theta.shape[1]
             rows = np.arange(X.shape[0])
             out = np.empty((X.shape[0], theta.shape[0]))
-            if self.theta_affine and theta.shape[0] >= POLY_MIN_RATIO * 3**m:
+            if self.theta_affine and theta.shape[0] >= substructure.POLY_MIN_RATIO * 3**m:
                 # all designs at once: 3^m exact solves per design, then an (N, 3^m) product
                 nodes, basis = theta_grid(theta)
                 Z = self._impedance(X, w, nodes)[:, :, 0]            # (P, 3^m, nb, 2, 2)

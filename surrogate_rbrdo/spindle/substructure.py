@@ -40,7 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
-from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+from surrogate_rbrdo.core.validate import check_positive
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel, theta_affine
 from surrogate_rbrdo.spindle.harmonic import dynamic_coefficients, orbit_amplitude, unbalance_load
 
 
@@ -201,6 +202,10 @@ def coupled_tool_amplitude(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray,
     return out
 
 
+#: the θ-polynomial coupling (``3^m`` node solves) is used for a θ sample of at least this many
+#: times ``3^m`` rows; smaller samples are solved row by row
+POLY_MIN_RATIO = 4
+
 #: designs per block in the last step of :func:`coupled_tool_amplitude_theta` (measured: 16
 #: blocks of (6, 1 000) rows ran 4x faster than one (600, 1 000) array)
 _CHUNK = 16
@@ -345,6 +350,43 @@ def coupled_tool_amplitude_theta(layout: RetainedLayout, S: np.ndarray, Z_nodes:
     return out, reliable
 
 
+def tool_amplitude_condensed(model: SpindleModel, speed_rpm: float,
+                             theta: np.ndarray | None = None) -> np.ndarray:
+    """Tool-tip amplitude (m) at one speed for θ rows ``(N,)``, by exact condensation.
+
+    The same quantity as ``harmonic.tool_amplitude(model, [speed_rpm], theta)[:, 0]``, solved
+    differently: the rotor is condensed onto its retained nodes once, and the θ sample goes
+    through :func:`coupled_tool_amplitude_theta` (``3^m`` node solves) when every θ bearing's
+    impedance is affine in θ, the sample has at least ``POLY_MIN_RATIO · 3^m`` rows and the
+    round-off bound holds; otherwise through :func:`coupled_tool_amplitude` row by row.
+    Nothing is approximated.
+
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> from surrogate_rbrdo.spindle.harmonic import tool_amplitude
+    >>> m = reference_spindle().model(np.array([3000.0, 442.5, 65.7]))
+    >>> th = np.random.default_rng(0).normal(1.0, 0.06, size=(100, 2))
+    >>> y = tool_amplitude_condensed(m, 24000.0, th)
+    >>> bool(np.allclose(y, tool_amplitude(m, np.array([24000.0]), th)[:, 0], rtol=1e-9))
+    True
+    """
+    th = model.check_theta(theta)
+    speed = check_positive("speed_rpm", speed_rpm)
+    lay = retained_layout(model)
+    S = condensed_rotor(model, np.array([speed]), lay)[0]
+    f = unbalance_force(model, speed, lay)
+    w = speed * RPM
+    K = 3 ** th.shape[1]
+    if th.shape[0] >= POLY_MIN_RATIO * K and theta_affine(model.geometry, model.effects,
+                                                          model.theta_bearings):
+        nodes, basis = theta_grid(th)
+        Zn = model.bearing_impedance(np.full((K, 1), w), nodes)[:, 0]
+        y, ok = coupled_tool_amplitude_theta(lay, S, Zn, f, basis)
+        if ok:
+            return y
+    Z = model.bearing_impedance(np.full((th.shape[0], 1), w), th)[:, 0]
+    return coupled_tool_amplitude(lay, S, Z, f)
+
+
 def condensed_vector(S: np.ndarray) -> np.ndarray:
     """Real vector ``[Re S, Im S]`` (flattened) of condensed stiffnesses ``(..., r, r)``."""
     return np.concatenate([S.real.reshape(*S.shape[:-2], -1),
@@ -392,6 +434,7 @@ class PointwiseCondensed:
 
 
 __all__ = [
+    "POLY_MIN_RATIO",
     "PointwiseCondensed",
     "RetainedLayout",
     "condensed_from_vector",
@@ -402,5 +445,6 @@ __all__ = [
     "retained_layout",
     "rotor_dynamic_stiffness",
     "theta_grid",
+    "tool_amplitude_condensed",
     "unbalance_force",
 ]

@@ -143,6 +143,7 @@ def test_structure_fe_is_the_fe_model_itself():
     X = np.array([[2000.0, 465.8, 65.0], [3000.0, 600.0, 80.0]])
     th = np.array([[1.0, 1.0], [0.95, 1.08]])
     assert isinstance(fm.fe, AtSpeedAmplitudeResponse) and fm.fe.speed_rpm == 24000.0
+    assert fm.fe.method == "condensed" == info["config"]["fe_method"]    # "auto", at speed
     Z = np.column_stack([np.repeat(X, 2, axis=0), np.tile(th, (2, 1))])
     np.testing.assert_allclose(fm.response_points(Z), fm.response(X, th).ravel(), rtol=1e-12)
 
@@ -173,6 +174,25 @@ def test_resonance_structure_requires_the_peak_response():
                              LimitState(1e-6), SurrogateConfig(structure="resonance"),
                              rng=np.random.default_rng(0),
                              response=ResponseSpec("at_speed", 24000.0))
+
+
+def test_fe_method_is_checked_and_condensed_needs_the_at_speed_response():
+    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+
+    with pytest.raises(ValueError, match=r"fe_method = 'fast' is not allowed: must be one of "
+                                         r"\['auto', 'direct', 'condensed'\]"):
+        SurrogateConfig(structure="fe", fe_method="fast")
+    with pytest.raises(ValueError, match=r"fe_method = 'condensed' is not allowed with "
+                                         r"response.kind = 'peak'"):
+        train_peak_surrogate(reference_spindle(), MultivariateNormal([1.0, 1.0], std=[0.06, 0.06]),
+                             LimitState(1e-6), SurrogateConfig(structure="fe",
+                                                               fe_method="condensed"),
+                             rng=np.random.default_rng(0), response=ResponseSpec())
+    fm, _ = train_peak_surrogate(reference_spindle(), None, None,
+                                 SurrogateConfig(structure="fe", fe_method="direct"),
+                                 rng=np.random.default_rng(0),
+                                 response=ResponseSpec("at_speed", 24000.0))
+    assert fm.fe.method == "direct"
 
 
 def test_structure_fe_refuses_active_learning():

@@ -72,3 +72,36 @@ def test_bad_response_spec_names_the_field(kw, match):
 def test_at_speed_response_rejects_a_bad_speed():
     with pytest.raises(ValueError, match=r"speed_rpm = 0.0 is not allowed"):
         AtSpeedAmplitudeResponse(reference_spindle(), 0.0)
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("effects", ["default", "housing_on_front"])
+def test_condensed_method_equals_the_direct_solve(effects):
+    """Known answer: the direct solve (one whole-system solve per θ). 60 θ go through the
+    θ-polynomial coupling (9 node solves); 3 θ, and a housing stage on a θ bearing, through the
+    row-by-row coupling of the condensed rotor."""
+    from dataclasses import replace
+
+    from surrogate_rbrdo.spindle.effects import HousingFlexibility
+
+    sp = reference_spindle()
+    if effects == "housing_on_front":
+        sp = replace(sp, effects=(*sp.effects, HousingFlexibility(
+            bearings=("front",), k_N_per_m=3e8, m_kg=12.0, c_Ns_per_m=3000.0)))
+    X = np.array([[3000.0, 442.5, 65.7], [2000.0, 465.8, 65.0], [1000.0, 750.0, 50.0]])
+    theta = np.random.default_rng(4).normal(1.0, [0.0605, 0.0641], size=(60, 2))
+    for s in (9000.0, 24000.0):
+        direct = AtSpeedAmplitudeResponse(sp, s)(X, theta)
+        cond = AtSpeedAmplitudeResponse(sp, s, method="condensed")
+        np.testing.assert_allclose(cond(X, theta), direct, rtol=1e-9)
+        np.testing.assert_allclose(cond(X, theta[:3]), direct[:, :3], rtol=1e-9)
+
+
+def test_fe_methods_are_checked():
+    sp = reference_spindle()
+    with pytest.raises(ValueError, match=r"method = 'fast' is not allowed: must be one of"):
+        AtSpeedAmplitudeResponse(sp, 24000.0, method="fast")
+    with pytest.raises(ValueError, match=r"method = 'condensed' is not allowed with the peak"):
+        ResponseSpec().fe_response(sp, "condensed")
+    r = ResponseSpec("at_speed", 24000.0).fe_response(sp, "condensed")
+    assert r.method == "condensed"
