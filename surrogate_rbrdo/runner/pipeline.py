@@ -241,6 +241,10 @@ class SurrogateConfig:
                              "there is no surrogate to enrich")
         check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
         check_choice("fe_method", self.fe_method, ("auto", *FE_METHODS))
+        if self.fe_method != "auto" and self.structure != "fe":
+            raise ValueError(f"fe_method = {self.fe_method!r} is not allowed with structure = "
+                             f"{self.structure!r}: it sets how the FE model in the loop is "
+                             "solved (structure = 'fe')")
         if self.structure == "substructure" and self.active_learning:
             raise ValueError("active_learning = True is not allowed with structure = "
                              "'substructure': its DOE is over the designs only (θ is exact)")
@@ -390,6 +394,17 @@ class FullModel:
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """FE ``y`` (m) at joint points ``Z = [x, θ]``."""
         return np.array([self.fe.point(z) for z in np.atleast_2d(np.asarray(Z, dtype=float))])
+
+
+def check_structure_response(cfg: SurrogateConfig, response: ResponseSpec) -> None:
+    """Refuse a surrogate structure (or FE method) that cannot model ``response``."""
+    if cfg.structure == "resonance" and response.kind != "peak":
+        raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
+                         f"= {response.kind!r}: the resonance structure models the peak over "
+                         "the speed range; use 'global', 'substructure' or 'fe'")
+    if cfg.fe_method == "condensed" and response.kind == "peak":
+        raise ValueError("surrogate.fe_method = 'condensed' is not allowed with response.kind = "
+                         "'peak': only 'direct' or 'auto' (the peak is searched per θ)")
 
 
 # ---------------------------------------------------------------------- building blocks
@@ -692,13 +707,7 @@ def train_peak_surrogate(spindle: Any, inputs: Any, limit: LimitState, cfg: Surr
     response = ResponseSpec() if response is None else response
     if not isinstance(response, ResponseSpec):
         raise ValueError(f"response = {response!r} is not allowed: must be a ResponseSpec")
-    if cfg.structure == "resonance" and response.kind != "peak":
-        raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
-                         f"= {response.kind!r}: the resonance structure models the peak over "
-                         "the speed range; use 'global', 'substructure' or 'fe'")
-    if cfg.fe_method == "condensed" and response.kind == "peak":
-        raise ValueError("surrogate.fe_method = 'condensed' is not allowed with response.kind = "
-                         "'peak': only 'direct' or 'auto' (the peak is searched per θ)")
+    check_structure_response(cfg, response)
     if cfg.structure == "fe":
         method = cfg.fe_method if cfg.fe_method != "auto" else (
             "condensed" if response.kind == "at_speed" else "direct")

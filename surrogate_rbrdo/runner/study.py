@@ -177,7 +177,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
     """Validate a ``study`` config (a dict from :func:`load_config`); raises ``ValueError``
     naming the field and value before any expensive work."""
     from surrogate_rbrdo.formulations import DeterministicOptions
-    from surrogate_rbrdo.runner.pipeline import SurrogateConfig
+    from surrogate_rbrdo.runner.pipeline import SurrogateConfig, check_structure_response
 
     top = {k for k in config if not k.startswith("_") and k != "experiment"}
     check_keys("study config (tables)", {k: None for k in top}, TABLES)
@@ -196,10 +196,7 @@ def parse_study_config(config: Mapping[str, Any]) -> StudyConfig:
         raise ValueError(f"response.speed_rpm = {response.speed_rpm} is not allowed: must lie "
                          f"in the spindle's speed range [{g.speed_min_rpm}, "
                          f"{g.speed_max_rpm}] rpm (the bearing laws are fitted there)")
-    if surrogate.structure == "resonance" and response.kind != "peak":
-        raise ValueError(f"surrogate.structure = 'resonance' is not allowed with response.kind "
-                         f"= {response.kind!r}: it models the peak over the speed range; use "
-                         "'global', 'substructure' or 'fe'")
+    check_structure_response(surrogate, response)
     dmo = _dataclass_from(DesignModelOptions, "[design_model]", config.get("design_model", {}))
 
     det = dict(config.get("deterministic", {}))

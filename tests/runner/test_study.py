@@ -222,6 +222,10 @@ def test_same_seed_same_compromises(tmp_path):
     ("n_start = 1", 'n_start = 1\n[response]\nspeed = 3', r"unknown key\(s\) \['speed'\]"),
     ("n_start = 1", 'n_start = 1\n[response]\nkind = "at_speed"\nspeed_rpm = 30000',
      r"response.speed_rpm = 30000.0 is not allowed: must lie in the spindle's speed range"),
+    ("n_start = 1", 'n_start = 1\nfe_method = "condensed"',
+     r"fe_method = 'condensed' is not allowed with structure = 'global'"),
+    ("n_doe = 24\nn_jobs = 1\nn_start = 1", 'structure = "fe"\nfe_method = "condensed"',
+     r"fe_method = 'condensed' is not allowed with response.kind = 'peak'"),
 ])
 def test_bad_config_fails_before_work(tmp_path, old, new, match):
     assert old in TINY
