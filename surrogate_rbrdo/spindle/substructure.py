@@ -376,8 +376,8 @@ def tool_amplitude_condensed(model: SpindleModel, speed_rpm: float,
     f = unbalance_force(model, speed, lay)
     w = speed * RPM
     K = 3 ** th.shape[1]
-    if th.shape[1] and th.shape[0] >= POLY_MIN_RATIO * K and theta_affine(model.geometry, model.effects,
-                                                          model.theta_bearings):
+    poly = th.shape[1] > 0 and th.shape[0] >= POLY_MIN_RATIO * K
+    if poly and theta_affine(model.geometry, model.effects, model.theta_bearings):
         nodes, basis = theta_grid(th)
         Zn = model.bearing_impedance(np.full((K, 1), w), nodes)[:, 0]
         y, ok = coupled_tool_amplitude_theta(lay, S, Zn, f, basis)
