@@ -32,13 +32,21 @@ def _kinds():
 
 
 def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = None,
-                   run_id: str | None = None, progress: bool = True):
-    """Run one experiment config; returns the run folder."""
+                   run_id: str | None = None, progress: bool = True, seed: int | None = None):
+    """Run one experiment config; returns the run folder.
+
+    ``seed`` replaces ``[experiment] seed`` (a seed sweep without copies of the config); the
+    run folder's ``config.json`` and ``meta.json`` record the seed used, ``config.toml`` is the
+    file as given.
+    """
+    from surrogate_rbrdo.core.validate import check_int
     from surrogate_rbrdo.runner.config import load_config
     from surrogate_rbrdo.runner.runfolder import RunFolder
 
     cfg = load_config(config_path)
     exp = cfg["experiment"]
+    if seed is not None:
+        exp["seed"] = check_int("--seed", seed, minimum=0)
     kind = _kinds().get(exp["kind"])  # unknown kind -> ValueError listing the known ones
     root = results_dir or exp.get("results_dir", "results")
     run = RunFolder.create(root, exp["name"], run_id)
@@ -68,6 +76,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_run.add_argument("--results", default=None, help="results root (default: results/)")
     p_run.add_argument("--run-id", default=None, help="run folder name (default: timestamp)")
     p_run.add_argument("--no-progress", action="store_true", help="hide progress bars")
+    p_run.add_argument("--seed", type=int, default=None,
+                       help="replace [experiment] seed (recorded in config.json and meta.json)")
     sub.add_parser("kinds", help="list the experiment kinds")
     args = parser.parse_args(argv)
     try:
@@ -76,7 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(name)
             return 0
         run = run_experiment(args.config, results_dir=args.results, run_id=args.run_id,
-                             progress=not args.no_progress)
+                             progress=not args.no_progress, seed=args.seed)
     except ValueError as exc:
         print(f"rbrdo: error: {exc}", file=sys.stderr)
         return 2

@@ -76,6 +76,20 @@ def test_bad_config_gives_one_line_naming_the_field(tmp_path, capsys, text, patt
     assert __import__("re").search(pattern, err), err
 
 
+def test_seed_option_replaces_the_config_seed(tmp_path, capsys):
+    cfg = write(tmp_path, SPINDLE_CFG.replace('kind = "spindle_report"',
+                                              'kind = "spindle_report"\nseed = 3'))
+    res = tmp_path / "res"
+    assert main(["run", str(cfg), "--results", str(res), "--run-id", "a", "--no-progress",
+                 "--seed", "17"]) == 0
+    run = res / "t" / "a"
+    assert json.loads((run / "meta.json").read_text())["seeds"] == {"seed": 17}
+    assert json.loads((run / "config.json").read_text())["experiment"]["seed"] == 17
+    assert "seed = 3" in (run / "config.toml").read_text()       # the file as given
+    assert main(["run", str(cfg), "--results", str(res), "--no-progress", "--seed", "-1"]) == 2
+    assert "rbrdo: error: --seed = -1 is not allowed" in capsys.readouterr().err
+
+
 def test_missing_config_file(tmp_path, capsys):
     assert main(["run", str(tmp_path / "none.toml")]) == 2
     assert "does not exist" in capsys.readouterr().err
