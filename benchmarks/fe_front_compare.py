@@ -1,23 +1,25 @@
 """Surrogate study vs FE-in-the-loop study: both fronts judged by the FE model on fresh θ.
 
-Run:  OMP_NUM_THREADS=1 python benchmarks/fe_front_compare.py SURROGATE_RUN FE_RUN
+Run:  OMP_NUM_THREADS=1 python benchmarks/fe_front_compare.py RUN RUN [RUN ...]
       [--n-theta 1000] [--max-points 1000] [--seed 5]
 
-Takes two ``study`` run folders of the same problem (configs equal apart from ``[experiment]``
-and ``[surrogate]``, checked; e.g. ``results/paper/<id>`` and ``results/rated_speed/<id>``).
-For every front of both (``pareto_fronts.csv``; its distinct designs, thinned to every k-th in
-μ order when there are more than ``--max-points``) it evaluates the designs with the FE model
+Takes two or more ``study`` run folders of the same problem (configs equal apart from
+``[experiment]`` and ``[surrogate]``, checked): e.g. the surrogate study ``results/paper/<id>``
+and the FE-in-the-loop study ``results/rated_speed/<id>``, and further seeds of each
+(``rbrdo run ... --seed N``) to see the optimiser's run-to-run scatter. For every front of
+each (``pareto_fronts.csv``; its distinct designs, thinned to every k-th in μ order when there
+are more than ``--max-points``) it evaluates the designs with the FE model
 on ONE fresh θ sample (``--n-theta``, not the optimiser's CRN sample, so neither study is
 flattered by the sample it optimised on), keeps those with FE ``P_f <= P_target`` (RBRDO
 fronts) and their FE non-dominated set, and prints per front:
 
 * the designs, how many stay feasible, the FE μ and σ ranges;
-* the multiplicative ε-indicator both ways, ``ε(A, B) = max_b min_a max_i a_i / b_i``: the
-  factor by which front A must be scaled to weakly dominate every point of B (1 = A covers B;
-  no reference point needed);
-* the hypervolume ratio surrogate / FE loop (pymoo's ``HV``, minimisation of (μ, σ) in µm) at
-  two reference points, 1.1× and 1.5× the worst μ and σ of the two fronts: on fronts whose σ
-  spans only a few hundredths of a µm the ratio depends strongly on the reference point.
+* the multiplicative ε-indicator of every pair, ``ε(A, B) = max_b min_a max_i a_i / b_i``:
+  the factor by which front A must be scaled to weakly dominate every point of B (1 = A covers
+  B; no reference point needed);
+* each front's hypervolume (pymoo's ``HV``, minimisation of (μ, σ) in µm) at two reference
+  points, 1.1× and 1.5× the worst μ and σ of all fronts: on fronts whose σ spans only a few
+  hundredths of a µm it depends strongly on the reference point.
 
 The FE model at one speed is solved by exact condensation (``method="condensed"``, ~3.5 ms per
 design for 1 000 θ); the peak response uses the direct solver (slow: use a small
@@ -72,18 +74,22 @@ def eps_mult(A: np.ndarray, B: np.ndarray) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("surrogate_run", type=Path)
-    ap.add_argument("fe_run", type=Path)
+    ap.add_argument("runs", type=Path, nargs="+",
+                    help="two or more study run folders of the same problem")
     ap.add_argument("--n-theta", type=int, default=1000)
     ap.add_argument("--max-points", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=5)
     a = ap.parse_args()
-    cfg = json.loads((a.fe_run / "config.json").read_text())
-    cfg_s = json.loads((a.surrogate_run / "config.json").read_text())
-    differ = sorted(k for k in set(cfg) | set(cfg_s)
-                    if k not in ("experiment", "surrogate") and cfg.get(k) != cfg_s.get(k))
-    if differ:
-        raise SystemExit(f"the two runs' configs differ in {differ}: not the same problem")
+    if len(a.runs) < 2:
+        raise SystemExit("give at least two run folders")
+    cfgs = [json.loads((r / "config.json").read_text()) for r in a.runs]
+    for r, c in zip(a.runs[1:], cfgs[1:], strict=True):
+        differ = sorted(k for k in set(cfgs[0]) | set(c) if k not in ("experiment", "surrogate")
+                        and cfgs[0].get(k) != c.get(k))
+        if differ:
+            raise SystemExit(f"{r}: its config differs from {a.runs[0]}'s in {differ}: not the "
+                             "same problem")
+    cfg = cfgs[0]
     sp = spindle_from_config(cfg.get("spindle", {}))
     inputs = uncertainty_from_config(cfg.get("uncertainty", {}), sp.theta_bearings)
     limit = limit_from_config(cfg.get("limit", {}))
@@ -91,37 +97,43 @@ def main() -> None:
     fe = (resp.fe_response(sp, "condensed") if resp.kind == "at_speed"
           else resp.fe_response(sp))
     theta = inputs.sample(a.n_theta, rng=np.random.default_rng(a.seed))
+    names = []
+    for r, c in zip(a.runs, cfgs, strict=True):
+        structure = c.get("surrogate", {}).get("structure", "global")
+        names.append(f"{c['experiment']['name']}/{r.name} ({structure}, "
+                     f"seed {c['experiment'].get('seed')})")
     print(f"y = {resp.label}, delta_lim = {limit.threshold * 1e6:g} µm; FE on {a.n_theta} "
-          f"fresh θ (seed {a.seed}); surrogate run {a.surrogate_run}, FE-in-the-loop run "
-          f"{a.fe_run}")
-    fs, ff = fronts(a.surrogate_run, a.max_points), fronts(a.fe_run, a.max_points)
-    for lab in [k for k in ff if k in fs]:
-        p_t = ff[lab][0]
-        res = {}
-        for who, (_, X) in (("surrogate", fs[lab]), ("FE loop", ff[lab])):
+          f"fresh θ (seed {a.seed})")
+    for i, n in enumerate(names):
+        print(f"  [{i}] {n}")
+    fr = [fronts(r, a.max_points) for r in a.runs]
+    for lab in [k for k in fr[0] if all(k in f for f in fr)]:
+        p_t = fr[0][lab][0]
+        print(f"\n{lab} (P_target {p_t:.0%})")
+        Fs = []
+        for i, f in enumerate(fr):
+            X = f[lab][1]
             y = fe(X, theta)
             mu, sd = y.mean(axis=1) * 1e6, y.std(axis=1, ddof=1) * 1e6
             pf = np.mean(limit.failed(y), axis=1)
             ok = pf <= p_t if lab.startswith("rbrdo") else np.ones(len(X), bool)
             F = np.column_stack([mu, sd])[ok]
-            res[who] = (len(X), F[nondominated(F)] if len(F) else F)
-        print(f"\n{lab} (P_target {p_t:.0%})")
-        for w, (n, F) in res.items():
+            F = F[nondominated(F)] if len(F) else F
+            Fs.append(F)
             rng_txt = (f"μ {F[:, 0].min():.4f}–{F[:, 0].max():.4f}, "
                        f"σ {F[:, 1].min():.4f}–{F[:, 1].max():.4f} µm") if len(F) else "-"
-            print(f"  {w:9s}: {n:4d} designs, {len(F):4d} FE-feasible non-dominated, {rng_txt}")
-        Fs, Ff = res["surrogate"][1], res["FE loop"][1]
-        if not (len(Fs) and len(Ff)):
+            print(f"  [{i}] {len(X):4d} designs, {len(F):4d} FE-feasible non-dominated, {rng_txt}")
+        if not all(len(F) for F in Fs):
             print("  a front has no FE-feasible design: no indicator")
             continue
-        print(f"  ε(surrogate covers FE loop) = {eps_mult(Fs, Ff):.4f}, "
-              f"ε(FE loop covers surrogate) = {eps_mult(Ff, Fs):.4f}")
-        worst = np.vstack([Fs, Ff]).max(axis=0)
-        ratios = []
+        print("  ε(row covers column):" + "".join(f"{f'[{j}]':>8s}" for j in range(len(Fs))))
+        for i, A in enumerate(Fs):
+            print(f"  {f'[{i}]':>21s}" + "".join(
+                f"{'-' if i == j else f'{eps_mult(A, B):.4f}':>8s}" for j, B in enumerate(Fs)))
+        worst = np.vstack(Fs).max(axis=0)
         for k in (1.1, 1.5):
             hv = HV(ref_point=k * worst)
-            ratios.append(f"{hv(Fs) / hv(Ff):.4f} (ref {k}x worst)")
-        print("  HV surrogate / FE loop = " + ", ".join(ratios))
+            print(f"  HV (ref {k}x worst μ, σ):" + "".join(f"{hv(F):10.6f}" for F in Fs))
 
 
 if __name__ == "__main__":
