@@ -98,7 +98,8 @@ class AtSpeedAmplitudeResponse(_PerDesign):
     ``method`` says how the FE model is solved, both exactly: ``"direct"`` (default) solves
     the whole system once per θ (``harmonic.tool_amplitude``); ``"condensed"`` condenses the
     rotor once per design and couples the θ sample through ``3^m`` node solves
-    (``substructure.tool_amplitude_condensed``; ~17x faster for 1 000 θ, equal to 1e-11).
+    (``substructure.tool_amplitude_condensed``; 12–17x faster for 1 000 θ, equal to 1e-11:
+    ``benchmarks/bench_spindle.py``).
     The FE verification of a study keeps ``"direct"``, independent of the surrogate's algebra.
 
     >>> import numpy as np
