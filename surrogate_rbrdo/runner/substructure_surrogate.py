@@ -16,7 +16,7 @@ What is modelled
 * the coupling of the two (a low-rank solve per θ): exact. For a θ sample at one speed it is
   solved at the 3^m nodes of a θ grid only and interpolated exactly, because the tool
   displacement is a ratio of polynomials of degree ≤ 2 in each θ_j
-  (``spindle.substructure.coupled_tool_amplitude_theta``): all designs × 1 000 θ in
+  (``spindle.coupling.coupled_tool_amplitude_theta``): all designs × 1 000 θ in
   milliseconds.
 
 So the only approximation is ``S`` over ``x``; the resonance and the tool-tip anti-resonance
@@ -50,17 +50,19 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.spindle import substructure
+from surrogate_rbrdo.spindle import coupling
 from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta, theta_affine
+from surrogate_rbrdo.spindle.coupling import (
+    coupled_tool_amplitude,
+    coupled_tool_amplitude_theta,
+    theta_grid,
+)
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.substructure import (
     RetainedLayout,
     condensed_from_vector,
     condensed_vector,
-    coupled_tool_amplitude,
-    coupled_tool_amplitude_theta,
     retained_layout,
-    theta_grid,
     unbalance_force,
 )
 from surrogate_rbrdo.surrogates._common import blas_threads
@@ -353,7 +355,7 @@ class SubstructureSurrogate:
             m = theta.shape[1]
             rows = np.arange(X.shape[0])
             out = np.empty((X.shape[0], theta.shape[0]))
-            if self.theta_affine and theta.shape[0] >= substructure.POLY_MIN_RATIO * 3**m:
+            if self.theta_affine and theta.shape[0] >= coupling.POLY_MIN_RATIO * 3**m:
                 # all designs at once: 3^m exact solves per design, then an (N, 3^m) product
                 nodes, basis = theta_grid(theta)
                 Z = self._impedance(X, w, nodes)[:, :, 0]            # (P, 3^m, nb, 2, 2)

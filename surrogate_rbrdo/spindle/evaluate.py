@@ -24,6 +24,7 @@ from scipy.optimize import brentq
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.validate import check_choice, check_positive
+from surrogate_rbrdo.spindle.coupling import tool_amplitude_condensed
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_tool_amplitude, tool_amplitude
 from surrogate_rbrdo.spindle.modal import (
     critical_speeds,
@@ -32,7 +33,6 @@ from surrogate_rbrdo.spindle.modal import (
 )
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle
 from surrogate_rbrdo.spindle.stress import max_von_mises
-from surrogate_rbrdo.spindle.substructure import tool_amplitude_condensed
 
 #: how ``AtSpeedAmplitudeResponse`` solves the FE model
 FE_METHODS = ("direct", "condensed")
@@ -98,7 +98,7 @@ class AtSpeedAmplitudeResponse(_PerDesign):
     ``method`` says how the FE model is solved, both exactly: ``"direct"`` (default) solves
     the whole system once per θ (``harmonic.tool_amplitude``); ``"condensed"`` condenses the
     rotor once per design and couples the θ sample through ``3^m`` node solves
-    (``substructure.tool_amplitude_condensed``; 12–17x faster for 1 000 θ, equal to 1e-11:
+    (``coupling.tool_amplitude_condensed``; 12–17x faster for 1 000 θ, equal to 1e-11:
     ``benchmarks/bench_spindle.py``).
     The FE verification of a study keeps ``"direct"``, independent of the surrogate's algebra.
 

@@ -85,7 +85,7 @@ def test_at_speed_surrogate_matches_the_fe_model_including_the_notch(at_speed):
 def test_theta_sample_path_equals_the_row_by_row_coupling(at_speed, monkeypatch):
     """A θ sample goes through the θ-polynomial coupling (9 node solves per design, all
     designs at once); known answer: the row-by-row coupling of the same predicted ``S``."""
-    import surrogate_rbrdo.spindle.substructure as mod
+    import surrogate_rbrdo.spindle.coupling as mod
 
     sur, _ = at_speed
     assert sur.theta_affine and THETA.shape[0] >= mod.POLY_MIN_RATIO * 9
@@ -100,7 +100,7 @@ def test_falls_back_to_rows_without_theta_affinity_or_with_a_wide_sample(monkeyp
     round-off bound and is coupled row by row too."""
     from dataclasses import replace
 
-    import surrogate_rbrdo.spindle.substructure as mod
+    import surrogate_rbrdo.spindle.coupling as mod
     from surrogate_rbrdo.spindle.effects import HousingFlexibility
 
     sp = replace(SP, effects=(*SP.effects, HousingFlexibility(
