@@ -21,8 +21,8 @@ fronts) and their FE non-dominated set, and prints per front:
   points, 1.1× and 1.5× the worst μ and σ of all fronts: on fronts whose σ spans only a few
   hundredths of a µm it depends strongly on the reference point.
 
-The FE model at one speed is solved by exact condensation (``method="condensed"``, ~3.5 ms per
-design for 1 000 θ); the peak response uses the direct solver (slow: use a small
+The FE model at one speed is solved by exact condensation (``method="condensed"``, ~3.5–7 ms
+per design for 1 000 θ); the peak response uses the direct solver (slow: use a small
 ``--max-points``). A relative geometry path in the config resolves from the working directory.
 """
 

@@ -1,5 +1,4 @@
-"""The rotor as a substructure: its dynamic stiffness condensed onto a few nodes, coupled
-exactly with the bearings.
+"""The rotor as a substructure: its dynamic stiffness condensed exactly onto a few nodes.
 
 Receptance / impedance coupling is how machine-tool spindles are assembled from their parts
 (Schmitz & Smith, *Machining Dynamics*, ch. 6, "receptance coupling substructure analysis").
@@ -9,12 +8,13 @@ the *retained* nodes (tool tip, bearings, unbalance planes) by the exact dynamic
     S(Ω) = A_RR − A_RI A_II⁻¹ A_IR,
 
 and the bearings (stiffness × θ, damping, housing stage) are added on the retained bearing
-DOFs. The retained system reproduces the full model's response at the retained nodes to
-round-off: nothing is approximated. What makes it useful is that ``S`` depends on the design
-only through the rotor (span, diameter), is free of θ, and is *smooth* in the design: its poles
-are the natural frequencies of the rotor segments clamped at the retained nodes (> 1.6 kHz for
-the reference spindle, far above 400 Hz = 24 000 rpm), while the resonances and the tool-tip
-anti-resonance of the assembled spindle come from the coupling algebra. A surrogate of ``S``
+DOFs by :mod:`surrogate_rbrdo.spindle.coupling`. The retained system reproduces the full
+model's response at the retained nodes to round-off: nothing is approximated. What makes it
+useful is that ``S`` depends on the design only through the rotor (span, diameter), is free of
+θ, and is *smooth* in the design: its poles are the natural frequencies of the rotor segments
+clamped at the retained nodes (> 1.6 kHz for the reference spindle, far above 400 Hz =
+24 000 rpm), while the resonances and the tool-tip anti-resonance of the assembled spindle
+come from the coupling algebra. A surrogate of ``S``
 over the design (``runner.substructure_surrogate``) therefore keeps the notch and the resonance
 that a Kriging of the amplitude itself smooths away.
 
