@@ -10,6 +10,7 @@ import argparse
 import json
 import os
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -76,8 +77,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p_run.add_argument("--results", default=None, help="results root (default: results/)")
     p_run.add_argument("--run-id", default=None, help="run folder name (default: timestamp)")
     p_run.add_argument("--no-progress", action="store_true", help="hide progress bars")
-    p_run.add_argument("--seed", type=int, default=None,
-                       help="replace [experiment] seed (recorded in config.json and meta.json)")
+    p_run.add_argument("--seed", type=int, nargs="+", default=None,
+                       help="replace [experiment] seed (recorded in config.json and meta.json); "
+                            "several seeds run one after another into <run-id>-seed<N>")
     sub.add_parser("kinds", help="list the experiment kinds")
     args = parser.parse_args(argv)
     try:
@@ -85,17 +87,28 @@ def main(argv: Sequence[str] | None = None) -> int:
             for name in sorted(_kinds()):
                 print(name)
             return 0
-        run = run_experiment(args.config, results_dir=args.results, run_id=args.run_id,
-                             progress=not args.no_progress, seed=args.seed)
+        seeds = [None] if args.seed is None else list(args.seed)
+        if len(set(seeds)) != len(seeds):
+            raise ValueError(f"--seed {' '.join(map(str, seeds))} is not allowed: a seed "
+                             "appears twice")
+        base = args.run_id or time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
+        for s in seeds:
+            rid = args.run_id if len(seeds) == 1 else f"{base}-seed{s}"
+            run = run_experiment(args.config, results_dir=args.results, run_id=rid,
+                                 progress=not args.no_progress, seed=s)
+            _report(run)
     except ValueError as exc:
         print(f"rbrdo: error: {exc}", file=sys.stderr)
         return 2
+    return 0
+
+
+def _report(run) -> None:
     summary = json.loads((run.path / "summary.json").read_text())
     print(f"results written to {run.path}")
     if "summary" in summary:
         for row in summary["summary"][:12]:
             print("  " + ", ".join(f"{k}={v}" for k, v in row.items()))
-    return 0
 
 
 if __name__ == "__main__":

@@ -88,6 +88,15 @@ def test_seed_option_replaces_the_config_seed(tmp_path, capsys):
     assert "seed = 3" in (run / "config.toml").read_text()       # the file as given
     assert main(["run", str(cfg), "--results", str(res), "--no-progress", "--seed", "-1"]) == 2
     assert "rbrdo: error: --seed = -1 is not allowed" in capsys.readouterr().err
+    # a sweep: one run folder per seed
+    assert main(["run", str(cfg), "--results", str(res), "--run-id", "sw", "--no-progress",
+                 "--seed", "5", "6"]) == 0
+    for s in (5, 6):
+        meta = json.loads((res / "t" / f"sw-seed{s}" / "meta.json").read_text())
+        assert meta["seeds"] == {"seed": s}
+    assert main(["run", str(cfg), "--results", str(res), "--no-progress", "--seed", "5",
+                 "5"]) == 2
+    assert "--seed 5 5 is not allowed: a seed appears twice" in capsys.readouterr().err
 
 
 def test_missing_config_file(tmp_path, capsys):
