@@ -50,12 +50,10 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.spindle import coupling
 from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta, theta_affine
 from surrogate_rbrdo.spindle.coupling import (
     coupled_tool_amplitude,
-    coupled_tool_amplitude_theta,
-    theta_grid,
+    coupled_tool_amplitude_sample,
 )
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.substructure import (
@@ -300,7 +298,7 @@ class SubstructureSurrogate:
 
     @cached_property
     def theta_affine(self) -> bool:
-        """Whether the θ sample can go through :func:`coupled_tool_amplitude_theta` (every
+        """Whether the θ sample can go through the θ-polynomial coupling (every
         θ bearing's impedance affine in its factor: no housing stage in series with it)."""
         sp = self.spindle
         return theta_affine(sp.geometry, sp.effects, sp.theta_bearings)
@@ -350,22 +348,12 @@ class SubstructureSurrogate:
     def _y_from_nodes(self, X: np.ndarray, Sn: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """``y`` of designs ``X`` with node stiffnesses ``Sn`` (P, ns, r, r) at θ (N, m)."""
         if self.kind == "at_speed":
+            # all designs at once: 3^m exact solves per design and an (N, 3^m) product
             w = np.array([self.speed_rpm * RPM])
-            f = self.force_per_w2 * w[0] ** 2
-            m = theta.shape[1]
-            rows = np.arange(X.shape[0])
-            out = np.empty((X.shape[0], theta.shape[0]))
-            if self.theta_affine and theta.shape[0] >= coupling.POLY_MIN_RATIO * 3**m:
-                # all designs at once: 3^m exact solves per design, then an (N, 3^m) product
-                nodes, basis = theta_grid(theta)
-                Z = self._impedance(X, w, nodes)[:, :, 0]            # (P, 3^m, nb, 2, 2)
-                out[:], ok = coupled_tool_amplitude_theta(self.layout, Sn[:, 0], Z, f, basis)
-                rows = rows[~ok]            # round-off bound exceeded: those designs row by row
-            if rows.size:
-                Z = self._impedance(X[rows], w, theta)[:, :, 0]      # (p, N, nb, 2, 2)
-                for k, i in enumerate(rows):    # one design at a time: p·N·(2nb)² memory
-                    out[i] = coupled_tool_amplitude(self.layout, Sn[i, 0], Z[k], f)
-            return out
+            return coupled_tool_amplitude_sample(
+                self.layout, Sn[:, 0], self.force_per_w2 * w[0] ** 2, theta,
+                lambda rows, which: self._impedance(X[which], w, rows)[:, :, 0],
+                affine=self.theta_affine)
         out = np.empty((X.shape[0], theta.shape[0]))
         g = self.spindle.geometry
         for i, xi in enumerate(X):

@@ -240,6 +240,31 @@ def coupled_tool_amplitude_theta(layout: RetainedLayout, S: np.ndarray, Z_nodes:
     return out, reliable
 
 
+def coupled_tool_amplitude_sample(layout: RetainedLayout, S: np.ndarray, f: np.ndarray,
+                                  theta: np.ndarray, impedance, *, affine: bool) -> np.ndarray:
+    """Tool-tip amplitude of rotors ``S`` (P, r, r) for a θ sample ``(N, m)``: ``(P, N)``.
+
+    The θ-polynomial coupling (:func:`coupled_tool_amplitude_theta`) when ``affine`` (every θ
+    bearing's impedance affine in its factor, ``assembly.theta_affine``) and the sample has at
+    least ``POLY_MIN_RATIO · 3^m`` rows; the rotors it flags (round-off bound) and every rotor
+    otherwise go through :func:`coupled_tool_amplitude` row by row.
+    ``impedance(rows, which)`` gives the bearing impedances of rotors ``which`` (indices) at the
+    θ ``rows`` (B, m): ``(len(which), B, nb, 2, 2)``.
+    """
+    P, (N, m) = S.shape[0], theta.shape
+    out = np.empty((P, N))
+    which = np.arange(P)
+    if affine and m > 0 and N >= POLY_MIN_RATIO * 3**m:
+        nodes, basis = theta_grid(theta)
+        out[:], ok = coupled_tool_amplitude_theta(layout, S, impedance(nodes, which), f, basis)
+        which = which[~ok]
+    if which.size:
+        Z = impedance(theta, which)
+        for k, i in enumerate(which):   # one rotor at a time: N·(2nb)² memory each
+            out[i] = coupled_tool_amplitude(layout, S[i], Z[k], f)
+    return out
+
+
 def tool_amplitude_condensed(model: SpindleModel, speed_rpm: float,
                              theta: np.ndarray | None = None) -> np.ndarray:
     """Tool-tip amplitude (m) at one speed for θ rows ``(N,)``, by exact condensation.
@@ -262,24 +287,21 @@ def tool_amplitude_condensed(model: SpindleModel, speed_rpm: float,
     th = model.check_theta(theta)
     speed = check_positive("speed_rpm", speed_rpm)
     lay = retained_layout(model)
-    S = condensed_rotor(model, np.array([speed]), lay)[0]
-    f = unbalance_force(model, speed, lay)
+    S = condensed_rotor(model, np.array([speed]), lay)          # (1, r, r): one rotor
     w = speed * RPM
-    K = 3 ** th.shape[1]
-    poly = th.shape[1] > 0 and th.shape[0] >= POLY_MIN_RATIO * K
-    if poly and theta_affine(model.geometry, model.effects, model.theta_bearings):
-        nodes, basis = theta_grid(th)
-        Zn = model.bearing_impedance(np.full((K, 1), w), nodes)[:, 0]
-        y, ok = coupled_tool_amplitude_theta(lay, S, Zn, f, basis)
-        if ok:
-            return y
-    Z = model.bearing_impedance(np.full((th.shape[0], 1), w), th)[:, 0]
-    return coupled_tool_amplitude(lay, S, Z, f)
+
+    def impedance(rows: np.ndarray, which: np.ndarray) -> np.ndarray:
+        return model.bearing_impedance(np.full((rows.shape[0], 1), w), rows)[None, :, 0]
+
+    return coupled_tool_amplitude_sample(
+        lay, S, unbalance_force(model, speed, lay), th, impedance,
+        affine=theta_affine(model.geometry, model.effects, model.theta_bearings))[0]
 
 
 __all__ = [
     "POLY_MIN_RATIO",
     "coupled_tool_amplitude",
+    "coupled_tool_amplitude_sample",
     "coupled_tool_amplitude_theta",
     "theta_grid",
     "tool_amplitude_condensed",
