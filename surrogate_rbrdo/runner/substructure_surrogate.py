@@ -139,7 +139,6 @@ class MultiOutputKriging:
     mean_: np.ndarray | None = None
     std_: np.ndarray | None = None
     vary_: np.ndarray | None = None
-    const_: np.ndarray | None = None
     U_: np.ndarray | None = field(default=None, repr=False)
     W_: np.ndarray | None = field(default=None, repr=False)
     Rinv_diag_: np.ndarray | None = field(default=None, repr=False)
@@ -189,7 +188,6 @@ class MultiOutputKriging:
         scale = np.abs(Y).max(axis=0)
         self.vary_ = sd > 1e-13 * np.where(scale > 0, scale, 1.0)
         self.std_ = np.where(self.vary_, sd, 1.0)
-        self.const_ = self.mean_.copy()
         if not self.vary_.any():
             raise ModelError("MultiOutputKriging: no output varies over the training designs "
                              "(the condensed rotor does not depend on the design variables)")
@@ -241,7 +239,7 @@ class MultiOutputKriging:
     def predict(self, X: np.ndarray) -> np.ndarray:
         """Predicted outputs ``(P, n_out)`` (the Kriging mean)."""
         U = self._u(X)
-        out = np.tile(self.const_, (U.shape[0], 1))
+        out = np.tile(self.mean_, (U.shape[0], 1))   # the constant columns: their mean
         out[:, self.vary_] = (_corr(U, self.U_, self.theta_) @ self.W_) * self.std_[self.vary_] \
             + self.mean_[self.vary_]
         return out
@@ -255,7 +253,7 @@ class MultiOutputKriging:
         the LOO y by ≤ 3e-6 relative at n = 30).
         """
         e = self.W_ / self.Rinv_diag_[:, None]
-        out = np.tile(self.const_, (self.U_.shape[0], 1))
+        out = np.tile(self.mean_, (self.U_.shape[0], 1))
         out[:, self.vary_] = (self.Yn_ - e) * self.std_[self.vary_] + self.mean_[self.vary_]
         return out
 
