@@ -192,9 +192,8 @@ MC_HEADER = ["variant", "design", "preload_N", "span_mm", "diameter_mm", "mean_f
              "mean_sur_um", "mean_rel_err", "ok_mean", "std_fe_um", "std_sur_um",
              "std_rel_err", "ok_std", "pf_fe", "pf_sur", "pf_abs_err", "pf_tol", "ok_pf"]
 COST_HEADER = ["variant", "active_learning", "structure", "transform", "fe_calls_train",
-               "n_train",
-               "fit_time_s", "train_time_s", "max_pf_abs_err", "mean_pf_abs_err", "n_pf_pass",
-               "n_mean_pass", "n_std_pass", "n_designs"]
+               "n_train", "fit_time_s", "train_time_s", "max_pf_abs_err", "mean_pf_abs_err",
+               "n_pf_pass", "n_mean_pass", "n_std_pass", "n_designs"]
 
 
 @EXPERIMENTS.register("surrogate_validation")
