@@ -33,6 +33,7 @@ from surrogate_rbrdo.identification import (
     identify,
     identify_phasors,
     model_reference,
+    normality_report,
     phasor_time_regression,
 )
 from surrogate_rbrdo.identification.virtual import phasor_campaign
@@ -66,6 +67,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=1.0)
     ap.add_argument("--probe-noise-nm", type=float, default=2.0)
     ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--figures", default=None, help="folder for the trend and Q-Q figures")
     a = ap.parse_args()
     rng = np.random.default_rng(a.seed)
     sp = reference_spindle()
@@ -115,6 +117,39 @@ def main() -> None:
         rv = u.random_vector(s, reference=model_reference(m, s, u.names))
         print(f"theta at {s:6.0f} rpm relative to the model: mean {np.round(rv.mean, 4)}, "
               f"std {np.round(rv.std, 4)}")
+    det, pool = u.tests["detrended"], u.tests["pooled"]
+    print("| coefficient | pooled mean ± SD (MN/m) | pooled CoV | SW p pooled | detrended CoV "
+          "| SW p detrended | Q-Q R² detrended |")
+    print("|---|---|---|---|---|---|---|")
+    for j, c in enumerate(u.coefficients):
+        mu, sd = u.pooled_mean[j], np.sqrt(u.pooled_cov[j, j])
+        print(f"| {c} | {mu / 1e6:.2f} ± {sd / 1e6:.2f} | {100 * sd / mu:.2f} % | "
+              f"{pool['shapiro'][c]['p_value']:.3g} | "
+              f"{100 * np.sqrt(u.scatter_cov[j, j]):.2f} % | {det['shapiro'][c]['p_value']:.3g} "
+              f"| {det['qq_r2'][c]:.4f} |")
+    print(f"Henze-Zirkler p: pooled {pool['henze_zirkler']['p_value']:.3g}, detrended "
+          f"{det['henze_zirkler']['p_value']:.3g}; Mardia skew/kurtosis p (detrended) "
+          f"{det['mardia_skewness']['p_value']:.3g} / {det['mardia_kurtosis']['p_value']:.3g}")
+    hi = camp.speeds_rpm[ok] >= 5000.0
+    fac = res.estimate[ok][:, k] / u.trend(camp.speeds_rpm[ok])
+    for label, X, names in (("detrended", fac[hi], u.coefficients),
+                            ("study theta", fac[hi] @ u.weights.T, u.names)):
+        sub = normality_report(X, names)
+        print(f"{label}, speeds >= 5 000 rpm ({hi.sum()} records): SW p "
+              f"{[round(t.p_value, 3) for t in sub.shapiro]}, Q-Q R² "
+              f"{[round(r, 4) for r in sub.qq_r2]}, Henze-Zirkler p "
+              f"{sub.henze_zirkler.p_value:.3g}")
+    st = u.tests["study"]
+    sw = [round(v["p_value"], 3) for v in st["shapiro"].values()]
+    print(f"study theta, all speeds: SW p {sw}, Henze-Zirkler p "
+          f"{st['henze_zirkler']['p_value']:.3g}")
+    if a.figures:
+        from surrogate_rbrdo.reporting.plots_identification import plot_qq, plot_trend
+
+        X, n = res.estimate[ok][:, k], camp.speeds_rpm[ok]
+        print("figures:", plot_trend(u, n, X, f"{a.figures}/identification_trend.png",
+                                     truth=lambda s: catalog_coefficients(m, [s])[0, k]),
+              plot_qq(X / u.trend(n), u.coefficients, f"{a.figures}/identification_qq.png"))
 
 
 if __name__ == "__main__":

@@ -151,6 +151,7 @@ def fit_uncertainty(values, speeds_rpm, coefficients: Sequence[str], *, law: str
     report = normality_report(e, coefficients)
     pooled = normality_report(X, coefficients)
     tests = {"detrended": report.to_dict(),
+             "study": normality_report(e @ W.T, names).to_dict(),
              "pooled": {"shapiro": pooled.to_dict()["shapiro"], "qq_r2": pooled.to_dict()["qq_r2"],
                         "henze_zirkler": pooled.to_dict()["henze_zirkler"]},
              "trend_law": {c: t.law for c, t in zip(coefficients, trends, strict=True)},
