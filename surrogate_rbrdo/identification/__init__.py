@@ -9,11 +9,13 @@
   the flexible FE rotor from 1× phasors by exact dynamic condensation;
 * :func:`fit_uncertainty` turns identified vectors into the :class:`IdentifiedUncertainty` the
   study uses (speed trend, scatter, normality tests, variance split; ``uncertainty.json`` via
-  :func:`save_uncertainty` / :func:`load_uncertainty`).
+  :func:`save_uncertainty` / :func:`load_uncertainty`); :func:`identify_campaign` does both
+  steps for a campaign's phasors.
 
 ``docs/identification.md`` has the figures and what they mean.
 """
 
+from surrogate_rbrdo.identification.campaign import CampaignResult, identify_campaign
 from surrogate_rbrdo.identification.condensation import (
     CondensedReactions,
     coefficient_names,
@@ -52,6 +54,7 @@ __all__ = [
     "SG",
     "BatchLS",
     "Bounds",
+    "CampaignResult",
     "CondensedReactions",
     "IdentificationResult",
     "IdentifiedUncertainty",
@@ -65,6 +68,7 @@ __all__ = [
     "fit_trend",
     "fit_uncertainty",
     "identify",
+    "identify_campaign",
     "identify_phasors",
     "load_uncertainty",
     "model_reference",

@@ -155,3 +155,24 @@ def test_fe_campaign_chain_recovers_truth_trend_and_scatter():
     est = np.array(u.variance_split["estimated"]["identification_fraction"])
     # first-order covariances vs the measured split (at 1 000 rpm the noise is 4 % of |x|)
     assert np.allclose(est, meas["identification_fraction"], atol=0.08)
+
+
+def test_identify_campaign_table_flags_and_model():
+    from surrogate_rbrdo.identification import identify_campaign
+
+    sp = reference_spindle()
+    m = sp.model(sp.baseline)
+    camp = phasor_campaign(m, np.linspace(5000.0, 24000.0, 8), 12, theta_std=[0.015, 0.03],
+                           noise_m=1e-11, rng=np.random.default_rng(5))
+    ph = camp.phasors.copy()
+    ph[3, 0] = 0.0                                   # front x not excited in record 3
+    out = identify_campaign(m, camp.speeds_rpm, camp.repeats, ph, phasor_std=camp.noise_m,
+                            truth=camp.truth)
+    assert out.n_used == camp.speeds_rpm.size - 1 and not out.table["ok"][3]
+    assert "not excited" in out.table["flags"][3] and out.flag_counts["unexcited"] == 1
+    assert np.isnan(out.table["front_k_yy"][3])
+    assert set(out.table) >= {"speed_rpm", "repeat", "front_k_yy", "rear_c_zz", "ok", "flags"}
+    assert out.uncertainty.provenance["records_used"] == out.n_used
+    assert out.uncertainty.coefficients == NAMES
+    with pytest.raises(ValueError, match="fit_on = 'c'"):
+        identify_campaign(m, camp.speeds_rpm, camp.repeats, ph, fit_on="c")
