@@ -42,11 +42,12 @@ def main() -> None:
     on = list(m.bearing_nodes)
     inboard = [node_at(m, 266.667), node_at(m, 433.333)]
     q_on = _ph(m, on)
-    sigma = 0.01 * np.abs(q_on).mean(axis=1, keepdims=True)
+    # complex noise of RMS 1 % of the mean journal amplitude: 1 %/√2 on each part
+    sigma = 0.01 / np.sqrt(2.0) * np.abs(q_on).mean(axis=1, keepdims=True)
     cr_on = condense_reactions(m, SPEEDS)
     cr_in = condense_reactions(m, SPEEDS, probe_nodes=inboard)
-    r_on = identify_phasors(cr_on, q_on, SPEEDS, phasor_std=sigma)
-    r_in = identify_phasors(cr_in, _ph(m, inboard), SPEEDS, phasor_std=sigma)
+    r_on = identify_phasors(cr_on, q_on, SPEEDS, phasor_sd=sigma)
+    r_in = identify_phasors(cr_in, _ph(m, inboard), SPEEDS, phasor_sd=sigma)
     # unknown unbalance: truth 10 % larger and 10° off the assumed one
     m_u = replace(m, unbalance=m.unbalance * 1.1 * np.exp(1j * np.deg2rad(10.0)))
     r_u = identify_phasors(cr_on, _ph(m_u, on), SPEEDS)

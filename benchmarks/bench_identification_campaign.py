@@ -45,8 +45,8 @@ def demodulate(ph: np.ndarray, speeds_rpm: np.ndarray, seconds: float, noise_m: 
                rng: np.random.Generator, fs: float = 1e4, chunk: int = 50):
     """Raw signals ``Re(X e^{iΩt}) + noise`` per record and channel, demodulated back by a
     least-squares fit of ``a cos Ωt + b sin Ωt`` (exact for any record length, no leakage);
-    returns the phasors ``a − i b`` and the standard deviation ``2σ/√N`` of their circular
-    complex noise (``E|δX|² = Var a + Var b = 4σ²/N``)."""
+    returns the phasors ``a − i b`` and the standard deviation ``σ √(2/N)`` of the real and of
+    the imaginary part of their noise (``rig.phasors.phasor_noise_sd``'s convention)."""
     n = int(seconds * fs)
     t = np.arange(n) / fs
     out = np.empty_like(ph)
@@ -59,7 +59,7 @@ def demodulate(ph: np.ndarray, speeds_rpm: np.ndarray, seconds: float, noise_m: 
         G = np.einsum("bin,bjn->bij", C, C)
         ab = np.linalg.solve(G[:, None], np.einsum("bcn,bin->bci", raw, C)[..., None])[..., 0]
         out[s:s + chunk] = ab[..., 0] - 1j * ab[..., 1]
-    return out, 2.0 * noise_m / np.sqrt(n)
+    return out, noise_m * np.sqrt(2.0 / n)
 
 
 def main() -> None:
@@ -82,7 +82,7 @@ def main() -> None:
     ph, se = demodulate(camp.phasors, camp.speeds_rpm, a.seconds, a.probe_noise_nm * 1e-9, rng)
     times[f"demodulation (1 000 records x 4 ch x {a.seconds:g} s)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    res = identify_phasors(cr, ph, camp.speeds_rpm, phasor_std=se,
+    res = identify_phasors(cr, ph, camp.speeds_rpm, phasor_sd=se,
                            catalog=catalog_coefficients(m, camp.speeds_rpm))
     times["8 coefficients + covariance, closed form"] = time.perf_counter() - t0
     t0 = time.perf_counter()

@@ -12,7 +12,7 @@ by reason), and fits the uncertainty model on the coefficients the study uses.
 >>> m = sp.model(sp.baseline)
 >>> c = phasor_campaign(m, np.linspace(5000, 24000, 6), 12, theta_std=[0.015, 0.03],
 ...                     noise_m=1e-11, rng=np.random.default_rng(0))
->>> out = identify_campaign(m, c.speeds_rpm, c.repeats, c.phasors, phasor_std=c.noise_m)
+>>> out = identify_campaign(m, c.speeds_rpm, c.repeats, c.phasors, phasor_sd=c.noise_m)
 >>> out.uncertainty.names, out.n_used, list(out.table)[:4]
 (('front', 'rear'), 72, ['speed_rpm', 'repeat', 'front_k_yy', 'front_k_zz'])
 """
@@ -59,7 +59,7 @@ class CampaignResult:
 
 
 def identify_campaign(model: SpindleModel, speeds_rpm, repeats, phasors, *,
-                      phasor_std=None, probe_nodes: Sequence[int] | None = None,
+                      phasor_sd=None, probe_nodes: Sequence[int] | None = None,
                       unbalance=None, fit_on: str = "stiffness", law: str = "auto",
                       study: str = "isotropic", scatter: str = "total", truth=None,
                       provenance: dict | None = None) -> CampaignResult:
@@ -73,9 +73,9 @@ def identify_campaign(model: SpindleModel, speeds_rpm, repeats, phasors, *,
     phasors : array (N, 2 np) complex
         1× phasors ``[x, y]`` per probe node (trial-weight differences if ``unbalance`` is the
         trial mass).
-    phasor_std : float or array (N, 2 np), optional
-        Circular noise standard deviation of each phasor (m): gives covariances and the
-        estimated variance split.
+    phasor_sd : float or array (N, 2 np), optional
+        Standard deviation of the real (and imaginary) part of each phasor's noise (m), as
+        ``rig.phasors.phasor_noise_sd``: gives covariances and the estimated variance split.
     fit_on : {"stiffness", "all"}
         Coefficients the uncertainty model is fitted on, and whose flags exclude a record:
         the four ``k`` (default — damping is not identifiable from unbalance response at
@@ -90,7 +90,7 @@ def identify_campaign(model: SpindleModel, speeds_rpm, repeats, phasors, *,
         raise ValueError(f"repeats has shape {rep.shape}: need {sp.shape} like speeds_rpm")
     speeds = np.unique(sp)
     cr = condense_reactions(model, speeds, probe_nodes=probe_nodes, unbalance=unbalance)
-    res = identify_phasors(cr, phasors, sp, phasor_std=phasor_std,
+    res = identify_phasors(cr, phasors, sp, phasor_sd=phasor_sd,
                            catalog=catalog_coefficients(model, sp))
     cols = [j for j, n in enumerate(res.names) if fit_on == "all" or "_k_" in n]
     bad_bound = res.at_bound[:, cols].any(axis=1)

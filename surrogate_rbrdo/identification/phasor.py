@@ -5,11 +5,12 @@ real unknowns, so the estimate is exact: ``k = Re(r/x)``, ``c = Im(r/x)/Ω``. A 
 cost a few array operations (:func:`identify_phasors`).
 
 The covariance comes from the phasor noise by linear propagation: with circular complex noise
-of standard deviation ``σ_m`` on each measured phasor (what synchronous demodulation of white
-noise gives), ``dZ_j = a_j · dq``, ``a_j = (L_r,j − Z_j L_x,j) / x_j``, and with
-``C = A diag(σ²) Aᴴ``: ``cov(Re Z_i, Re Z_j) = cov(Im Z_i, Im Z_j) = ½ Re C_ij``,
-``cov(Re Z_i, Im Z_j) = −½ Im C_ij``. It is first order in the noise (the ratio ``r/x`` is
-biased at order ``σ²/|x|²``).
+on each measured phasor whose real and imaginary parts have standard deviation ``s_m`` each (what
+synchronous demodulation of white noise gives: ``s = σ √(2/N)``, the convention of
+``rig.phasors.phasor_noise_sd``), ``dZ_j = a_j · dq``, ``a_j = (L_r,j − Z_j L_x,j) / x_j``, and
+with ``C = A diag(2 s²) Aᴴ`` (``E|dq_m|² = 2 s_m²``):
+``cov(Re Z_i, Re Z_j) = cov(Im Z_i, Im Z_j) = ½ Re C_ij``, ``cov(Re Z_i, Im Z_j) = −½ Im C_ij``.
+It is first order in the noise (the ratio ``r/x`` is biased at order ``s²/|x|²``).
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ class PhasorIdentification:
     raw : ndarray (N, 8)
         Before projection.
     covariance : ndarray (N, 8, 8) or None
-        First-order covariance from ``phasor_std``.
+        First-order covariance from ``phasor_sd``.
     at_bound, unexcited : ndarray (N, 8) bool
         Flags: outside the box (and projected onto it); a journal not moving in a direction.
     """
@@ -107,7 +108,7 @@ def _bearing_major(Zk: np.ndarray, Zc: np.ndarray) -> np.ndarray:
 
 def _covariance(cr: CondensedReactions, si, x, Z, std, omega) -> np.ndarray:
     A = (cr.Lr[si] - Z[:, :, None] * cr.Lx[si]) / x[:, :, None]     # (N, m, p)
-    C = np.einsum("nip,np,njp->nij", A, std**2, A.conj())
+    C = np.einsum("nip,np,njp->nij", A, 2.0 * std**2, A.conj())
     m = Z.shape[1]
     w = omega[:, None, None]
     cov = np.empty((Z.shape[0], 2, m, 2, m))                         # (k|c, i, k|c, j)
@@ -122,7 +123,7 @@ def _covariance(cr: CondensedReactions, si, x, Z, std, omega) -> np.ndarray:
 
 
 def identify_phasors(cr: CondensedReactions, phasors: np.ndarray, speeds_rpm: np.ndarray, *,
-                     phasor_std: np.ndarray | float | None = None,
+                     phasor_sd: np.ndarray | float | None = None,
                      catalog: np.ndarray | None = None) -> PhasorIdentification:
     """Identify the eight diagonal bearing coefficients of every record.
 
@@ -133,9 +134,9 @@ def identify_phasors(cr: CondensedReactions, phasors: np.ndarray, speeds_rpm: np
     phasors : array (N, 2 np) complex
         Measured 1× amplitudes ``[x, y]`` per probe node (m), keyphasor-referenced.
     speeds_rpm : array (N,)
-    phasor_std : float or array (N, 2 np), optional
-        Standard deviation of the circular complex noise on each phasor (m): the covariance is
-        then returned.
+    phasor_sd : float or array (N, 2 np), optional
+        Standard deviation of the real (and of the imaginary) part of each phasor's noise (m),
+        as ``rig.phasors.phasor_noise_sd`` gives it: the covariance is then returned.
     catalog : array (N, 8) or (8,), optional
         ``k_catalog`` and ``c_init`` per coefficient (:func:`catalog_coefficients`): estimates
         outside the paper's box are set to the bound and flagged.
@@ -151,11 +152,11 @@ def identify_phasors(cr: CondensedReactions, phasors: np.ndarray, speeds_rpm: np
     raw = _bearing_major(Z.real, Z.imag / omega[:, None])
     unexcited = _bearing_major(unexc, unexc)
     cov = None
-    if phasor_std is not None:
-        std = np.broadcast_to(np.asarray(phasor_std, dtype=float), x.shape[:1] + (
+    if phasor_sd is not None:
+        std = np.broadcast_to(np.asarray(phasor_sd, dtype=float), x.shape[:1] + (
             cr.Lx.shape[-1],))
         if np.any(~np.isfinite(std) | (std < 0)):
-            raise ValueError("phasor_std is not allowed: must be finite and >= 0 (m)")
+            raise ValueError("phasor_sd is not allowed: must be finite and >= 0 (m)")
         with np.errstate(invalid="ignore"):
             cov = _covariance(cr, si, np.where(unexc, 1.0, x), np.nan_to_num(Z), std, omega)
         cov[unexcited.any(axis=1)] = np.nan

@@ -3,9 +3,10 @@
 Each record draws the bearing stiffness factors θ of its run from an MVN (physical scatter
 around the model's speed law), computes the FE model's 1× response at the probe nodes
 (:func:`~surrogate_rbrdo.spindle.harmonic.unbalance_response`) and adds circular complex
-noise of a given standard deviation (what synchronous demodulation of white probe noise leaves
-on a phasor). It is *not* the virtual rig (issue 14: sensors, records, demodulation, hidden
-effects); it exercises the identification → uncertainty chain where the answer is known.
+noise whose real and imaginary parts have a given standard deviation (what synchronous
+demodulation of white probe noise leaves on a phasor). It is *not* the virtual rig (issue 14:
+sensors, records, demodulation, hidden effects); it exercises the identification →
+uncertainty chain where the answer is known.
 
 >>> import numpy as np
 >>> from surrogate_rbrdo.spindle import reference_spindle
@@ -57,7 +58,7 @@ def phasor_campaign(model: SpindleModel, speeds_rpm: Sequence[float], repeats: i
     theta_std : sequence of float
         Standard deviation of the stiffness factors of ``model.theta_bearings`` (relative).
     noise_m : float
-        Standard deviation of the circular complex noise on each phasor (m).
+        Standard deviation of the real (and of the imaginary) part of each phasor's noise (m).
     rng : numpy.random.Generator
     theta_corr : array (m, m), optional
         Correlation of the factors (default independent).
@@ -79,8 +80,8 @@ def phasor_campaign(model: SpindleModel, speeds_rpm: Sequence[float], repeats: i
     q = unbalance_response(model, sp[:, None], theta)[:, 0]          # (N, nn, 4)
     ph = q[:, nodes, :2].reshape(sp.size, -1)
     if noise_m > 0:
-        ph = ph + noise_m / np.sqrt(2.0) * (rng.standard_normal(ph.shape)
-                                             + 1j * rng.standard_normal(ph.shape))
+        ph = ph + noise_m * (rng.standard_normal(ph.shape)
+                             + 1j * rng.standard_normal(ph.shape))
     u, inv = np.unique(sp, return_inverse=True)
     cat = catalog_coefficients(model, u)[inv]                       # (N, 8), nominal θ = 1
     names = [b.name for b in model.geometry.bearings]

@@ -57,9 +57,9 @@ def test_probes_away_from_bearings_expand_exactly(model):
     truth = catalog_coefficients(model, SPEEDS)
     q_on, q_off = _phasors(model, model.bearing_nodes), _phasors(model, probes)
     sigma = 1e-3 * np.abs(q_on).mean(axis=1, keepdims=True)          # same probe noise (m)
-    res = identify_phasors(off, q_off, SPEEDS, phasor_std=sigma)
+    res = identify_phasors(off, q_off, SPEEDS, phasor_sd=sigma)
     assert np.allclose(res.estimate, truth, rtol=1e-6)
-    ref = identify_phasors(on, q_on, SPEEDS, phasor_std=sigma)
+    ref = identify_phasors(on, q_on, SPEEDS, phasor_sd=sigma)
     assert np.all(off.expansion_condition > 2 * on.expansion_condition)
     assert np.all(res.std[:2, [0, 4]] > 1.5 * ref.std[:2, [0, 4]])
 
@@ -86,10 +86,10 @@ def test_covariance_matches_monte_carlo(model):
     cr = condense_reactions(model, SPEEDS[2:])
     q = _phasors(model, model.bearing_nodes, SPEEDS[2:])
     std = 1e-3 * np.abs(q)
-    lin = identify_phasors(cr, q, SPEEDS[2:], phasor_std=std)
+    lin = identify_phasors(cr, q, SPEEDS[2:], phasor_sd=std)
     rng = np.random.default_rng(0)
     n = 20000
-    noise = (rng.normal(size=(n, 4)) + 1j * rng.normal(size=(n, 4))) * std / np.sqrt(2)
+    noise = (rng.normal(size=(n, 4)) + 1j * rng.normal(size=(n, 4))) * std   # sd per part
     mc = identify_phasors(cr, q + noise, np.full(n, SPEEDS[2]))
     assert np.allclose(np.std(mc.raw, axis=0), lin.std[0], rtol=0.03)
     c_mc = np.cov(mc.raw.T)[0, 4] / np.prod(np.std(mc.raw, axis=0)[[0, 4]])
