@@ -7,7 +7,9 @@ Laws (``s = n / n_ref``, ``n`` in rpm, ``n_ref`` = 24 000 rpm by default):
   grows with the ball's centrifugal force ∝ Ω² (Harris & Kotzalas, *Rolling Bearing Analysis*,
   ch. 3; Jones's high-speed model); the paper's Table 3 is close to it (1.5 % worst residual);
 * ``"power"``: ``k̄ = k0 (1 − a s^p)`` — the form the reference spindle's softening effect uses
-  (Table 3 fits best with p ≈ 1.25 front, 1.52 rear); it nests the quadratic law at ``p = 2``.
+  (Table 3 fits best with p ≈ 1.25 front, 1.52 rear); it nests the quadratic law at ``p = 2``;
+* ``"cubic"``: ``k̄ = β0 + β1 s + β2 s² + β3 s³`` — no physics, the fallback for competing
+  effects (softening and thermal preload growth together make a non-monotone trend).
 
 With repeats at every speed (≥ 10) the law is fitted to the speed means by weighted least
 squares, each mean weighted by ``n_g / s_g²`` (its repeats' scatter: identification error grows
@@ -37,7 +39,8 @@ from scipy import optimize, stats
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.validate import check_choice, check_positive
 
-TREND_LAWS = ("constant", "quadratic", "power")
+TREND_LAWS = ("constant", "quadratic", "power", "cubic")
+_N_PARAMS = {"constant": 1, "quadratic": 2, "power": 3, "cubic": 4}
 #: significance level of the lack-of-fit test used by ``law="auto"``
 LOF_ALPHA = 0.05
 _POWER_BOUNDS = ([0.0, -5.0, 0.5], [np.inf, 0.99, 4.0])
@@ -96,6 +99,8 @@ def _evaluate(law: str, b: np.ndarray, s: np.ndarray) -> np.ndarray:
         return np.full_like(s, b[0], dtype=float)
     if law == "quadratic":
         return b[0] + b[1] * s**2
+    if law == "cubic":
+        return b[0] + s * (b[1] + s * (b[2] + s * b[3]))
     return b[0] * (1.0 - b[1] * s ** b[2])
 
 
@@ -104,6 +109,8 @@ def _jacobian(law: str, b: np.ndarray, s: np.ndarray) -> np.ndarray:
         return np.ones((s.size, 1))
     if law == "quadratic":
         return np.column_stack([np.ones_like(s), s**2])
+    if law == "cubic":
+        return np.column_stack([np.ones_like(s), s, s**2, s**3])
     sp = s ** b[2]
     with np.errstate(divide="ignore", invalid="ignore"):
         dlog = np.where(s > 0, sp * np.log(np.where(s > 0, s, 1.0)), 0.0)
@@ -131,8 +138,8 @@ def _groups(speeds: np.ndarray, y: np.ndarray):
 def _solve(law: str, s: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Weighted least squares ``min Σ w (y − f(s))²`` of one law."""
     sw = np.sqrt(w)
-    if law in ("constant", "quadratic"):
-        J = _jacobian(law, np.zeros(2), s)
+    if law in ("constant", "quadratic", "cubic"):
+        J = _jacobian(law, np.zeros(4), s)
         return np.linalg.lstsq(J * sw[:, None], y * sw, rcond=None)[0]
     q = _solve("quadratic", s, y, w)
     b0 = np.array([q[0], np.clip(-q[1] / q[0], -4.9, 0.98), 2.0])
@@ -172,7 +179,7 @@ def _fit_one(law: str, speeds: np.ndarray, y: np.ndarray, speed_ref: float) -> T
     identification is noisy count less), lack-of-fit ``F = χ²/(m − P)`` on ``(m − P, N − m)``
     degrees of freedom and the parameter covariance ``(JᵀWJ)⁻¹ max(1, χ²/(m − P))``. Without:
     ordinary least squares on the records, ``σ̂² (JᵀJ)⁻¹``."""
-    P = {"constant": 1, "quadratic": 2, "power": 3}[law]
+    P = _N_PARAMS[law]
     g = _groups(speeds, y)
     if g is None:
         s = speeds / speed_ref
@@ -207,10 +214,10 @@ def fit_trend(speeds_rpm, values, *, law: str = "auto",
     ----------
     speeds_rpm, values : array (N,)
         Speed of each record (rpm) and its identified value (SI).
-    law : {"auto", "constant", "quadratic", "power"}
-        ``"auto"``: the first of quadratic, power that passes the lack-of-fit test at 5 %
-        (needs repeats), else the one with the smaller residual (its failed test is kept in
-        ``lack_of_fit`` for the report).
+    law : {"auto", "constant", "quadratic", "power", "cubic"}
+        ``"auto"``: the first of quadratic, power, cubic that passes the lack-of-fit test at
+        5 % (needs repeats), else the one with the smallest residual (its failed test is kept
+        in ``lack_of_fit`` for the report).
     speed_ref_rpm : float
         Reference speed of ``s = n / n_ref``.
     """
@@ -223,19 +230,20 @@ def fit_trend(speeds_rpm, values, *, law: str = "auto",
     if not (np.all(np.isfinite(sp)) and np.all(np.isfinite(y))):
         raise ValueError("speeds_rpm or values has a non-finite entry: drop flagged records "
                          "first")
-    need = {"constant": 2, "quadratic": 3, "power": 4, "auto": 3}[law]
+    need = {"auto": 3, **{k: v + 1 for k, v in _N_PARAMS.items()}}[law]
     if np.unique(sp).size < need - 1 or sp.size < need:
         raise ValueError(f"{sp.size} records at {np.unique(sp).size} speeds cannot fit law "
                          f"{law!r}: need at least {need - 1} speeds and {need} records")
     if law != "auto":
         return _fit_one(law, sp, y, speed_ref_rpm)
-    fits = [_fit_one("quadratic", sp, y, speed_ref_rpm)]
-    if fits[0].lack_of_fit is None or fits[0].lack_of_fit.p_value >= LOF_ALPHA:
-        return fits[0]
-    if np.unique(sp).size >= 4:
-        fits.append(_fit_one("power", sp, y, speed_ref_rpm))
-        if fits[1].lack_of_fit is not None and fits[1].lack_of_fit.p_value >= LOF_ALPHA:
-            return fits[1]
+    fits = []
+    for cand in ("quadratic", "power", "cubic"):
+        if np.unique(sp).size < _N_PARAMS[cand] + 1 and fits:
+            break
+        fits.append(_fit_one(cand, sp, y, speed_ref_rpm))
+        lof = fits[-1].lack_of_fit
+        if lof is None or lof.p_value >= LOF_ALPHA:
+            return fits[-1]
     best = min(fits, key=lambda f: f.residual_std)
     if not np.all(np.isfinite(best.params)):
         raise ModelError(f"fit_trend: non-finite parameters for law {best.law!r}")
