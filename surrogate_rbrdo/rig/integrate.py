@@ -265,9 +265,9 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
             lo = a - 1
         grid = tf[lo:b]
         fseg = None if fine_force is None else fine_force[lo:b]
-        etas = _run(eta, lam, Wb, P, profile, grid, fseg, force_dofs)
-        out[a:b] = ((Phi[np.asarray(out_dofs)] @ V[: Phi.shape[1]]) @ etas[a - lo:].T).real.T
-        eta = etas[-1]
+        Cv = Phi[np.asarray(out_dofs)] @ V[: Phi.shape[1]]
+        y, eta = _run(eta, lam, Wb, P, profile, grid, fseg, force_dofs, Cv)
+        out[a:b] = y[a - lo:]
         V_prev = V
     q = out[:: options.oversample]
     return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM)
@@ -310,35 +310,47 @@ def _advance(eta, lam, Wb, P, profile, ta, tb):
     return np.exp(lam * hh) * eta + acc
 
 
-def _run(eta0, lam, Wb, P, profile, grid, fseg, force_dofs):
-    """Modal states at every time of ``grid`` (constant matrices), ``(len(grid), 2r)``."""
+def _run(eta0, lam, Wb, P, profile, grid, fseg, force_dofs, Cv, chunk=4096):
+    """Outputs ``Re(Cv η)`` at every time of ``grid`` (constant matrices) and the final modal
+    state; worked in chunks of ``chunk`` steps so memory stays bounded.
+
+    The unbalance input over a step is ``e^{iφ_k} e^{iΩ_s τ} g(τ)`` with ``Ω_s`` the segment's
+    mid speed and ``g`` (the envelope ``φ'² − iφ''`` times the residual phase) linear over the
+    step: exact at constant speed, ``O(h²)`` in the envelope's curvature on a ramp."""
     T = grid.size
+    out = np.empty((T, Cv.shape[0]))
+    out[0] = (Cv @ eta0).real
     if T == 1:
-        return eta0[None, :]
+        return out, eta0
     h = float(grid[1] - grid[0])
-    t = grid
-    w = profile.omega(t[:-1])
-    ph = profile.angle(t)
-    env = _envelope(profile, t)
-    # unbalance: e^{iφ(t_k+τ)} a(t_k+τ) = e^{iφ_k} e^{iΩ_k τ} g(τ), g linear over the step
-    g0 = env[:-1] * np.exp(1j * ph[:-1])
-    g1 = env[1:] * np.exp(1j * (ph[1:] - w * h))
-    bP, bPc = Wb @ P, Wb @ P.conj()
     a = np.exp(lam * h)
-    r = np.zeros((T - 1, lam.size), complex)
-    for sgn, b in ((1.0, bP), (-1.0, bPc)):
-        nu = sgn * 1j * w
-        p1, p12 = _phi12(lam[None, :] * h, nu[:, None] * h)
-        G0 = g0 if sgn > 0 else g0.conj()
-        G1 = g1 if sgn > 0 else g1.conj()
-        r += 0.5 * h * (p1 * G0[:, None] + p12 * (G1 - G0)[:, None]) * b
+    ws = float(profile.omega(np.array([0.5 * (grid[0] + grid[-1])]))[0])
+    coef = []
+    if np.any(P != 0):
+        for sgn, b in ((1.0, Wb @ P), (-1.0, Wb @ P.conj())):
+            p1, p12 = _phi12(lam * h, np.full_like(lam, sgn * 1j * ws * h))
+            coef.append((sgn, 0.5 * h * p1 * b, 0.5 * h * p12 * b))
     if fseg is not None:
         p1, p12 = _phi12(lam * h, np.zeros_like(lam))
         bF = Wb[:, np.asarray(force_dofs)]                   # (2r, k)
-        F0, F1 = fseg[:-1] @ bF.T, fseg[1:] @ bF.T           # (T-1, 2r)
-        r += h * (p1 * F0 + p12 * (F1 - F0))
-    etas = np.empty((T, lam.size), complex)
-    etas[0] = eta0
-    for k in range(T - 1):  # the diagonal recurrence; a loop over steps, vectorised over modes
-        etas[k + 1] = a * etas[k] + r[k]
-    return etas
+    eta = eta0
+    for c0 in range(0, T - 1, chunk):
+        c1 = min(c0 + chunk, T - 1)
+        t = grid[c0:c1 + 1]
+        ph = profile.angle(t)
+        env = _envelope(profile, t)
+        g0 = env[:-1] * np.exp(1j * ph[:-1])
+        g1 = env[1:] * np.exp(1j * (ph[1:] - ws * h))
+        r = np.zeros((c1 - c0, lam.size), complex)
+        for sgn, B0, B1 in coef:
+            G0, G1 = (g0, g1) if sgn > 0 else (g0.conj(), g1.conj())
+            r += G0[:, None] * B0 + (G1 - G0)[:, None] * B1
+        if fseg is not None:
+            F0, F1 = fseg[c0:c1] @ bF.T, fseg[c0 + 1:c1 + 1] @ bF.T     # (n, 2r)
+            r += h * (p1 * F0 + p12 * (F1 - F0))
+        etas = np.empty((c1 - c0, lam.size), complex)
+        for k in range(c1 - c0):  # the diagonal recurrence: a loop over steps, vector over modes
+            eta = a * eta + r[k]
+            etas[k] = eta
+        out[c0 + 1:c1 + 1] = (etas @ Cv.T).real
+    return out, eta
