@@ -21,7 +21,7 @@ record, largest at the top speed (see ``docs/rig.md``); the fast path leaves it 
 
 >>> s = phasor_noise_sd(50e-9, 38.8e-9, 10_000)
 >>> round(s * 1e9, 3)     # nm, per real/imaginary part
-0.742
+0.725
 """
 
 from __future__ import annotations
