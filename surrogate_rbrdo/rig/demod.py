@@ -34,11 +34,16 @@ from surrogate_rbrdo.rig.records import Record, RecordError
 def keyphasor_edges(record: Record, channel: str = "keyphasor") -> np.ndarray:
     """Times (s, on the record's time axis) of the keyphasor's rising edges."""
     v = record.values(channel)
-    delay = record.channel(channel).delay_s
-    lo, hi = np.percentile(v, 1), np.percentile(v, 99)
-    if not hi - lo > 0:
+    if not np.ptp(v) > 0:
         raise RecordError(f"record {record.id!r}", f"channel {channel!r}",
                           "flat keyphasor signal: no pulses")
+    return edges_of(v, record.sample_rate_hz, record.channel(channel).delay_s)
+
+
+def edges_of(v: np.ndarray, fs: float, delay_s: float = 0.0) -> np.ndarray:
+    """Rising-edge times of a pulse train ``v`` sampled at ``fs`` (threshold at mid-swing,
+    cubic interpolation between samples), corrected for a known sampling delay."""
+    lo, hi = np.percentile(v, 1), np.percentile(v, 99)
     thr = 0.5 * (lo + hi)
     k = np.nonzero((v[:-1] < thr) & (v[1:] >= thr))[0]
     frac = (thr - v[k]) / (v[k + 1] - v[k])
@@ -56,7 +61,7 @@ def keyphasor_edges(record: Record, channel: str = "keyphasor") -> np.ndarray:
         df = sum(Li * pi for Li, pi in zip(dL, p, strict=True))
         x = np.clip(x - f / np.where(df > 0, df, np.inf), 0.0, 1.0)
     frac[inner] = x
-    return (k + frac) / record.sample_rate_hz + delay
+    return (k + frac) / fs + delay_s
 
 
 @dataclass(frozen=True)

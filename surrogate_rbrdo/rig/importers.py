@@ -75,7 +75,7 @@ def read_csv(path: str | Path, *, sidecar: str | Path | None = None,
     src = str(path)
     if not path.is_file():
         raise RecordError(src, "file", "does not exist")
-    meta, _ = _sidecar_for(path, sidecar)
+    meta, side = _sidecar_for(path, sidecar)
     with open(path) as fh:
         header = [h.strip() for h in fh.readline().strip().split(",")]
     try:
@@ -100,7 +100,7 @@ def read_csv(path: str | Path, *, sidecar: str | Path | None = None,
             raise RecordError(src, f"channel {n!r}", f"missing from the CSV columns "
                                                      f"{sorted(cols)}")
     data = np.array([cols[n] for n in names], dtype=float).reshape(len(names), -1)
-    rec = record_from_metadata(meta, data, src)
+    rec = record_from_metadata(meta, data, f"{src} [sidecar {side}]")
     return check_record(rec, source=src, **dict(check or {}))
 
 

@@ -129,6 +129,7 @@ class Truth:
     variability: Variability = Variability()
     theta_bearings: tuple[str, ...] | None = None
     random_phase: bool = True
+    _u_perm: float = dataclasses.field(init=False, repr=False, compare=False, default=0.0)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "effects", tuple(self.effects))
@@ -138,6 +139,9 @@ class Truth:
         object.__setattr__(self, "theta_bearings", tb)
         if not self.geometry.unbalances:
             raise ValueError("truth.geometry has no unbalance planes: the rig needs at least one")
+        m = build_model(self.geometry, ()).rotor_mass_kg
+        object.__setattr__(self, "_u_perm", iso_unbalance_kgm(
+            m, self.variability.balance_grade_mm_s, BALANCE_SPEED_RPM))
 
     @property
     def all_effects(self) -> tuple[Effect, ...]:
@@ -146,8 +150,7 @@ class Truth:
     def permissible_unbalance_kgm(self) -> float:
         """ISO 21940-11 permissible residual unbalance ``U = m G / Ω`` of the nominal rotor at
         the balancing speed (24 000 rpm)."""
-        m = build_model(self.geometry, ()).rotor_mass_kg
-        return iso_unbalance_kgm(m, self.variability.balance_grade_mm_s, BALANCE_SPEED_RPM)
+        return self._u_perm
 
     def describe(self) -> dict[str, Any]:
         """JSON-able description for provenance (effects with their parameters)."""
