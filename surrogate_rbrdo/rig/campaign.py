@@ -35,7 +35,12 @@ from surrogate_rbrdo.rig.demod import demodulate
 from surrogate_rbrdo.rig.integrate import SpeedProfile
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import SensorSet
-from surrogate_rbrdo.rig.simulate import impact_record, runup_record, steady_records
+from surrogate_rbrdo.rig.simulate import (
+    check_stable,
+    impact_record,
+    runup_record,
+    steady_records,
+)
 from surrogate_rbrdo.rig.store import DatasetWriter, read_record
 from surrogate_rbrdo.rig.truth import Truth, _child
 
@@ -140,6 +145,8 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     ramps, impacts = [], []
     for b in range(options.builds):
         for tl in range(options.tools_per_build):
+            st0 = truth.state(root_ss, build=b, tool=tl, run=0)
+            check_stable(st0.model(), st0.theta, _stability_speeds(options))
             for r in range(options.repeats):
                 st = truth.state(root_ss, build=b, tool=tl, run=r)
                 ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" for i in range(len(options.speeds_rpm))]
@@ -156,7 +163,6 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                     count += 1
                     if progress:
                         progress(count, total, rid)
-            st0 = truth.state(root_ss, build=b, tool=tl, run=0)
             for rec_id, make in _extras(truth, st0, options, inst, root_ss, b, tl):
                 kind = "impact" if "_hit" in rec_id else "ramp"
                 (impacts if kind == "impact" else ramps).append(rec_id)
@@ -175,6 +181,14 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return CampaignResult(out, writer.root, table, count, written, secs, tuple(ramps),
                           tuple(impacts))
+
+
+def _stability_speeds(o: CampaignOptions) -> np.ndarray:
+    """Speeds at which the truth must be stable: the campaign's speeds and the ramp's range."""
+    sp = list(o.speeds_rpm)
+    if o.runup is not None:
+        sp += np.linspace(o.runup[0], o.runup[1], 12).tolist()
+    return np.unique(sp)
 
 
 def _n_extra(o: CampaignOptions) -> int:

@@ -214,7 +214,11 @@ def critical_speeds_from_ramp(tr: Tracking, channel: str, *, min_prominence: flo
     """Peaks of the 1x amplitude of ``channel`` with a phase change of at least
     ``min_phase_change_deg`` across the half-power band (a resonance, not a notch).
 
-    The peak speed is refined by a parabola through the three highest blocks.
+    The peak speed is refined by a parabola through the three highest blocks. After a fast
+    sweep through a lightly damped resonance the free vibration beats with the 1x response;
+    lower peaks within three half-power bandwidths (or 2 %) of a higher one are dropped.
+    A run-up's peak lies above the critical speed and a run-down's below it, by an amount
+    that grows with the sweep rate (``tests/rig/test_demod.py``).
     """
     A = np.abs(tr.X[tr.channels.index(channel)])
     ph = np.unwrap(np.angle(tr.X[tr.channels.index(channel)]))
@@ -222,8 +226,8 @@ def critical_speeds_from_ramp(tr: Tracking, channel: str, *, min_prominence: flo
     order = np.argsort(sp)
     A, ph, sp = A[order], ph[order], sp[order]
     peaks, _ = find_peaks(A, prominence=min_prominence * A.max())
-    out = []
-    for p in peaks:
+    found = []
+    for p in peaks[np.argsort(-A[peaks])]:        # highest first
         half = A[p] / np.sqrt(2)
         lo = p
         while lo > 0 and A[lo] > half:
@@ -241,6 +245,10 @@ def critical_speeds_from_ramp(tr: Tracking, channel: str, *, min_prominence: flo
                 x0 = sp[p] - b / (2 * a)
         n1 = np.interp(half, A[lo:p + 1], sp[lo:p + 1])
         n2 = np.interp(half, A[p:hi + 1][::-1], sp[p:hi + 1][::-1])
-        out.append(CriticalSpeed(float(x0), float(A[p]), float(dphi),
-                                 float(x0 / (n2 - n1)) if n2 > n1 else np.inf))
+        # a lower peak within a few bandwidths of a higher one is the sweep's beating
+        if any(abs(x0 - c.speed_rpm) < max(3 * (n2 - n1), 0.02 * x0) for c in found):
+            continue
+        found.append(CriticalSpeed(float(x0), float(A[p]), float(dphi),
+                                   float(x0 / (n2 - n1)) if n2 > n1 else np.inf))
+    out = sorted(found, key=lambda c: c.speed_rpm)
     return tuple(out)

@@ -39,11 +39,12 @@ class FRFEstimate:
 
 
 def h1_frf(records: Sequence[Record], responses: Sequence[str] | None = None,
-           force: str = "hammer", *, force_window: float = 0.1) -> FRFEstimate:
+           force: str = "hammer", *, force_window: float | None = None) -> FRFEstimate:
     """H1 FRFs and coherence averaged over impact ``records`` (one hit each).
 
-    ``force_window``: fraction of the record kept on the force channel (rectangular force
-    window, removes the noise after the pulse).
+    ``force_window``: fraction of the record kept on the force channel (a rectangular force
+    window from the start, removing the noise after the pulse); default: up to twice the
+    pulse's end (the last sample above 5 % of the peak) over all hits.
     """
     from sdypy.FRF import FRF  # optional heavy dependency (pyFRF + SEP-005 readers)
 
@@ -59,6 +60,10 @@ def h1_frf(records: Sequence[Record], responses: Sequence[str] | None = None,
             raise RecordError(f"record {r.id!r}", "sample_rate_hz/n_samples",
                               "all impact records of one FRF need the same rate and length")
     exc = np.stack([r.values(force) for r in recs])                   # (n, T)
+    if force_window is None:
+        above = np.abs(exc) > 0.05 * np.abs(exc).max(axis=1, keepdims=True)
+        end = int(np.max(exc.shape[1] - 1 - np.argmax(above[:, ::-1], axis=1)))
+        force_window = min(1.0, 2.0 * (end + 1) / exc.shape[1])
     out_H, out_c = [], []
     for name in responses:
         resp = np.stack([r.values(name) - np.mean(r.values(name)) for r in recs])

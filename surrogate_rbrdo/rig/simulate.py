@@ -23,11 +23,13 @@ from typing import Any
 import numpy as np
 from scipy.signal import decimate
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.rig.integrate import IntegratorOptions, SpeedProfile, simulate
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import Installation, SensorSet
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
 from surrogate_rbrdo.spindle.harmonic import unbalance_response
+from surrogate_rbrdo.spindle.modal import modal_analysis
 
 #: ramps: matrices frozen over 10 ms, modes below 20 kHz + static shapes (docs/rig.md)
 RAMP_OPTIONS = IntegratorOptions(segment_s=0.01, f_cut_hz=20_000.0)
@@ -53,6 +55,19 @@ class ProbeLayout:
     def dofs(self, sensors: SensorSet) -> np.ndarray:
         return np.array([4 * self.nodes[n.split("_")[0]] + (n.endswith("_y"))
                          for n in sensors.probe_channels])
+
+
+def check_stable(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarray) -> None:
+    """Raise :class:`ModelError` if a mode of the truth has negative damping at one of the
+    speeds: no steady state exists there, so the rig cannot measure one."""
+    for s in np.asarray(speeds_rpm, float):
+        m = modal_analysis(model, float(s), theta[0])
+        if np.any(m.damping_ratio < 0):
+            k = int(np.argmin(m.damping_ratio))
+            raise ModelError(
+                f"the truth is unstable at {s:.6g} rpm: the {m.frequency_hz[k]:.4g} Hz "
+                f"{m.whirl[k]} mode has damping ratio {m.damping_ratio[k]:.3g} (cross-coupling "
+                "too strong for the damping?); no steady state to measure")
 
 
 def keyphasor_volts(sensors: SensorSet, angle: np.ndarray) -> np.ndarray:
@@ -179,7 +194,7 @@ def hammer_pulse(t: np.ndarray, t_hit: float, peak_N: float, width_s: float) -> 
 def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
                   inst: Installation, rng: np.random.Generator, *, rid: str,
                   provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
-                  t_hit_s: float = 0.05, oversample: int = 8) -> Record:
+                  t_hit_s: float = 0.05, oversample: int = 4) -> Record:
     """A hammer hit at the tool tip in ``direction`` at standstill, all probes and the force."""
     layout = ProbeLayout.of(model)
     fs = sensors.daq.sample_rate_hz

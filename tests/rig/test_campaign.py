@@ -54,3 +54,19 @@ def test_options_are_checked():
         CampaignOptions(speeds_rpm=(2000.0, 1000.0))
     with pytest.raises(ValueError, match="runup"):
         CampaignOptions(runup=(2000.0, 1000.0, 5.0))
+
+
+def test_report_writes_every_figure(tmp_path):
+    pytest.importorskip("sdypy.EMA")
+    from surrogate_rbrdo.reporting.plots_rig import write_rig_report
+
+    truth = reference_truth()
+    opts = CampaignOptions(speeds_rpm=(5000.0, 15000.0, 21000.0), repeats=3, duration_s=0.2,
+                           runup=(20500.0, 23000.0, 1.5), impacts_per_direction=2,
+                           impact_duration_s=0.5)
+    res = run_campaign(truth, opts, tmp_path, rng=np.random.default_rng(2))
+    summary = write_rig_report(res, truth, tmp_path)
+    for name in ("bode", "polar", "orbit", "campbell_runup", "frf_tool_x", "waterfall_runup"):
+        assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 10_000
+    assert summary["critical_speeds_runup_rpm"] and summary["impact_modes_hz"]
+    assert json.loads((tmp_path / "rig_summary.json").read_text()) == summary
