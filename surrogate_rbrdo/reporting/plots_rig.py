@@ -33,6 +33,13 @@ def _plt():
     return plt
 
 
+def _save(plt, fig, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def bode_stats(result: CampaignResult, channel: str) -> dict[str, np.ndarray]:
     """Per speed: mean complex 1x phasor over repeats, and the SD of amplitude and phase."""
     t = result.phasors
@@ -74,10 +81,7 @@ def plot_bode(result: CampaignResult, curves: dict[str, tuple[np.ndarray, np.nda
     a2.set_xlabel("speed (rpm)")
     a1.legend(fontsize=7, ncol=2)
     a1.set_title("Bode: measured 1x (mean ± 2σ over repeats) vs FE")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_polar(result: CampaignResult, path: Path, channel: str = "tool_x") -> Path:
@@ -95,10 +99,7 @@ def plot_polar(result: CampaignResult, path: Path, channel: str = "tool_x") -> P
     ax.set_xlabel("Re X (µm)")
     ax.set_ylabel("Im X (µm)")
     ax.set_title(f"Polar plot of the 1x response, {channel}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_orbit(record, path: Path, target: str = "tool", n_rev: int = 5) -> Path:
@@ -113,10 +114,7 @@ def plot_orbit(record, path: Path, target: str = "tool", n_rev: int = 5) -> Path
     ax.set_xlabel("x (µm)")
     ax.set_ylabel("y (µm)")
     ax.set_title(f"Orbit at {target}, {record.speed_rpm:.0f} rpm (record {record.id})")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_campbell_runup(camp, measured: dict[str, list[float]], path: Path) -> Path:
@@ -139,10 +137,7 @@ def plot_campbell_runup(camp, measured: dict[str, list[float]], path: Path) -> P
     ax.set_ylim(0, max(sp[-1] / 60.0 * 1.6, 1.0))
     ax.legend(fontsize=8)
     ax.set_title("Campbell: model vs critical speeds from run-ups")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_frf(est, fit, path: Path) -> Path:
@@ -162,10 +157,7 @@ def plot_frf(est, fit, path: Path) -> Path:
     a2.set_xlabel("frequency (Hz)")
     a1.legend(fontsize=8)
     a1.set_title(f"Impact tests: H1 over {est.n_averages} hits")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def plot_waterfall(record, path: Path, channel: str = "tool_x") -> Path:
@@ -181,10 +173,7 @@ def plot_waterfall(record, path: Path, channel: str = "tool_x") -> Path:
     ax.set_xlabel("speed (rpm)")
     ax.set_ylabel("frequency (Hz)")
     ax.set_title(f"{record.kind} waterfall (spectrogram), {channel}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def write_rig_report(result: CampaignResult, truth: Truth, out_dir: str | Path
@@ -200,7 +189,9 @@ def write_rig_report(result: CampaignResult, truth: Truth, out_dir: str | Path
     st = truth.apply(*(prov["truth_draws"][k] for k in ("build", "tool", "run")))
     true_model = st.model()
     nominal = build_model(st.geometry, truth.effects, theta_bearings=truth.theta_bearings)
-    channels = ("tool_x", "front_x", "rear_x")
+    present = set(result.phasors.array("channel").tolist())
+    channels = tuple(c for c in ("tool_x", "front_x", "rear_x") if c in present)
+    main = channels[0]
     sp = np.geomspace(min(result.phasors.array("speed_rpm")),
                       max(result.phasors.array("speed_rpm")), 300)
     curves = {}
@@ -211,31 +202,31 @@ def write_rig_report(result: CampaignResult, truth: Truth, out_dir: str | Path
         curves[label] = (sp, np.stack([Q[:, nodes[c.split("_")[0]], 0] for c in channels],
                                       axis=1))
     figs = [plot_bode(result, curves, fig_dir / "bode.png", channels),
-            plot_polar(result, fig_dir / "polar.png")]
+            plot_polar(result, fig_dir / "polar.png", main)]
     steady = ds.select(kind="steady")
     top = max(steady, key=lambda r: r["speed_rpm"])
-    figs.append(plot_orbit(ds.load(top), fig_dir / "orbit.png"))
+    figs.append(plot_orbit(ds.load(top), fig_dir / "orbit.png", main.split("_")[0]))
     summary: dict[str, Any] = {"n_records": result.n_records, "seconds": result.seconds}
     measured: dict[str, list[float]] = {}
     for rid in result.ramps:
         rec = ds.load(rid)
-        cs = critical_speeds_from_ramp(track_1x(rec, ("tool_x",)), "tool_x")
+        cs = critical_speeds_from_ramp(track_1x(rec, (main,)), main)
         measured[rec.kind] = [c.speed_rpm for c in cs]
         summary[f"critical_speeds_{rec.kind}_rpm"] = measured[rec.kind]
         summary[f"amplification_factors_{rec.kind}"] = [c.amplification_factor for c in cs]
         if rec.kind == "runup":
-            figs.append(plot_waterfall(rec, fig_dir / "waterfall_runup.png"))
+            figs.append(plot_waterfall(rec, fig_dir / "waterfall_runup.png", main))
     if result.ramps:
         cb = campbell(nominal, np.linspace(0.0, nominal.geometry.speed_max_rpm * 1.1, 23))
         summary["model_critical_speeds_rpm"] = cb.critical_speeds_rpm.tolist()
         figs.append(plot_campbell_runup(cb, measured, fig_dir / "campbell_runup.png"))
     hits = [ds.load(rid) for rid in result.impacts if "_hit_x" in rid]
     if hits:
-        est = h1_frf(hits, ("tool_x", "front_x"))
+        est = h1_frf(hits, channels[:2])
         fit = modal_fit(est, (50.0, 0.4 * hits[0].sample_rate_hz))
         summary["impact_modes_hz"] = fit.frequency_hz.tolist()
         summary["impact_damping_ratios"] = fit.damping_ratio.tolist()
-        figs.append(plot_frf(est, fit, fig_dir / "frf_tool_x.png"))
+        figs.append(plot_frf(est, fit, fig_dir / f"frf_{main}.png"))
     summary["figures"] = [str(p.relative_to(out)) for p in figs]
     (out / "rig_summary.json").write_text(json.dumps(summary, indent=2))
     return summary

@@ -94,12 +94,7 @@ def read_csv(path: str | Path, *, sidecar: str | Path | None = None,
                 raise RecordError(src, "sample_rate_hz",
                                   f"= {fs} disagrees with the time_s column (step "
                                   f"{np.median(dt):.6g} s = {1 / np.median(dt):.6g} Hz)")
-    names = [c["name"] for c in meta.get("channels", [])]
-    for n in names:
-        if n not in cols:
-            raise RecordError(src, f"channel {n!r}", f"missing from the CSV columns "
-                                                     f"{sorted(cols)}")
-    data = np.array([cols[n] for n in names], dtype=float).reshape(len(names), -1)
+    data = _columns(meta, cols, src, "the CSV columns")
     rec = record_from_metadata(meta, data, f"{src} [sidecar {side}]")
     return check_record(rec, source=src, **dict(check or {}))
 
@@ -113,6 +108,16 @@ def write_csv(record: Record, path: str | Path) -> Path:
                header=",".join(("time_s",) + record.channel_names), comments="", fmt="%.17g")
     _write_float_sidecar(record, path.with_suffix(".json"))
     return path
+
+
+def _columns(meta: Mapping[str, Any], available: Mapping[str, np.ndarray], src: str,
+             where: str) -> np.ndarray:
+    """The sidecar's channels, in its order, from the file's ``available`` columns."""
+    names = [c["name"] for c in meta.get("channels", [])]
+    for n in names:
+        if n not in available:
+            raise RecordError(src, f"channel {n!r}", f"missing from {where} {sorted(available)}")
+    return np.array([available[n] for n in names], dtype=float).reshape(len(names), -1)
 
 
 def read_uff58(path: str | Path, *, sidecar: str | Path | None = None,
@@ -140,12 +145,8 @@ def read_uff58(path: str | Path, *, sidecar: str | Path | None = None,
     if meta.get("sample_rate_hz") not in (None, fs) and abs(meta["sample_rate_hz"] / fs - 1) > 1e-6:
         raise RecordError(src, "sample_rate_hz", f"= {meta['sample_rate_hz']} in the sidecar "
                                                  f"but {fs} Hz in the file")
-    names = [c["name"] for c in meta.get("channels", [])]
-    for n in names:
-        if n not in by_name:
-            raise RecordError(src, f"channel {n!r}", f"no type-58 dataset with id1 {n!r}; "
-                                                     f"found {sorted(by_name)}")
-    data = np.array([np.real(by_name[n]["data"]) for n in names], dtype=float)
+    data = _columns(meta, {k: np.real(v["data"]) for k, v in by_name.items()}, src,
+                    "the type-58 datasets (by id1)")
     rec = record_from_metadata({**meta, "sample_rate_hz": fs}, data, src)
     return check_record(rec, source=src, **dict(check or {}))
 

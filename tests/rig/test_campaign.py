@@ -70,3 +70,17 @@ def test_report_writes_every_figure(tmp_path):
         assert (tmp_path / "figures" / f"{name}.png").stat().st_size > 10_000
     assert summary["critical_speeds_runup_rpm"] and summary["impact_modes_hz"]
     assert json.loads((tmp_path / "rig_summary.json").read_text()) == summary
+
+
+def test_report_with_bearing_probes_only(tmp_path):
+    pytest.importorskip("sdypy.EMA")
+    from surrogate_rbrdo.reporting.plots_rig import write_rig_report
+    from surrogate_rbrdo.rig.sensors import SensorSet
+
+    opts = CampaignOptions(speeds_rpm=(8000.0, 16000.0), repeats=2, duration_s=0.2,
+                           runup=None, impacts_per_direction=1, impact_duration_s=0.5,
+                           sensors=SensorSet(targets=("front", "rear")))
+    truth = reference_truth()
+    res = run_campaign(truth, opts, tmp_path, rng=np.random.default_rng(0))
+    write_rig_report(res, truth, tmp_path)
+    assert (tmp_path / "figures" / "frf_front_x.png").is_file()
