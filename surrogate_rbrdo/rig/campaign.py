@@ -196,13 +196,22 @@ def _n_extra(o: CampaignOptions) -> int:
     return o.builds * o.tools_per_build * per_tool
 
 
+def _provenance(truth, st, inst, root_ss, b, tl, r) -> dict[str, Any]:
+    """What every record carries: the truth's effects (model and hidden) with parameters, the
+    draws of its build/tool/run, θ, the sensors' hidden installation errors and the seed."""
+    d = truth.describe()
+    return {"source": "surrogate_rbrdo virtual rig", "build": b, "tool": tl, "run": r,
+            "truth_effects": d["effects"], "hidden_effects": d["hidden"],
+            "truth_draws": st.draws, "theta": st.theta[0].tolist(),
+            "sensor_installation": inst.to_dict(), "seed_entropy": str(root_ss.entropy),
+            "seed_spawn_key": list(root_ss.spawn_key)}
+
+
 def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) -> dict[str, Record]:
     sp = np.asarray(options.speeds_rpm)[todo]
     rngs = [np.random.default_rng(_child(root_ss, 3, b, tl, r, i)) for i in todo]
-    prov = [{"source": "surrogate_rbrdo virtual rig", "build": b, "tool": tl, "run": r,
-             "truth_draws": st.draws, "theta": st.theta[0].tolist(),
-             "hidden_effects": truth.describe()["hidden"],
-             "seed_key": [3, b, tl, r, i]} for i in todo]
+    base = _provenance(truth, st, inst, root_ss, b, tl, r)
+    prov = [{**base, "seed_key": [3, b, tl, r, i]} for i in todo]
     recs = steady_records(st.model(), st.theta, sp, options.sensors, inst, rngs,
                           duration_s=options.duration_s, ids=[ids[i] for i in todo],
                           provenance=prov)
@@ -212,9 +221,7 @@ def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) -> dict[str,
 def _extras(truth, st, options, inst, root_ss, b, tl):
     """(id, thunk) of the run-up/run-down and impact records of one tool (on its run 0)."""
     model = st.model()
-    base = {"source": "surrogate_rbrdo virtual rig", "build": b, "tool": tl, "run": 0,
-            "truth_draws": st.draws, "theta": st.theta[0].tolist(),
-            "hidden_effects": truth.describe()["hidden"]}
+    base = _provenance(truth, st, inst, root_ss, b, tl, 0)
     out = []
     if options.runup is not None:
         a, e, d = options.runup

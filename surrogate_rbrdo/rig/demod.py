@@ -100,17 +100,23 @@ def shaft_angle(record: Record, *, constant_speed: bool | None = None) -> ShaftA
 
 
 def fit_orders(y: np.ndarray, angle: np.ndarray, orders: tuple[int, ...] = (1,)
-               ) -> tuple[np.ndarray, float]:
-    """Least-squares ``y ≈ a₀ + Σ Re(X_h e^{i h φ})``; returns ``X`` (len(orders),) and the
-    residual RMS."""
-    cols = [np.ones_like(angle)]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares ``y ≈ a₀ + Σ Re(X_h e^{i h φ})``, for one signal (``y``, ``angle`` of shape
+    (N,)) or many at once ((C, N)); returns ``X`` (..., len(orders)) and the residual RMS (...).
+
+    Solved by the normal equations: over whole revolutions the columns are nearly orthogonal,
+    so they are well conditioned."""
+    y = np.asarray(y, float)
+    ang = np.broadcast_to(angle, y.shape)
+    cols = [np.ones_like(y)]
     for h in orders:
-        cols += [np.cos(h * angle), -np.sin(h * angle)]
-    A = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    X = coef[1::2] + 1j * coef[2::2]
-    res = y - A @ coef
-    return X, float(np.sqrt(np.mean(res**2)))
+        cols += [np.cos(h * ang), -np.sin(h * ang)]
+    A = np.stack(cols, axis=-1)                                   # (..., N, k)
+    At = np.swapaxes(A, -1, -2)
+    coef = np.linalg.solve(At @ A, At @ y[..., None])               # (..., k, 1)
+    X = coef[..., 1::2, 0] + 1j * coef[..., 2::2, 0]
+    res = y - (A @ coef)[..., 0]
+    return X, np.sqrt(np.mean(res**2, axis=-1))
 
 
 @dataclass(frozen=True)
@@ -139,13 +145,12 @@ def demodulate(record: Record, channels: tuple[str, ...] | None = None, *,
                           f"{n_rev} revolutions: demodulation needs {min_revolutions}")
     if channels is None:
         channels = tuple(c.name for c in record.channels if c.quantity == "displacement")
-    t = record.time_s
-    X = np.empty((len(channels), len(orders)), complex)
-    res = np.empty(len(channels))
-    for i, name in enumerate(channels):
-        tc = t + record.channel(name).delay_s
-        use = (tc >= ang.edges_s[0]) & (tc < ang.edges_s[-1])
-        X[i], res[i] = fit_orders(record.values(name)[use], ang.angle(tc[use]), orders)
+    delays = np.array([record.channel(n).delay_s for n in channels])
+    # whole revolutions of the channel with the largest delay; the same sample count for all
+    tc = record.time_s[None, :] + delays[:, None]
+    use = np.all((tc >= ang.edges_s[0]) & (tc < ang.edges_s[-1]), axis=0)
+    Y = np.stack([record.values(n)[use] for n in channels])
+    X, res = fit_orders(Y, ang.angle(tc[:, use]), orders)
     return Phasors(record.id, ang.speed_rpm, tuple(channels), tuple(orders), X, res, n_rev)
 
 

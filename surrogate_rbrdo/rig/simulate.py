@@ -127,8 +127,9 @@ def _probe_volts(sensors, inst, X, w, ang, rng):
     gain = np.array([inst.gain[c] for c in names])
     H = np.array([sensors.lowpass(c, inst, w / (2 * np.pi)) for c in names])
     gap = np.array([inst.gap_m[c] for c in names])
-    x = (H * X)[:, None] * np.exp(1j * ang)
-    v = S * gain[:, None] * (gap[:, None] + x.real)
+    Z = H * X
+    x = np.abs(Z)[:, None] * np.cos(ang + np.angle(Z)[:, None])      # Re(Z e^{iφ})
+    v = S * gain[:, None] * (gap[:, None] + x)
     if sensors.noise and sensors.probe.noise_rms_m > 0:
         v += rng.normal(0, S * sensors.probe.noise_rms_m, v.shape)
     return v
