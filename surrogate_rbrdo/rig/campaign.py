@@ -253,6 +253,20 @@ def _phasor_rows(rec: Record, b: int, tl: int, r: int) -> list[tuple[Any, ...]]:
     return rows
 
 
+def read_phasors(path: str | Path) -> PhasorTable:
+    """Read a campaign's ``phasors.csv`` back (numbers as floats/ints, names as str)."""
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    cols = tuple(rows[0])
+    if cols != PHASOR_COLUMNS:
+        raise ValueError(f"{path}: header {list(cols)} is not a phasor table "
+                         f"{list(PHASOR_COLUMNS)}")
+    ints = {"build", "tool", "run"}
+    conv = [str if c in ("record", "channel") else int if c in ints else float for c in cols]
+    return PhasorTable(cols, tuple(tuple(f(v) for f, v in zip(conv, r, strict=True))
+                                   for r in rows[1:]))
+
+
 def _write_csv(path: Path, table: PhasorTable) -> None:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.rig.campaign import CampaignOptions, run_campaign
+from surrogate_rbrdo.rig.campaign import CampaignOptions, read_phasors, run_campaign
 from surrogate_rbrdo.rig.store import open_dataset
 from surrogate_rbrdo.rig.truth import reference_truth
 
@@ -30,6 +30,9 @@ def test_campaign_writes_a_complete_dataset_with_provenance(tmp_path):
     info = json.loads((res.dataset / "dataset.json").read_text())
     assert info["truth"]["hidden"][0]["name"] == "anisotropy"
     assert (tmp_path / "phasors.csv").read_text().count("\n") == 1 + 6 * 6
+    back = read_phasors(tmp_path / "phasors.csv")
+    np.testing.assert_array_equal(back.array("re_m"), res.phasors.array("re_m"))
+    assert back.rows[0][:4] == res.phasors.rows[0][:4]
 
 
 def test_resume_rewrites_only_missing_records_identically(tmp_path):
