@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, Support
+from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, Joint, Support
 from surrogate_rbrdo.spindle.element import BeamSection, element_matrices
 from surrogate_rbrdo.spindle.geometry import ConstantLaw, PreloadLaw, SpindleGeometry
 
@@ -31,8 +31,10 @@ MM = 1e-3
 RPM = np.pi / 30.0  # rpm -> rad/s
 
 
-def _mesh(geometry: SpindleGeometry) -> tuple[np.ndarray, np.ndarray]:
-    """Node positions (m) and, per element, the index of its shaft section."""
+def _mesh(geometry: SpindleGeometry, joints: Sequence[Joint] = ()
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """Node positions (m) and, per element, the index of its shaft section. Each joint's
+    position gets two coincident nodes (a zero-length element between them)."""
     edges = np.concatenate([[0.0], np.cumsum([s.length_mm for s in geometry.sections])])
     pts = []
     for i, s in enumerate(geometry.sections):
@@ -42,10 +44,13 @@ def _mesh(geometry: SpindleGeometry) -> tuple[np.ndarray, np.ndarray]:
         pts.append(np.linspace(edges[i], edges[i + 1], n + 1))
     items = [b.position_mm for b in geometry.bearings] + [d.position_mm for d in geometry.disks]
     items += [u.position_mm for u in geometry.unbalances] + [geometry.tool_tip_mm]
+    items += [j.position_mm for j in joints]
     z = np.unique(np.round(np.concatenate(pts + [np.asarray(items, float)]), 9))
     # merge nodes closer than 1 µm (an item sitting on a mesh node)
     keep = np.concatenate([[True], np.diff(z) > 1e-3])
     z = z[keep]
+    for j in joints:
+        z = np.insert(z, _node_of(z * MM, j.position_mm), z[_node_of(z * MM, j.position_mm)])
     mid = 0.5 * (z[:-1] + z[1:])
     sec = np.clip(np.searchsorted(edges, mid, side="right") - 1, 0, len(geometry.sections) - 1)
     return z * MM, sec
@@ -183,6 +188,13 @@ class SpindleModel:
                 A[np.ix_(hd, hd)] += B + extra * np.eye(2)
             M[np.ix_(hd, hd)] += sup.m_kg * np.eye(2)
         return M, C, K
+
+
+def _joint_matrix(j: Joint) -> np.ndarray:
+    """8x8 stiffness of a zero-length joint: ``[[D, −D], [−D, D]]``, ``D = diag(k_t, k_t, k_r,
+    k_r)`` on the DOFs ``[x, y, a, b]`` of its two nodes."""
+    D = np.diag([j.k_t_N_per_m, j.k_t_N_per_m, j.k_r_Nm_per_rad, j.k_r_Nm_per_rad])
+    return np.block([[D, -D], [-D, D]])
 
 
 def check_theta(theta_bearings: Sequence[str], theta: np.ndarray | None,
@@ -364,7 +376,10 @@ def build_model(
         raise ValueError(f"theta_bearings = {list(theta_bearings)} is not allowed: each bearing "
                          "may carry one θ factor (a name appears twice)")
 
-    z, sec_idx = _mesh(geometry)
+    joints = [j for e in effects if (j := e.joint()) is not None]
+    if len({j.position_mm for j in joints}) != len(joints):
+        raise ValueError("effects: two joints at one position")
+    z, sec_idx = _mesh(geometry, joints)
     nn = z.size
     n = 4 * nn
     sections = tuple(
@@ -381,7 +396,12 @@ def build_model(
     for e in range(nn - 1):
         L = z[e + 1] - z[e]
         sec = sections[sec_idx[e]]
-        Me, Ke, Ge = emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
+        if L == 0.0:  # a joint: springs between two coincident nodes, no mass
+            emats[e, 1] = _joint_matrix(next(j for j in joints
+                                             if abs(j.position_mm * MM - z[e]) < 1e-9))
+        else:
+            emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
+        Me, Ke, Ge = emats[e]
         sl = slice(4 * e, 4 * e + 8)
         M[sl, sl] += Me
         K[sl, sl] += Ke

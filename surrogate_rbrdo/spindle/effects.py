@@ -9,7 +9,8 @@ editing the assembly:
 * ``bearing(bearing, omega, K)``: the 2x2 stiffness (N/m) of a bearing, shape ``(..., 2, 2)``;
 * ``support(bearing)``: a :class:`Support` in series between the bearing and ground (housing);
 * ``gyroscopic_scale()``: a factor on the rotor's polar inertia (gyroscopic matrix);
-* ``unbalance(U)``: the complex unbalance vector (kg m).
+* ``unbalance(U)``: the complex unbalance vector (kg m);
+* ``joint()``: a :class:`Joint` (zero-length spring between two coincident rotor nodes).
 
 ``omega`` is the spin speed in rad/s, any shape; the hooks broadcast over it.
 
@@ -44,6 +45,17 @@ class Support:
     k_N_per_m: float
     c_Ns_per_m: float = 0.0
     m_kg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A zero-length elastic joint splitting the rotor at ``position_mm``: translational
+    ``k_t`` (N/m) and rotational ``k_r`` (N m/rad) springs between the two coincident nodes.
+    Items at the joint's position (disks, unbalances, tool tip) sit on its left node."""
+
+    position_mm: float
+    k_t_N_per_m: float
+    k_r_Nm_per_rad: float
 
 
 @dataclass(frozen=True)
@@ -94,6 +106,9 @@ class Effect:
 
     def unbalance(self, U: np.ndarray) -> np.ndarray:
         return U
+
+    def joint(self) -> Joint | None:
+        return None
 
 
 def effect_from_dict(data: dict[str, Any]) -> Effect:
@@ -261,3 +276,39 @@ class UnbalanceError(Effect):
 
     def unbalance(self, U: np.ndarray) -> np.ndarray:
         return U * (1.0 + self.epsilon) * np.exp(1j * np.deg2rad(self.delta_deg))
+
+
+@EFFECTS.register("tool_interface")
+@dataclass(frozen=True)
+class ToolInterface(Effect):
+    """Tool-holder/spindle interface compliance: a zero-length joint at ``position_mm``
+    (the spindle nose face) with translational ``k_t`` and rotational ``k_r`` stiffness; the
+    tool holder and tool tip (items at that position) sit on the tool side. Its damping is the
+    rotor's stiffness-proportional Rayleigh term (``β k``).
+
+    Plausible ranges (HSK/steep-taper interfaces identified by receptance coupling:
+    Schmitz & Smith, *Machining Dynamics*, 2nd ed., 2019, ch. 6; Namazi et al. 2007,
+    IJMTM 47:1333; Özşahin et al. 2009, IJMTM 49:25): k_t ~ 1e7–1e9 N/m, k_r ~ 1e5–1e7 N m/rad
+    (see ``docs/rig.md``). Both ``inf`` is off (rigid). Signature: tool-tip response and
+    tool-side modes only; bearing-plane responses barely move.
+    """
+
+    name: ClassVar[str] = "tool_interface"
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {
+        "k_t_N_per_m": (1e6, np.inf), "k_r_Nm_per_rad": (1e4, np.inf)}
+    off_params: ClassVar[dict[str, float]] = {"k_t_N_per_m": np.inf, "k_r_Nm_per_rad": np.inf}
+    position_mm: float = 0.0
+    k_t_N_per_m: float = np.inf
+    k_r_Nm_per_rad: float = np.inf
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if np.isinf(self.k_t_N_per_m) != np.isinf(self.k_r_Nm_per_rad):
+            raise ValueError(
+                f"effects.tool_interface: k_t_N_per_m = {self.k_t_N_per_m} and k_r_Nm_per_rad = "
+                f"{self.k_r_Nm_per_rad} are not allowed: both finite, or both inf (off)")
+
+    def joint(self) -> Joint | None:
+        if self.is_off:
+            return None
+        return Joint(self.position_mm, self.k_t_N_per_m, self.k_r_Nm_per_rad)

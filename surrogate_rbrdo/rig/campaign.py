@@ -1,0 +1,274 @@
+"""A measurement campaign on the virtual rig: options → dataset + 1x table + summary.
+
+The paper's campaign by default: 50 speeds uniformly in 1 000–24 000 rpm × 20 repeats of 1 s
+steady-state records, a run-up and a run-down, and impact tests at the tool tip (x and y).
+Each repeat is one *run* (its own thermal state); builds and tool changes are nested around
+runs. Records stream to disk one run at a time (bounded memory); a campaign interrupted and
+started again with the same options and seed skips every record already written.
+
+>>> import numpy as np, tempfile
+>>> from surrogate_rbrdo.rig.truth import reference_truth
+>>> opts = CampaignOptions(speeds_rpm=(6000.0, 12000.0), repeats=2, duration_s=0.2,
+...                        runup=None, impacts_per_direction=0)
+>>> with tempfile.TemporaryDirectory() as d:
+...     res = run_campaign(reference_truth(), opts, d, rng=np.random.default_rng(1))
+...     res.n_records, sorted(res.phasors.columns)[:3]
+(4, ['amplitude_m', 'build', 'channel'])
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.core.validate import check_int, check_positive
+from surrogate_rbrdo.rig.demod import demodulate
+from surrogate_rbrdo.rig.integrate import SpeedProfile
+from surrogate_rbrdo.rig.records import Record
+from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.simulate import (
+    check_stable,
+    impact_record,
+    runup_record,
+    steady_records,
+)
+from surrogate_rbrdo.rig.store import DatasetWriter, read_record
+from surrogate_rbrdo.rig.truth import Truth, _child
+
+Progress = Callable[[int, int, str], None]
+
+
+def _default_speeds() -> tuple[float, ...]:
+    return tuple(np.linspace(1000.0, 24000.0, 50).tolist())
+
+
+@dataclass(frozen=True)
+class CampaignOptions:
+    """What to measure (defaults: the paper's campaign; see ``docs/rig.md``).
+
+    ``runup``: ``(start_rpm, end_rpm, duration_s)`` of the run-up (and the reverse run-down if
+    ``rundown``), ``None`` for none; impacts: hits per direction (x, y) at the tool tip.
+    """
+
+    speeds_rpm: tuple[float, ...] = field(default_factory=_default_speeds)
+    repeats: int = 20
+    duration_s: float = 1.0
+    builds: int = 1
+    tools_per_build: int = 1
+    runup: tuple[float, float, float] | None = (1000.0, 24000.0, 10.0)
+    rundown: bool = True
+    impacts_per_direction: int = 5
+    impact_duration_s: float = 1.0
+    sensors: SensorSet = SensorSet()
+
+    def __post_init__(self) -> None:
+        sp = np.asarray(self.speeds_rpm, float)
+        if sp.ndim != 1 or sp.size == 0 or np.any(sp <= 0) or np.any(np.diff(sp) <= 0):
+            raise ValueError(f"speeds_rpm = {self.speeds_rpm} is not allowed: a strictly "
+                             "increasing list of speeds > 0")
+        object.__setattr__(self, "speeds_rpm", tuple(sp.tolist()))
+        for n in ("repeats", "builds", "tools_per_build"):
+            check_int(n, getattr(self, n), minimum=1)
+        check_int("impacts_per_direction", self.impacts_per_direction, minimum=0)
+        check_positive("duration_s", self.duration_s)
+        check_positive("impact_duration_s", self.impact_duration_s)
+        if self.runup is not None:
+            a, b, d = self.runup
+            if not (0 < a < b and d > 0):
+                raise ValueError(f"runup = {self.runup} is not allowed: need 0 < start_rpm < "
+                                 "end_rpm and duration_s > 0")
+            object.__setattr__(self, "runup", (float(a), float(b), float(d)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class PhasorTable:
+    """The demodulated 1x phasors of every steady record (one row per record and channel)."""
+
+    columns: tuple[str, ...]
+    rows: tuple[tuple[Any, ...], ...]
+
+    def array(self, name: str) -> np.ndarray:
+        i = self.columns.index(name)
+        return np.array([r[i] for r in self.rows])
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    """Where the dataset is, the 1x table, counts and timings."""
+
+    root: Path
+    dataset: Path
+    phasors: PhasorTable
+    n_records: int
+    n_written: int
+    seconds: float
+    ramps: tuple[str, ...]
+    impacts: tuple[str, ...]
+
+
+PHASOR_COLUMNS = ("record", "build", "tool", "run", "speed_rpm", "measured_speed_rpm",
+                  "channel", "amplitude_m", "phase_deg", "re_m", "im_m")
+
+
+def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
+                 rng: np.random.Generator, progress: Progress | None = None) -> CampaignResult:
+    """Simulate the campaign into ``out_dir/dataset`` (resumable) and write ``phasors.csv`` and
+    ``summary.json`` into ``out_dir``."""
+    require_rng(rng)
+    t_start = time.perf_counter()
+    out = Path(out_dir)
+    root_ss = rng.bit_generator.seed_seq
+    sens = options.sensors
+    inst = sens.install(np.random.default_rng(_child(root_ss, 9)))
+    writer = DatasetWriter(out / "dataset", {
+        "title": "virtual rig campaign", "truth": truth.describe(),
+        "campaign": options.to_dict(), "installation": inst.to_dict(),
+        "seed": {"entropy": str(root_ss.entropy), "spawn_key": list(root_ss.spawn_key)}})
+    done = writer.done()
+    n_steady = options.builds * options.tools_per_build * options.repeats * len(
+        options.speeds_rpm)
+    total = n_steady + _n_extra(options)
+    rows: list[tuple[Any, ...]] = []
+    count = written = 0
+    ramps, impacts = [], []
+    for b in range(options.builds):
+        for tl in range(options.tools_per_build):
+            st0 = truth.state(root_ss, build=b, tool=tl, run=0)
+            check_stable(st0.model(), st0.theta, _stability_speeds(options))
+            for r in range(options.repeats):
+                st = truth.state(root_ss, build=b, tool=tl, run=r)
+                ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" for i in range(len(options.speeds_rpm))]
+                todo = [i for i, rid in enumerate(ids) if rid not in done]
+                new = _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) \
+                    if todo else {}
+                for i, rid in enumerate(ids):
+                    rec = new.get(rid) or read_record(writer.root / f"records/{rid}.npz")
+                    if rid in new:
+                        writer.write(rec, labels={"build": b, "tool": tl, "run": r,
+                                                  "repeat": r, "speed_index": i})
+                        written += 1
+                    rows += _phasor_rows(rec, b, tl, r)
+                    count += 1
+                    if progress:
+                        progress(count, total, rid)
+            for rec_id, make in _extras(truth, st0, options, inst, root_ss, b, tl):
+                kind = "impact" if "_hit" in rec_id else "ramp"
+                (impacts if kind == "impact" else ramps).append(rec_id)
+                if rec_id not in done:
+                    writer.write(make(), labels={"build": b, "tool": tl, "run": 0})
+                    written += 1
+                count += 1
+                if progress:
+                    progress(count, total, rec_id)
+    table = PhasorTable(PHASOR_COLUMNS, tuple(rows))
+    _write_csv(out / "phasors.csv", table)
+    secs = time.perf_counter() - t_start
+    summary = {"n_records": count, "n_written_this_call": written, "seconds": secs,
+               "n_steady": n_steady, "ramps": ramps, "impacts": impacts}
+    writer.finish(summary)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return CampaignResult(out, writer.root, table, count, written, secs, tuple(ramps),
+                          tuple(impacts))
+
+
+def _stability_speeds(o: CampaignOptions) -> np.ndarray:
+    """Speeds at which the truth must be stable: the campaign's speeds and the ramp's range."""
+    sp = list(o.speeds_rpm)
+    if o.runup is not None:
+        sp += np.linspace(o.runup[0], o.runup[1], 12).tolist()
+    return np.unique(sp)
+
+
+def _n_extra(o: CampaignOptions) -> int:
+    per_tool = (0 if o.runup is None else 1 + o.rundown) + 2 * o.impacts_per_direction
+    return o.builds * o.tools_per_build * per_tool
+
+
+def _provenance(truth, st, inst, root_ss, b, tl, r) -> dict[str, Any]:
+    """What every record carries: the truth's effects (model and hidden) with parameters, the
+    draws of its build/tool/run, θ, the sensors' hidden installation errors and the seed."""
+    d = truth.describe()
+    return {"source": "surrogate_rbrdo virtual rig", "build": b, "tool": tl, "run": r,
+            "truth_effects": d["effects"], "hidden_effects": d["hidden"],
+            "truth_draws": st.draws, "theta": st.theta[0].tolist(),
+            "sensor_installation": inst.to_dict(), "seed_entropy": str(root_ss.entropy),
+            "seed_spawn_key": list(root_ss.spawn_key)}
+
+
+def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) -> dict[str, Record]:
+    sp = np.asarray(options.speeds_rpm)[todo]
+    rngs = [np.random.default_rng(_child(root_ss, 3, b, tl, r, i)) for i in todo]
+    base = _provenance(truth, st, inst, root_ss, b, tl, r)
+    prov = [{**base, "seed_key": [3, b, tl, r, i]} for i in todo]
+    recs = steady_records(st.model(), st.theta, sp, options.sensors, inst, rngs,
+                          duration_s=options.duration_s, ids=[ids[i] for i in todo],
+                          provenance=prov)
+    return {rec.id: rec for rec in recs}
+
+
+def _extras(truth, st, options, inst, root_ss, b, tl):
+    """(id, thunk) of the run-up/run-down and impact records of one tool (on its run 0)."""
+    model = st.model()
+    base = _provenance(truth, st, inst, root_ss, b, tl, 0)
+    out = []
+    if options.runup is not None:
+        a, e, d = options.runup
+        ramps = [("runup", a, e)] + ([("rundown", e, a)] if options.rundown else [])
+        for k, (name, s0, s1) in enumerate(ramps):
+            rid = f"b{b}_t{tl}_{name}"
+            out.append((rid, lambda s0=s0, s1=s1, rid=rid, k=k: runup_record(
+                model, st.theta, SpeedProfile.ramp(s0, s1, d), options.sensors, inst,
+                np.random.default_rng(_child(root_ss, 4, b, tl, k)), rid=rid,
+                provenance={**base, "seed_key": [4, b, tl, k]})))
+    for di, direction in enumerate(("x", "y")):
+        for h in range(options.impacts_per_direction):
+            rid = f"b{b}_t{tl}_hit_{direction}{h}"
+            out.append((rid, lambda rid=rid, h=h, di=di, direction=direction: impact_record(
+                model, st.theta, options.sensors, inst,
+                np.random.default_rng(_child(root_ss, 5, b, tl, di, h)), rid=rid,
+                provenance={**base, "seed_key": [5, b, tl, di, h]}, direction=direction,
+                duration_s=options.impact_duration_s)))
+    return out
+
+
+def _phasor_rows(rec: Record, b: int, tl: int, r: int) -> list[tuple[Any, ...]]:
+    p = demodulate(rec)
+    rows = []
+    for j, ch in enumerate(p.channels):
+        X = p.X[j, 0]
+        rows.append((rec.id, b, tl, r, rec.speed_rpm, p.speed_rpm, ch, abs(X),
+                     float(np.degrees(np.angle(X))), X.real, X.imag))
+    return rows
+
+
+def read_phasors(path: str | Path) -> PhasorTable:
+    """Read a campaign's ``phasors.csv`` back (numbers as floats/ints, names as str)."""
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    cols = tuple(rows[0])
+    if cols != PHASOR_COLUMNS:
+        raise ValueError(f"{path}: header {list(cols)} is not a phasor table "
+                         f"{list(PHASOR_COLUMNS)}")
+    ints = {"build", "tool", "run"}
+    conv = [str if c in ("record", "channel") else int if c in ints else float for c in cols]
+    return PhasorTable(cols, tuple(tuple(f(v) for f, v in zip(conv, r, strict=True))
+                                   for r in rows[1:]))
+
+
+def _write_csv(path: Path, table: PhasorTable) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(table.columns)
+        w.writerows(table.rows)

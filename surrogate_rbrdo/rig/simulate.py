@@ -1,0 +1,229 @@
+"""Records of the three kinds of test, from a truth state through the sensors.
+
+* :func:`steady_records` — constant speed after the transient has decayed: the response is the
+  exact steady state of the linear model, ``x(t) = Re(X e^{iφ(t)})`` with ``X`` the FE harmonic
+  solution (``spindle.harmonic.unbalance_response``, all speeds of a run in one vectorised
+  solve). ``rig.integrate`` integrated from rest converges to the same samples (tested ≤ 1e-6);
+  the residual transient after a settling time ``T`` is ``e^{−σT}`` of the free response
+  (slowest σ = ζω ≈ 7.7 1/s for the reference spindle: 2e-17 after 5 s) and is not added.
+* :func:`runup_record` — a speed ramp integrated by ``rig.integrate`` (frozen-matrix segments),
+  started from rest 5 s before the ramp at the start speed (the exact jump makes the wait free).
+* :func:`impact_record` — a hammer hit at standstill, integrated exactly at ``oversample`` × the
+  sample rate and decimated through a linear-phase anti-aliasing filter.
+
+Each channel then goes through its sensor (gain, driver low-pass, gap), the ADC's timing (known
+delay + unknown skew), noise and quantisation/clipping (``rig.sensors``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from scipy.signal import decimate
+
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.rig.integrate import IntegratorOptions, SpeedProfile, simulate
+from surrogate_rbrdo.rig.records import Record
+from surrogate_rbrdo.rig.sensors import Installation, SensorSet
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+from surrogate_rbrdo.spindle.harmonic import unbalance_response
+from surrogate_rbrdo.spindle.modal import modal_analysis
+
+#: ramps: matrices frozen over 10 ms, modes below 20 kHz + static shapes (docs/rig.md)
+RAMP_OPTIONS = IntegratorOptions(segment_s=0.01, f_cut_hz=20_000.0)
+
+
+@dataclass(frozen=True)
+class ProbeLayout:
+    """FE nodes the probes look at: front bearing, rear bearing, tool tip."""
+
+    nodes: dict[str, int]
+    positions_mm: dict[str, float]
+
+    @classmethod
+    def of(cls, model: SpindleModel) -> ProbeLayout:
+        """``front`` = the bearing nearest the tool tip, ``rear`` = the farthest one."""
+        bz = model.z[model.bearing_nodes]
+        dist = np.abs(bz - model.z[model.tool_node])
+        nodes = {"front": int(model.bearing_nodes[np.argmin(dist)]),
+                 "rear": int(model.bearing_nodes[np.argmax(dist)]),
+                 "tool": int(model.tool_node)}
+        return cls(nodes, {k: float(model.z[v] * 1e3) for k, v in nodes.items()})
+
+    def dofs(self, sensors: SensorSet) -> np.ndarray:
+        return np.array([4 * self.nodes[n.split("_")[0]] + (n.endswith("_y"))
+                         for n in sensors.probe_channels])
+
+
+def check_stable(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarray) -> None:
+    """Raise :class:`ModelError` if a mode of the truth has negative damping at one of the
+    speeds: no steady state exists there, so the rig cannot measure one."""
+    for s in np.asarray(speeds_rpm, float):
+        m = modal_analysis(model, float(s), theta[0])
+        if np.any(m.damping_ratio < 0):
+            k = int(np.argmin(m.damping_ratio))
+            raise ModelError(
+                f"the truth is unstable at {s:.6g} rpm: the {m.frequency_hz[k]:.4g} Hz "
+                f"{m.whirl[k]} mode has damping ratio {m.damping_ratio[k]:.3g} (cross-coupling "
+                "too strong for the damping?); no steady state to measure")
+
+
+def keyphasor_volts(sensors: SensorSet, angle: np.ndarray) -> np.ndarray:
+    """Noise-free keyphasor voltage at shaft angles ``angle``: a pulse rising at angle 0."""
+    kp = sensors.keyphasor
+    a = np.degrees(np.mod(angle + np.radians(kp.edge_deg / 2), 2 * np.pi))  # edge starts here
+    e = max(kp.edge_deg, 1e-9)
+    rise = np.clip(a / e, 0, 1)
+    fall = np.clip((kp.notch_deg + e - a) / e, 0, 1)
+    s = np.minimum(rise, fall)
+    return kp.high_V * 0.5 * (1 - np.cos(np.pi * s))
+
+
+def _channel_delays(sensors: SensorSet, inst: Installation, kind: str) -> np.ndarray:
+    names = sensors.channel_names(kind)
+    return np.array([i * sensors.daq.interchannel_delay_s + inst.skew_s[n]
+                     for i, n in enumerate(names)])
+
+
+def steady_records(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarray,
+                   sensors: SensorSet, inst: Installation, rngs: list[np.random.Generator],
+                   *, duration_s: float = 1.0, ids: list[str], provenance: list[dict[str, Any]]
+                   ) -> list[Record]:
+    """One steady-state record per speed (one run: one θ, one truth state).
+
+    ``rngs[i]`` draws record ``i``'s noise and initial shaft angle.
+    """
+    layout = ProbeLayout.of(model)
+    sp = np.asarray(speeds_rpm, float)
+    Q = unbalance_response(model, sp, theta)[0]          # (S, nn, 4)
+    X = Q.reshape(sp.size, -1)[:, layout.dofs(sensors)]  # (S, n_probe)
+    specs = sensors.channel_specs("steady", layout.positions_mm)
+    fs = sensors.daq.sample_rate_hz
+    n = int(round(duration_s * fs))
+    t = np.arange(n) / fs
+    tau = _channel_delays(sensors, inst, "steady")
+    out = []
+    for i, s in enumerate(sp):
+        rng = rngs[i]
+        w = s * RPM
+        phi0 = rng.uniform(0, 2 * np.pi)
+        ang = phi0 + w * (t[None, :] + tau[:, None])            # (n_ch, n)
+        volts = _probe_volts(sensors, inst, X[i], w, ang[:-1], rng)
+        kp = keyphasor_volts(sensors, ang[-1])
+        if sensors.noise:
+            kp = kp + rng.normal(0, sensors.keyphasor.noise_V, n)
+        data = sensors.digitise(np.vstack([volts, kp[None, :]]))
+        out.append(Record(ids[i], "steady", fs, specs, data, speed_rpm=float(s),
+                          provenance={**provenance[i], "initial_angle_rad": phi0}))
+    return out
+
+
+def _probe_volts(sensors, inst, X, w, ang, rng):
+    """Probe voltages of a steady 1x response ``X`` (n_probe,) at angles ``ang``."""
+    names = sensors.probe_channels
+    S = sensors.probe.sensitivity_V_per_m
+    gain = np.array([inst.gain[c] for c in names])
+    H = np.array([sensors.lowpass(c, inst, w / (2 * np.pi)) for c in names])
+    gap = np.array([inst.gap_m[c] for c in names])
+    Z = H * X
+    x = np.abs(Z)[:, None] * np.cos(ang + np.angle(Z)[:, None])      # Re(Z e^{iφ})
+    v = S * gain[:, None] * (gap[:, None] + x)
+    if sensors.noise and sensors.probe.noise_rms_m > 0:
+        v += rng.normal(0, S * sensors.probe.noise_rms_m, v.shape)
+    return v
+
+
+def _dynamics(sensors: SensorSet, inst: Installation, names, x: np.ndarray, fs: float,
+              tau: np.ndarray) -> np.ndarray:
+    """Driver low-pass and sampling delay of each channel, applied in the frequency domain on a
+    mirror-padded record (``x``: (n_ch, n) true signals at the record's time axis)."""
+    n = x.shape[1]
+    pad = np.concatenate([x, x[:, ::-1]], axis=1)              # even extension: no end jump
+    f = np.fft.rfftfreq(2 * n, 1 / fs)
+    H = np.array([sensors.lowpass(c, inst, f) if c != "hammer" else np.ones_like(f)
+                  for c in names]) * np.exp(2j * np.pi * f[None, :] * tau[:, None])
+    return np.fft.irfft(np.fft.rfft(pad, axis=1) * H, 2 * n, axis=1)[:, :n]
+
+
+def runup_record(model: SpindleModel, theta: np.ndarray, profile: SpeedProfile,
+                 sensors: SensorSet, inst: Installation, rng: np.random.Generator, *,
+                 rid: str, provenance: dict[str, Any],
+                 options: IntegratorOptions = RAMP_OPTIONS) -> Record:
+    """A speed-ramp record (kind ``runup`` or ``rundown`` from the profile's direction)."""
+    layout = ProbeLayout.of(model)
+    fs = sensors.daq.sample_rate_hz
+    T = profile.times_s[-1] - profile.times_s[0]
+    t = profile.times_s[0] + np.arange(int(round(T * fs))) / fs
+    sim = simulate(model, profile, t, layout.dofs(sensors), theta=theta,
+                   t0_s=profile.times_s[0] - 5.0, options=options)
+    names = sensors.channel_names("runup")
+    tau = _channel_delays(sensors, inst, "runup")
+    x = _dynamics(sensors, inst, names[:-1], sim.q.T, fs, tau[:-1])
+    volts = _volts(sensors, inst, names[:-1], x, rng)
+    kp = keyphasor_volts(sensors, profile.angle(t + tau[-1]))
+    if sensors.noise:
+        kp = kp + rng.normal(0, sensors.keyphasor.noise_V, t.size)
+    kind = "runup" if profile.speeds_rpm[-1] >= profile.speeds_rpm[0] else "rundown"
+    specs = sensors.channel_specs(kind, layout.positions_mm)
+    prof = np.array([np.asarray(profile.times_s) - profile.times_s[0], profile.speeds_rpm])
+    return Record(rid, kind, fs, specs, sensors.digitise(np.vstack([volts, kp])),
+                  speed_profile=prof, provenance=provenance)
+
+
+def _volts(sensors, inst, names, x, rng):
+    S = sensors.probe.sensitivity_V_per_m
+    gain = np.array([inst.gain[c] for c in names])[:, None]
+    gap = np.array([inst.gap_m[c] for c in names])[:, None]
+    v = S * gain * (gap + x)
+    if sensors.noise and sensors.probe.noise_rms_m > 0:
+        v += rng.normal(0, S * sensors.probe.noise_rms_m, v.shape)
+    return v
+
+
+def hammer_pulse(t: np.ndarray, t_hit: float, peak_N: float, width_s: float) -> np.ndarray:
+    """Half-sine force pulse of ``width_s`` starting at ``t_hit``.
+
+    >>> hammer_pulse(np.array([0.0, 0.5, 1.0]), 0.0, 10.0, 1.0).round(6).tolist()
+    [0.0, 10.0, 0.0]
+    """
+    s = (t - t_hit) / width_s
+    return np.where((s >= 0) & (s <= 1), peak_N * np.sin(np.pi * np.clip(s, 0, 1)), 0.0)
+
+
+def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
+                  inst: Installation, rng: np.random.Generator, *, rid: str,
+                  provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
+                  t_hit_s: float = 0.05, oversample: int = 4) -> Record:
+    """A hammer hit at the tool tip in ``direction`` at standstill, all probes and the force."""
+    layout = ProbeLayout.of(model)
+    fs = sensors.daq.sample_rate_hz
+    n = int(round(duration_s * fs))
+    tf = np.arange(n * oversample) / (fs * oversample)
+    hm = sensors.hammer
+    peak = hm.peak_N * (1 + (rng.normal(0, hm.peak_sd) if sensors.noise else 0.0))
+    f = hammer_pulse(tf, t_hit_s, peak, hm.pulse_ms * 1e-3)
+    fdof = np.array([4 * layout.nodes["tool"] + (direction == "y")])
+    sim = simulate(model, SpeedProfile.constant(0.0), tf, layout.dofs(sensors), theta=theta,
+                   unbalance=False, force_dofs=fdof, force=f[:, None],
+                   options=IntegratorOptions(f_cut_hz=None))
+    # anti-aliasing: linear-phase FIR, zero phase (the delay is compensated, as in DSA boards)
+    fine = np.vstack([sim.q.T, f[None, :]])
+    coarse = decimate(fine, oversample, ftype="fir", axis=1, zero_phase=True)
+    names = sensors.channel_names("impact")
+    tau = _channel_delays(sensors, inst, "impact")
+    x = _dynamics(sensors, inst, names, coarse, fs, tau)
+    volts = _volts(sensors, inst, names[:-1], x[:-1], rng)
+    fv = x[-1] * hm.sensitivity_V_per_N * inst.gain["hammer"]
+    if sensors.noise:
+        fv = fv + rng.normal(0, hm.noise_N * hm.sensitivity_V_per_N, n)
+    specs = sensors.channel_specs("impact", layout.positions_mm)
+    specs = specs[:-1] + (_hammer_dir(specs[-1], direction),)
+    return Record(rid, "impact", fs, specs, sensors.digitise(np.vstack([volts, fv])),
+                  speed_rpm=0.0, provenance={**provenance, "peak_N": peak,
+                                             "direction": direction})
+
+
+def _hammer_dir(spec, direction):
+    return replace(spec, location=replace(spec.location, direction=direction))

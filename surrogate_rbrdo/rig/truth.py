@@ -1,0 +1,253 @@
+"""The rig's hidden truth: the model's machinery plus hidden effects plus variability.
+
+A :class:`Truth` is a geometry, the effects the *model* also has, the *hidden* effects (from the
+effects registry, with parameters) and a :class:`Variability` model. Variability is drawn at
+three levels, each from its own random stream so any record can be regenerated alone:
+
+* **build** (assembly): bearing stiffness factor and damping (η) factor per bearing,
+  unbalance magnitude per plane (a fraction of the ISO 21940-11 permissible residual
+  unbalance) with a uniformly random phase per plane;
+* **tool change**: tool/holder mass and inertia factor; the stiffness of a
+  ``tool_interface`` effect if the truth has one;
+* **run** (thermal state): a preload factor per preloaded bearing (stiffness ∝ F^{1/3}).
+
+Every number and its source is in ``docs/rig.md``.
+
+>>> import numpy as np
+>>> truth = reference_truth()
+>>> st = truth.state(np.random.SeedSequence(1), build=0, tool=0, run=0)
+>>> st.model().theta_bearings, st.theta.shape
+(('front', 'rear'), (1, 2))
+>>> sorted(st.draws)
+['build', 'run', 'tool']
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_positive, check_range
+from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
+from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict
+from surrogate_rbrdo.spindle.geometry import PreloadLaw, SpindleGeometry, Unbalance
+from surrogate_rbrdo.spindle.reference import (
+    BALANCE_SPEED_RPM,
+    iso_unbalance_kgm,
+    reference_spindle,
+)
+
+
+@dataclass(frozen=True)
+class Variability:
+    """The truth's variability model (sources in ``docs/rig.md``).
+
+    Attributes
+    ----------
+    bearing_k_cov : float
+        Coefficient of variation of each bearing's stiffness per build (lognormal).
+    bearing_damping_cov : float
+        CoV of each bearing's damping (η) per build (lognormal).
+    balance_grade_mm_s : float
+        ISO 21940-11 balance quality grade the rotor is balanced to.
+    unbalance_fraction : (lo, hi)
+        Residual unbalance per plane as a fraction of the plane's share of the permissible
+        unbalance, uniform in ``[lo, hi]``; phase uniform in [0, 360°) per plane.
+    thermal_preload_cov : float
+        CoV of the preload per run (thermal state at the start of a run), lognormal;
+        the stiffness follows as ``F^{exponent}``.
+    tool_mass_cov : float
+        CoV of the tool/holder mass and inertia per tool change (lognormal).
+    interface_k_cov : float
+        CoV of a ``tool_interface`` effect's stiffnesses per tool change (lognormal).
+    tool_disk : str
+        Name of the geometry's disk that is the tool/holder.
+    """
+
+    bearing_k_cov: float = 0.05
+    bearing_damping_cov: float = 0.20
+    balance_grade_mm_s: float = 2.5
+    unbalance_fraction: tuple[float, float] = (0.25, 1.0)
+    thermal_preload_cov: float = 0.08
+    tool_mass_cov: float = 0.03
+    interface_k_cov: float = 0.15
+    tool_disk: str = "tool_holder"
+
+    def __post_init__(self) -> None:
+        for name in ("bearing_k_cov", "bearing_damping_cov", "thermal_preload_cov",
+                     "tool_mass_cov", "interface_k_cov"):
+            check_range(f"variability.{name}", getattr(self, name), 0.0, 1.0)
+        check_positive("variability.balance_grade_mm_s", self.balance_grade_mm_s, allow_zero=True)
+        lo, hi = self.unbalance_fraction
+        if not (0.0 <= lo <= hi):
+            raise ValueError(f"variability.unbalance_fraction = {self.unbalance_fraction} is "
+                             "not allowed: need 0 <= lo <= hi")
+        object.__setattr__(self, "unbalance_fraction", (float(lo), float(hi)))
+
+    @classmethod
+    def none(cls) -> Variability:
+        """No scatter at all: every build, tool and run is the nominal truth, and the unbalance
+        is the full permissible value at phase 0 in every plane."""
+        return cls(0.0, 0.0, 2.5, (1.0, 1.0), 0.0, 0.0, 0.0)
+
+
+def _lognormal(rng: np.random.Generator, cov: float, size: int | None = None) -> np.ndarray:
+    """Mean-one lognormal factors with coefficient of variation ``cov``."""
+    s2 = np.log1p(cov**2)
+    return np.exp(rng.normal(-0.5 * s2, np.sqrt(s2), size=size))
+
+
+@dataclass(frozen=True)
+class TruthState:
+    """One realisation of the truth (a build, a tool, a run): geometry, effects, θ, draws."""
+
+    geometry: SpindleGeometry
+    effects: tuple[Effect, ...]
+    theta_bearings: tuple[str, ...]
+    theta: np.ndarray
+    draws: dict[str, Any]
+
+    def model(self) -> SpindleModel:
+        return build_model(self.geometry, self.effects, theta_bearings=self.theta_bearings)
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A truth spindle: what the rig measures (never what the model knows).
+
+    ``effects`` are those the model has too; ``hidden`` are added on top (the discrepancy the
+    workflow should find); ``random_phase``: unbalance phases drawn per build (else as given).
+    """
+
+    geometry: SpindleGeometry
+    effects: tuple[Effect, ...] = ()
+    hidden: tuple[Effect, ...] = ()
+    variability: Variability = Variability()
+    theta_bearings: tuple[str, ...] | None = None
+    random_phase: bool = True
+    _u_perm: float = dataclasses.field(init=False, repr=False, compare=False, default=0.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "effects", tuple(self.effects))
+        object.__setattr__(self, "hidden", tuple(self.hidden))
+        names = tuple(b.name for b in self.geometry.bearings)
+        tb = names if self.theta_bearings is None else tuple(self.theta_bearings)
+        object.__setattr__(self, "theta_bearings", tb)
+        if not self.geometry.unbalances:
+            raise ValueError("truth.geometry has no unbalance planes: the rig needs at least one")
+        m = build_model(self.geometry, ()).rotor_mass_kg
+        object.__setattr__(self, "_u_perm", iso_unbalance_kgm(
+            m, self.variability.balance_grade_mm_s, BALANCE_SPEED_RPM))
+
+    @property
+    def all_effects(self) -> tuple[Effect, ...]:
+        return self.effects + self.hidden
+
+    def permissible_unbalance_kgm(self) -> float:
+        """ISO 21940-11 permissible residual unbalance ``U = m G / Ω`` of the nominal rotor at
+        the balancing speed (24 000 rpm)."""
+        return self._u_perm
+
+    def describe(self) -> dict[str, Any]:
+        """JSON-able description for provenance (effects with their parameters)."""
+        return {"effects": [_effect_dict(e) for e in self.effects],
+                "hidden": [_effect_dict(e) for e in self.hidden],
+                "variability": dataclasses.asdict(self.variability),
+                "theta_bearings": list(self.theta_bearings),
+                "geometry": self.geometry.to_dict()}
+
+    # ------------------------------------------------------------------ draws
+    def draw_build(self, ss: np.random.SeedSequence) -> dict[str, Any]:
+        v, rng = self.variability, np.random.default_rng(ss)
+        nb = len(self.geometry.bearings)
+        k = _lognormal(rng, v.bearing_k_cov, nb)
+        c = _lognormal(rng, v.bearing_damping_cov, nb)
+        n_pl = len(self.geometry.unbalances)
+        frac = rng.uniform(*v.unbalance_fraction, size=n_pl)
+        phase = rng.uniform(0.0, 360.0, size=n_pl)
+        U = self.permissible_unbalance_kgm() / n_pl * frac
+        return {"k_factor": k.tolist(), "damping_factor": c.tolist(),
+                "unbalance_kgm": U.tolist(),
+                "unbalance_phase_deg": phase.tolist() if self.random_phase
+                else [u.phase_deg for u in self.geometry.unbalances]}
+
+    def draw_tool(self, ss: np.random.SeedSequence) -> dict[str, Any]:
+        v, rng = self.variability, np.random.default_rng(ss)
+        return {"mass_factor": float(_lognormal(rng, v.tool_mass_cov)),
+                "interface_factor": _lognormal(rng, v.interface_k_cov, 2).tolist()}
+
+    def draw_run(self, ss: np.random.SeedSequence) -> dict[str, Any]:
+        v, rng = self.variability, np.random.default_rng(ss)
+        return {"preload_factor": _lognormal(rng, v.thermal_preload_cov,
+                                             len(self.geometry.bearings)).tolist()}
+
+    def state(self, ss: np.random.SeedSequence, *, build: int, tool: int, run: int
+              ) -> TruthState:
+        """The truth of build ``build``, tool change ``tool`` and run ``run``; the draws come
+        from ``ss`` spawned by key ``(build,)``, ``(build, tool)``, ``(build, tool, run)``."""
+        b = self.draw_build(_child(ss, 0, build))
+        t = self.draw_tool(_child(ss, 1, build, tool))
+        r = self.draw_run(_child(ss, 2, build, tool, run))
+        return self.apply(b, t, r)
+
+    def apply(self, b: dict[str, Any], t: dict[str, Any], r: dict[str, Any]) -> TruthState:
+        """The truth state for given draws (as :meth:`draw_build` etc. return them)."""
+        g = self.geometry
+        bearings, theta = [], []
+        for j, br in enumerate(g.bearings):
+            law = br.law
+            law = replace(law, damping_eta_s=law.damping_eta_s * b["damping_factor"][j])
+            # thermal preload state: k ∝ F^exponent for a preload law, F^{1/3} otherwise
+            expo = law.exponent if isinstance(law, PreloadLaw) else 1.0 / 3.0
+            kf = b["k_factor"][j] * r["preload_factor"][j] ** expo
+            bearings.append(replace(br, law=law))
+            if br.name in self.theta_bearings:
+                theta.append(kf)
+            elif kf != 1.0:
+                raise ValueError(f"truth: bearing {br.name!r} varies but is not a θ bearing")
+        unb = tuple(Unbalance(u.position_mm, U, ph) for u, U, ph in
+                    zip(g.unbalances, b["unbalance_kgm"], b["unbalance_phase_deg"], strict=True))
+        disks = tuple(
+            replace(d, mass_kg=d.mass_kg * t["mass_factor"],
+                    polar_inertia_kgm2=d.polar_inertia_kgm2 * t["mass_factor"],
+                    diametral_inertia_kgm2=d.diametral_inertia_kgm2 * t["mass_factor"])
+            if d.name == self.variability.tool_disk else d for d in g.disks)
+        geom = replace(g, bearings=tuple(bearings), unbalances=unb, disks=disks)
+        effects = tuple(_scale_interface(e, t["interface_factor"]) for e in self.all_effects)
+        return TruthState(geom, effects, self.theta_bearings, np.array([theta]),
+                          {"build": b, "tool": t, "run": r})
+
+
+def _child(ss: np.random.SeedSequence, *key: int) -> np.random.SeedSequence:
+    """A child seed sequence addressed by ``key`` (random access, so runs can resume)."""
+    return np.random.SeedSequence(ss.entropy, spawn_key=tuple(ss.spawn_key) + tuple(key))
+
+
+def _scale_interface(e: Effect, factors: Sequence[float]) -> Effect:
+    """A ``tool_interface`` effect with its two stiffnesses scaled (others unchanged)."""
+    if e.name != "tool_interface" or e.is_off:
+        return e
+    return replace(e, k_t_N_per_m=e.k_t_N_per_m * factors[0],
+                   k_r_Nm_per_rad=e.k_r_Nm_per_rad * factors[1])
+
+
+def _effect_dict(e: Effect) -> dict[str, Any]:
+    d = {"name": e.name}
+    for k, v in e.params().items():
+        d[k] = list(v) if isinstance(v, tuple) else (None if v == np.inf else v)
+    return d
+
+
+def reference_truth(hidden: Sequence[Effect | dict[str, Any]] = (),
+                    variability: Variability = Variability(),
+                    x: np.ndarray | None = None) -> Truth:
+    """The reference spindle (design ``x``, default the baseline) as a truth: the model's
+    default effects, plus ``hidden`` effects (objects or ``{"name": ..., <params>}``)."""
+    sp = reference_spindle()
+    geom = sp.geometry_for(sp.baseline if x is None else np.asarray(x, float))
+    hid = tuple(e if isinstance(e, Effect) else effect_from_dict(dict(e)) for e in hidden)
+    return Truth(geom, sp.effects, hid, variability, sp.theta_bearings)
