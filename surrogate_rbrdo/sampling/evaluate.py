@@ -33,11 +33,14 @@ shared file system.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import joblib
 import numpy as np
+from tqdm.auto import tqdm
 
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.errors import ModelError
@@ -110,11 +113,9 @@ def _call_vector(func: Callable[[np.ndarray], np.ndarray], point: np.ndarray) ->
 
 def _parallel_config(backend: str, n_jobs: int, client: Any) -> tuple[Any, Any]:
     """Return (context manager, cluster-to-close)."""
-    import joblib
-
     if backend != "dask":
         return joblib.parallel_config(backend=backend, n_jobs=n_jobs), None
-    try:
+    try:  # optional dependency (the [dask] extra), imported only for this backend
         from distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - optional dependency
         raise ValueError(
@@ -147,6 +148,7 @@ def evaluate_points(
     progress: bool = False,
     client: Any = None,
     n_outputs: int | None = None,
+    desc: str = "evaluating",
 ) -> SampleResult:
     """Evaluate ``func`` on every row of ``points``.
 
@@ -174,6 +176,8 @@ def evaluate_points(
         ``None`` (default): ``func`` returns a float and ``y`` is ``(n,)``. An integer ``k``:
         ``func`` returns ``k`` values (any array-like) and ``y`` is ``(n, k)``; a return of
         another length raises ``ValueError``.
+    desc : str
+        Label of the progress bar.
 
     Returns
     -------
@@ -184,10 +188,6 @@ def evaluate_points(
     ModelError
         With ``on_nonfinite="raise"``, if ``func`` returns NaN or inf (message names the point).
     """
-    import time
-
-    import joblib
-
     t0 = time.perf_counter()
     X = check_finite_array("points", np.atleast_2d(np.asarray(points, dtype=float)), ndim=2)
     check_choice("backend", backend, BACKENDS)
@@ -216,19 +216,21 @@ def evaluate_points(
                 y[i] = target(func, X[i])
                 from_cache[i] = True
     todo = np.flatnonzero(~from_cache)
+    if counter is not None and from_cache.any():
+        counter.add_cached(int(from_cache.sum()))
 
     if todo.size:
         done: list[float] = []
         try:
             if backend == "sequential" or (backend != "dask" and n_jobs == 1):
-                _collect((target(func, X[i]) for i in todo), todo.size, progress, done)
+                _collect((target(func, X[i]) for i in todo), todo.size, progress, done, desc)
             else:
                 ctx, closer = _parallel_config(backend, int(n_jobs), client)
                 try:
                     with ctx:
                         par = joblib.Parallel(return_as="generator")
                         it = par(joblib.delayed(target)(func, X[i]) for i in todo)
-                        _collect(it, todo.size, progress, done)
+                        _collect(it, todo.size, progress, done, desc)
                 finally:
                     if closer is not None and closer[0] is not None:
                         closer[1].close()
@@ -256,10 +258,8 @@ def evaluate_points(
                         wall_time_s=time.perf_counter() - t0)
 
 
-def _collect(it: Any, total: int, progress: bool, out: list[float]) -> None:
+def _collect(it: Any, total: int, progress: bool, out: list[float], desc: str) -> None:
     if progress:
-        from tqdm.auto import tqdm
-
-        it = tqdm(it, total=total, desc="evaluating", unit="pt")
+        it = tqdm(it, total=total, desc=desc, unit="pt", leave=False)
     for v in it:
         out.append(v)
