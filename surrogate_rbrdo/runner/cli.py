@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import sys
 import time
 from collections.abc import Sequence
@@ -21,26 +20,13 @@ from typing import Any
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
-from joblib.externals.loky import reusable_executor  # noqa: E402 - after the BLAS pinning
-
-from surrogate_rbrdo import __version__  # noqa: E402
+from surrogate_rbrdo import __version__  # noqa: E402 - after the BLAS pinning
 from surrogate_rbrdo.runner.execute import Terminated, run_experiment  # noqa: E402
 from surrogate_rbrdo.runner.kinds import discover  # noqa: E402
 from surrogate_rbrdo.runner.runfolder import AlreadyComplete  # noqa: E402
+from surrogate_rbrdo.runner.signals import handled_signals  # noqa: E402
 
 MAX_ROWS = 12
-
-
-def stop_workers() -> None:
-    """Kill joblib's reusable loky worker processes (idle workers otherwise live 300 s, and
-    an interrupted parent would leave them running)."""
-    executor = reusable_executor._executor   # joblib keeps the one executor here
-    if executor is not None:
-        executor.shutdown(wait=True, kill_workers=True)
-
-
-def _terminate(signum: int, frame: Any) -> None:
-    raise Terminated()
 
 
 def describe_kinds() -> str:
@@ -102,12 +88,12 @@ def _run(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    old = signal.signal(signal.SIGTERM, _terminate)
     try:
         if args.command == "kinds":
             print(describe_kinds())
             return 0
-        return _run(args)
+        with handled_signals():
+            return _run(args)
     except ValueError as exc:
         print(f"rbrdo: error: {exc}", file=sys.stderr)
         return 2
@@ -121,9 +107,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             + (f" --results {args.results}" if args.results else ""))
         print(f"rbrdo: {what}{where}", file=sys.stderr)
         return 130 if isinstance(exc, KeyboardInterrupt) else 143
-    finally:
-        signal.signal(signal.SIGTERM, old)
-        stop_workers()
 
 
 def _report(path: Any) -> None:

@@ -147,8 +147,8 @@ class DesignModel:
 
 
 def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Generator,
-                     progress: bool = False, counter: CallCounter | None = None
-                     ) -> DesignModel:
+                     progress: bool = False, counter: CallCounter | None = None,
+                     label: str = "") -> DesignModel:
     """Fit the g_det design model on FE designs and validate it on fresh ones.
 
     Parameters
@@ -161,6 +161,8 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
         Progress bars over the FE designs.
     counter : CallCounter, optional
         Receives every FE call (``validation["n_fe_calls"]`` is this fit's share).
+    label : str
+        Prefix of the progress bars.
     """
     counter = counter if counter is not None else CallCounter()
     start = counter.calls
@@ -169,7 +171,8 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
     lo, hi = b[:, 0].astype(float), b[:, 1].astype(float)
     t0 = time.perf_counter()
     X = lhs(options.n_train, b, rng=r_train)
-    Y = _fe_designs(spindle, X, options.n_jobs, counter, progress, "FE: design-model DOE")
+    Y = _fe_designs(spindle, X, options.n_jobs, counter, progress,
+                    f"{label} FE: design-model DOE".strip())
     U = (X - lo) / (hi - lo)
     kopts = KrigingOptions(theta0=1.0, theta_lower=1e-3, theta_upper=100.0, n_start=5)
     models = tuple(KrgSE(kopts, rng=r).fit(U, np.log(Y[:, j]))
@@ -181,7 +184,7 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
     if options.n_validate:
         Xv = lo + r_val.random((options.n_validate, lo.size)) * (hi - lo)  # fresh, uniform
         Yv = _fe_designs(spindle, Xv, options.n_jobs, counter, progress,
-                         "FE: design-model validation")
+                         f"{label} FE: design-model validation".strip())
         Pv = dm.quantities(Xv)
         for j, name in enumerate(QUANTITIES):
             rel = np.abs(Pv[:, j] - Yv[:, j]) / np.abs(Yv[:, j])

@@ -156,7 +156,7 @@ def refine_surrogate(trained: TrainedSurrogate, spindle: Any, X: np.ndarray,
     structured = trained.structure == "resonance"
     if structured:
         Zn, Qn = sample_resonance(spindle, Z, o, cache=cache, counter=counter,
-                                  progress=progress)
+                                  progress=progress, label="refinement")
         yn = Qn[:, 3]
     else:
         Zn, yn = sample_positive(trained.response.pointwise(spindle), Z, n_jobs=o.n_jobs,

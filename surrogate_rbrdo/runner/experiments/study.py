@@ -157,12 +157,12 @@ def _surrogate(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
     pr = p.problem
     return train_surrogate(pr.spindle, pr.inputs, pr.limit, p.surrogate, rng=ctx.stream(0),
                            response=pr.response, cache=fe_cache(ctx.cache_dir),
-                           progress=ctx.progress)
+                           progress=ctx.progress, label=ctx.label)
 
 
 def _design_model(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
     return fit_design_model(p.problem.spindle, p.design_model, rng=ctx.stream(1),
-                            progress=ctx.progress)
+                            progress=ctx.progress, label=ctx.label)
 
 
 def _optimise(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:

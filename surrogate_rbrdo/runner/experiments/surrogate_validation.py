@@ -169,10 +169,10 @@ def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Truth:
     if any(v.structure == "resonance" for v in p.variants.values()):
         n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
         Z_t, Q_t = sample_resonance(p.spindle, Z, box, cache=cache, counter=c_test,
-                                    progress=ctx.progress)
+                                    progress=ctx.progress, label=ctx.label)
         Z_d = np.column_stack([np.repeat(X, n_th, axis=0), np.tile(theta[:n_th], (len(X), 1))])
         Z_d, Q_d = sample_resonance(p.spindle, Z_d, box, cache=cache, counter=c_test,
-                                    progress=ctx.progress)
+                                    progress=ctx.progress, label=ctx.label)
         if Z_d.shape[0] != X.shape[0] * n_th:
             raise ValueError("FE resonance quantities failed at a validation design")
         res = (Z_t, Q_t, Z_d, Q_d)
@@ -192,7 +192,8 @@ class VariantResult:
 
 def _one(p: Plan, t: Truth, name: str, options: Any, ctx: StageContext) -> VariantResult:
     tr = train_surrogate(p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0),
-                         cache=fe_cache(ctx.cache_dir), progress=ctx.progress)
+                         cache=fe_cache(ctx.cache_dir), progress=ctx.progress,
+                         label=f"{ctx.label} {name}")
     model = CountingResponse(tr.model.response)
     yp = tr.model.response_points(t.Z)
     X, labels = np.vstack(list(p.designs.values())), list(p.designs)

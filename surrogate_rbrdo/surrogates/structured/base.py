@@ -169,7 +169,7 @@ def structure_of(options: Any) -> Structure:
 def train_surrogate(spindle: Any, inputs: Any, limit: LimitState, options: Any, *,
                     rng: np.random.Generator, response: ResponseSpec | None = None,
                     cache: Any = None, counter: CallCounter | None = None,
-                    progress: bool = False) -> TrainedSurrogate:
+                    progress: bool = False, label: str = "") -> TrainedSurrogate:
     """Train the structure of ``options`` on FE evaluations of ``spindle``.
 
     Parameters
@@ -189,6 +189,8 @@ def train_surrogate(spindle: Any, inputs: Any, limit: LimitState, options: Any, 
     counter : CallCounter, optional
         Receives every FE call (``TrainedSurrogate.fe_calls`` has this training's share).
     progress : bool
+    label : str
+        Prefix of the progress bars (e.g. the run: ``"quick/r1"``).
     """
     entry = structure_of(options)
     response = ResponseSpec() if response is None else response
@@ -197,7 +199,7 @@ def train_surrogate(spindle: Any, inputs: Any, limit: LimitState, options: Any, 
     options.check_response(response)
     counter = counter if counter is not None else CallCounter()
     return entry.train(spindle, inputs, limit, response, options, rng=rng, cache=cache,
-                       counter=counter, progress=progress)
+                       counter=counter, progress=progress, label=label)
 
 
 __all__ = ["STRUCTURES", "SamplingOptions", "Structure", "SurrogateModel", "TrainedSurrogate",

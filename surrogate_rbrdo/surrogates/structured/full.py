@@ -89,7 +89,7 @@ class FEOptions:
                     "query (the ground truth)")
 def train_fe(spindle: Any, inputs: Any, limit: LimitState, response: ResponseSpec,
              options: FEOptions, *, rng: np.random.Generator, cache: Any = None,
-             counter: Any = None, progress: bool = False) -> TrainedSurrogate:
+             counter: Any = None, progress: bool = False, label: str = "") -> TrainedSurrogate:
     """No training: the FE response itself (no FE calls until it is queried)."""
     method = options.method(response)
     info = {"structure": "fe", "response": response.label, "n_train": 0, "fe_method": method}

@@ -126,7 +126,7 @@ class _RefitFactory:
 
 def active_learning(spindle: Any, inputs: Any, limit: LimitState, response: Any,
                     options: GlobalOptions, *, rng: np.random.Generator, cache: Any = None,
-                    counter: Any = None, progress: bool = False
+                    counter: Any = None, progress: bool = False, label: str = ""
                     ) -> tuple[np.ndarray, np.ndarray, list[dict[str, Any]], str]:
     """AK-MCS enrichment of the global Kriging (module docstring); ``Z, y, history, reason``."""
     o = options
@@ -136,7 +136,7 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, response: Any,
     sample = partial(sample_positive, response.pointwise(spindle), n_jobs=o.n_jobs,
                      backend=o.backend, cache=cache, counter=counter)
     Z, y = sample(lhs(o.al_n_initial, bounds, rng=r_doe), progress=progress,
-                  desc="FE: initial DOE")
+                  desc=f"{label} FE: initial DOE".strip())
     pool = GridPool(lhs(o.al_pool_designs, bounds[:d], rng=r_pool_x, criterion="random"),
                     inputs.sample(o.al_pool_theta, rng=r_pool_t))
     res = ak_mcs(response.pointwise(spindle), pool, bounds,
@@ -152,7 +152,7 @@ def active_learning(spindle: Any, inputs: Any, limit: LimitState, response: Any,
                     "(static maximin LHS or AK-MCS active learning)", refinable=True)
 def train_global(spindle: Any, inputs: Any, limit: LimitState, response: Any,
                  options: GlobalOptions, *, rng: np.random.Generator, cache: Any = None,
-                 counter: Any, progress: bool = False) -> TrainedSurrogate:
+                 counter: Any, progress: bool = False, label: str = "") -> TrainedSurrogate:
     """DOE (static or active) → FE sampling → fit (:func:`train_surrogate` calls it)."""
     o = options
     r_doe, r_fit = require_rng(rng).spawn(2)
@@ -165,11 +165,12 @@ def train_global(spindle: Any, inputs: Any, limit: LimitState, response: Any,
     if o.active_learning:
         Z, y, history, reason = active_learning(spindle, inputs, limit, response, o,
                                                 rng=r_doe, cache=cache, counter=counter,
-                                                progress=progress)
+                                                progress=progress, label=label)
     else:
         Z, y = sample_positive(response.pointwise(spindle), lhs(o.n_doe, bounds, rng=r_doe),
                                n_jobs=o.n_jobs, backend=o.backend, cache=cache,
-                               counter=counter, progress=progress, desc="FE: surrogate DOE")
+                               counter=counter, progress=progress,
+                               desc=f"{label} FE: surrogate DOE".strip())
     sample_s = time.perf_counter() - t0
     model = fit_transformed(Z, y, rng=r_fit, surrogate=o.surrogate, transform=o.transform,
                             n_start=o.n_start, n_design=d)

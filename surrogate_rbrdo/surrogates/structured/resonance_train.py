@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -149,13 +150,13 @@ def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm
 
 
 def sample_resonance(spindle: Any, Z: np.ndarray, options: Any, *, cache: Any = None,
-                     counter: Any = None, progress: bool = False
+                     counter: Any = None, progress: bool = False, label: str = ""
                      ) -> tuple[np.ndarray, np.ndarray]:
     """FE resonance quantities at joint points (one counted, cached FE call per point): the
     points whose four outputs are finite and positive, and those outputs ``(n, 4)``."""
     return sample_positive(PointwiseResonance(spindle), Z, n_outputs=4, n_jobs=options.n_jobs,
                            backend=options.backend, cache=cache, counter=counter,
-                           progress=progress, desc="FE: resonance quantities")
+                           progress=progress, desc=f"{label} FE: resonance quantities".strip())
 
 
 @register_structure("resonance", ResonanceOptions, "physics-structured Kriging of the peak: "
@@ -163,7 +164,7 @@ def sample_resonance(spindle: Any, Z: np.ndarray, options: Any, *, cache: Any = 
                     refinable=True)
 def train_resonance(spindle: Any, inputs: Any, limit: LimitState, response: ResponseSpec,
                     options: ResonanceOptions, *, rng: np.random.Generator, cache: Any = None,
-                    counter: Any, progress: bool = False) -> TrainedSurrogate:
+                    counter: Any, progress: bool = False, label: str = "") -> TrainedSurrogate:
     """LHS → FE resonance quantities → band infill → sub-model fits (module docstring)."""
     o = options
     r_doe, r_fit = require_rng(rng).spawn(2)
@@ -172,19 +173,18 @@ def train_resonance(spindle: Any, inputs: Any, limit: LimitState, response: Resp
     bounds = o.bounds(spindle, inputs)
     n_max = float(spindle.geometry.speed_max_rpm)
     t0 = time.perf_counter()
-    Z, Q = sample_resonance(spindle, lhs(o.n_doe, bounds, rng=r_doe), o, cache=cache,
-                            counter=counter, progress=progress)
+    sample = partial(sample_resonance, spindle, options=o, cache=cache, counter=counter,
+                     progress=progress, label=label)
+    Z, Q = sample(lhs(o.n_doe, bounds, rng=r_doe))
     n_lhs = Z.shape[0]
     if o.res_n_band > 0:
-        Zb = band_points(Z, Q[:, 0], bounds, n_max, o, rng=r_doe.spawn(1)[0], n_design=d)
-        Zb, Qb = sample_resonance(spindle, Zb, o, cache=cache, counter=counter,
-                                  progress=progress)
+        Zb, Qb = sample(band_points(Z, Q[:, 0], bounds, n_max, o, rng=r_doe.spawn(1)[0],
+                                    n_design=d))
         Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])
     if o.res_n_band_lim > 0:
-        Zb = band_points(Z, Q[:, 0], bounds, n_max, o, rng=r_doe.spawn(1)[0], n_design=d,
-                         amp_res_m=Q[:, 1], threshold_m=limit.threshold)
-        Zb, Qb = sample_resonance(spindle, Zb, o, cache=cache, counter=counter,
-                                  progress=progress)
+        Zb, Qb = sample(band_points(Z, Q[:, 0], bounds, n_max, o, rng=r_doe.spawn(1)[0],
+                                    n_design=d, amp_res_m=Q[:, 1],
+                                    threshold_m=limit.threshold))
         Z, Q = np.vstack([Z, Zb]), np.vstack([Q, Qb])
     sample_s = time.perf_counter() - t0
     model = fit_resonance_surrogate(Z, Q, o, rng=r_fit, n_max_rpm=n_max, n_design=d,

@@ -326,8 +326,8 @@ class SubstructureOptions(SamplingOptions):
                     "dynamic stiffness over the designs, bearings and θ coupled exactly")
 def train_substructure(spindle: Any, inputs: Any, limit: LimitState, response: ResponseSpec,
                        options: SubstructureOptions, *, rng: np.random.Generator,
-                       cache: Any = None, counter: Any, progress: bool = False
-                       ) -> TrainedSurrogate:
+                       cache: Any = None, counter: Any, progress: bool = False,
+                       label: str = "") -> TrainedSurrogate:
     """LHS over the designs → FE condensations → fit (``inputs`` and ``limit`` are not
     needed: θ is coupled exactly)."""
     o = options
@@ -344,7 +344,8 @@ def train_substructure(spindle: Any, inputs: Any, limit: LimitState, response: R
     res = evaluate_points(
         func, X, n_jobs=o.n_jobs, backend=o.backend, cache=cache, counter=counter,
         on_nonfinite="raise", progress=progress, n_outputs=func.n_outputs(lay.n_dof),
-        client="local" if o.backend == "dask" else None, desc="FE: condensed rotor")
+        client="local" if o.backend == "dask" else None,
+        desc=f"{label} FE: condensed rotor".strip())
     sample_s = time.perf_counter() - t0
     model = fit_substructure_surrogate(spindle, X, res.y, kind=response.kind,
                                        speed_rpm=response.speed_rpm, nodes_rpm=nodes,
