@@ -28,7 +28,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import tomllib
+import types
 import typing
+from collections import abc
 from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
@@ -40,7 +42,6 @@ WHAT = {
     "int_type": "an integer", "int_from_float": "an integer", "int_parsing": "an integer",
     "float_type": "a number", "float_parsing": "a number", "bool_type": "true or false",
     "bool_parsing": "true or false", "string_type": "a string",
-    "tuple_type": "an array, e.g. [1.0, 2.0]", "list_type": "an array, e.g. [1.0, 2.0]",
     "dataclass_type": "a table", "dict_type": "a table", "model_type": "a table",
     "mapping_type": "a table", "finite_number": "a finite number",
 }
@@ -78,16 +79,65 @@ def _adapter(cls: type) -> Any:
     return TypeAdapter(model)
 
 
+def _unwrap(tp: Any) -> Any:
+    """``X | None`` → ``X``."""
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if typing.get_origin(tp) in (typing.Union, types.UnionType) and len(args) == 1:
+        return args[0]
+    return tp
+
+
+def type_at(cls: Any, loc: tuple[Any, ...]) -> Any:
+    """The annotation reached from ``cls`` along ``loc`` (dataclass fields, mapping values,
+    tuple items); ``None`` when the path leaves the schema."""
+    tp = cls
+    for part in loc:
+        tp = _unwrap(tp)
+        origin, args = typing.get_origin(tp), typing.get_args(tp)
+        if dataclasses.is_dataclass(tp) and isinstance(part, str):
+            tp = typing.get_type_hints(tp).get(part)
+        elif origin in (dict, Mapping, abc.Mapping) and len(args) == 2:
+            tp = args[1]
+        elif origin is tuple and isinstance(part, int):
+            tp = args[0] if len(args) == 2 and args[1] is Ellipsis else (
+                args[part] if part < len(args) else None)
+        else:
+            return None
+        if tp is None:
+            return None
+    return _unwrap(tp)
+
+
 def fields_at(cls: type, loc: tuple[Any, ...]) -> list[str] | None:
     """Field names of the dataclass reached from ``cls`` along ``loc`` (``None``: not one)."""
-    for part in loc:
-        if not dataclasses.is_dataclass(cls) or isinstance(part, int):
-            return None
-        hints = typing.get_type_hints(cls)
-        if part not in hints:
-            return None
-        cls = hints[part]
-    return [f.name for f in dataclasses.fields(cls)] if dataclasses.is_dataclass(cls) else None
+    tp = type_at(cls, loc)
+    return [f.name for f in dataclasses.fields(tp)] if dataclasses.is_dataclass(tp) else None
+
+
+def _length(cls: type, loc: tuple[Any, ...]) -> int | None:
+    """The fixed length of the tuple at ``loc`` (``None``: not a fixed-length tuple)."""
+    tp = type_at(cls, loc)
+    args = typing.get_args(tp)
+    if typing.get_origin(tp) is tuple and not (len(args) == 2 and args[1] is Ellipsis):
+        return len(args)
+    return None
+
+
+def _array(cls: type, loc: tuple[Any, ...]) -> str:
+    """What an array at ``loc`` holds, for messages."""
+    tp = type_at(cls, loc)
+    args = typing.get_args(tp)
+    item = _unwrap(args[0]) if args else None
+    n = _length(cls, loc)
+    size = f"{n} " if n is not None else ""
+    if item is str:
+        return f'an array of {size}strings, e.g. ["a", "b"]'
+    if dataclasses.is_dataclass(item) or typing.get_origin(item) in (dict, abc.Mapping):
+        return f"an array of {size}tables"
+    if typing.get_origin(item) is tuple:
+        return "an array of arrays, e.g. [[1.0, 0.0], [0.0, 1.0]]"
+    example = ", ".join(f"{k + 1}.0" for k in range(n if n is not None else 2))
+    return f"an array of {size}numbers, e.g. [{example}]"
 
 
 def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
@@ -98,6 +148,11 @@ def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
         allowed = fields_at(cls, loc[:-1])
         what = "table" if isinstance(err.get("input"), Mapping) else "key"
         return f"unknown {what} {path}; allowed: {sorted(allowed or [])}"
+    if kind in ("missing", "missing_argument") and loc and isinstance(loc[-1], int):
+        n = _length(cls, loc[:-1])
+        parent = ".".join(p for p in (where, dotted(loc[:-1])) if p)
+        return (f"{parent} = {_short(err.get('input'))} is not allowed: must be an array of "
+                f"{n} numbers")
     if kind in ("missing", "missing_argument"):
         return f"{path} is missing: it is required"
     if kind == "value_error":
@@ -109,10 +164,13 @@ def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
         if first in (fields_at(cls, loc) or []) or first.startswith("unknown"):
             return f"{path}.{msg}" if path and not first.startswith("unknown") else msg
         return f"{path}: {msg}" if path else msg
-    what = WHAT.get(kind)
+    what = _array(cls, loc) if kind in ("tuple_type", "list_type") else WHAT.get(kind)
     if what is None:
         ctx = err.get("ctx") or {}
-        if kind in ("too_short", "too_long") and "max_length" in ctx:
+        n = _length(cls, loc)
+        if kind in ("too_short", "too_long") and n is not None:
+            what = f"an array of {n} items"
+        elif kind in ("too_short", "too_long") and "max_length" in ctx:
             what = f"an array of at most {ctx['max_length']} items"
         elif kind in ("too_short", "too_long"):
             what = f"an array of at least {ctx.get('min_length')} items"
@@ -148,4 +206,4 @@ def parse(cls: type, data: Any, where: str = "") -> Any:
         raise ValueError(_message(cls, exc.errors()[0], where)) from None
 
 
-__all__ = ["dotted", "fields_at", "load_toml", "parse"]
+__all__ = ["dotted", "fields_at", "load_toml", "parse", "type_at"]
