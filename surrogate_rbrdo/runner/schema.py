@@ -146,13 +146,13 @@ def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
     kind = err["type"]
     if kind in ("unexpected_keyword_argument", "extra_forbidden"):
         allowed = fields_at(cls, loc[:-1])
-        what = "table" if isinstance(err.get("input"), Mapping) else "key"
+        what = "table" if len(loc) == 1 and not where and isinstance(err.get("input"),
+                                                                      Mapping) else "key"
         return f"unknown {what} {path}; allowed: {sorted(allowed or [])}"
     if kind in ("missing", "missing_argument") and loc and isinstance(loc[-1], int):
-        n = _length(cls, loc[:-1])
         parent = ".".join(p for p in (where, dotted(loc[:-1])) if p)
-        return (f"{parent} = {_short(err.get('input'))} is not allowed: must be an array of "
-                f"{n} numbers")
+        return (f"{parent} = {_short(err.get('input'))} is not allowed: must be "
+                f"{_array(cls, loc[:-1])}")
     if kind in ("missing", "missing_argument"):
         return f"{path} is missing: it is required"
     if kind == "value_error":
