@@ -65,21 +65,22 @@ def plot_pareto_fronts(fronts: Mapping[str, np.ndarray], *,
                     label=f"{label}: ASF compromise")
     ax.set_xlabel(f"mean μ_y of the {quantity} [{unit}]")
     ax.set_ylabel(f"standard deviation σ_y [{unit}]")
-    ax.set_title(f"feasible Pareto fronts (μ_y, σ_y) of the {quantity}", fontsize=10)
+    ax.set_title(f"feasible Pareto fronts (μ_y, σ_y)\n{quantity}", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return fig
 
 
 def plot_convergence(histories: Mapping[str, list], *, objective: int = 0, scale: float = 1e6,
-                     unit: str = "μm", name: str = "μ_y", ax=None):
+                     unit: str = "μm", name: str = "μ_y", note: str = "", ax=None):
     """Best feasible value of one objective per generation, one line per run.
 
     ``histories`` maps a label to ``OptimizationResult.history`` (dicts with ``f_min``);
-    ``name`` is what objective ``objective`` is (for the axis and the title).
+    ``name`` is what objective ``objective`` is (axis and title), ``note`` a remark for the
+    title (e.g. what a single-objective run minimises instead).
     """
     if ax is None:
-        fig = Figure(figsize=(6.0, 3.5), layout="constrained")
+        fig = Figure(figsize=(6.5, 4.0), layout="constrained")
         ax = fig.subplots()
     else:
         fig = ax.figure
@@ -88,7 +89,9 @@ def plot_convergence(histories: Mapping[str, list], *, objective: int = 0, scale
         ax.plot(np.arange(len(best)), best * scale, label=label)
     ax.set_xlabel("generation")
     ax.set_ylabel(f"best feasible {name} [{unit}]")
-    ax.set_title(f"convergence: best feasible {name} so far, per run", fontsize=10)
+    extra = f" ({note})" if note else ""
+    ax.set_title(f"convergence of objective {objective + 1}, {name}{extra}:\n"
+                 "best feasible value so far, per run", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     return fig

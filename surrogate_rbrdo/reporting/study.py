@@ -158,17 +158,21 @@ def front_figures(out: Any, opt: Optimisation, weights: tuple[float, ...], *,
         {lab: fronts[lab] for lab in rb}, quantity=quantity,
         compromises={lab: (comp[lab].mean, comp[lab].std) for lab in rb if comp[lab]},
         clouds={lab: res[lab].archive.F[res[lab].archive.feasible] for lab in rb})
-    fig.axes[0].set_title("RBRDO feasible Pareto fronts per P_target "
-                          f"({'full FE' if model_in_loop == 'fe' else 'surrogate'}, CRN sample)")
+    fig.axes[0].set_title(f"RBRDO: feasible Pareto fronts per P_target\n({quantity}; "
+                          f"{'full FE model' if model_in_loop == 'fe' else 'surrogate'}, one "
+                          "CRN θ sample)", fontsize=10)
     out.save_figure("pareto_fronts.png", fig)
     fig = plot_pareto_fronts(fronts, quantity=quantity,
                              compromises={k: (comp[k].mean, comp[k].std)
                                           for k in fronts if comp[k]})
+    fig.axes[0].set_title(f"RBRDO and RDO: feasible Pareto fronts\n({quantity}, one CRN θ "
+                          "sample)", fontsize=10)
     out.save_figure("pareto_fronts_with_rdo.png", fig)
     fig = plot_front_designs({lab: res[lab].archive.X[archive_front(res[lab])] for lab in rb},
                              baseline=baseline)
     out.save_figure("front_designs.png", fig)
-    fig = plot_convergence({lab: list(r.history) for lab, r in res.items()})
+    fig = plot_convergence({lab: list(r.history) for lab, r in res.items()},
+                           name="μ_y", note="deterministic run: nominal y")
     out.save_figure("convergence.png", fig)
 
 

@@ -26,11 +26,13 @@ from joblib.externals.loky import reusable_executor
 from surrogate_rbrdo.runner.execute import Terminated
 
 
-def stop_workers() -> None:
-    """Kill joblib's reusable loky worker processes, if any."""
+def stop_workers(kill: bool = True) -> None:
+    """Stop joblib's reusable loky worker processes, if any: killed (``kill``, after an
+    interruption: they may be computing) or asked to exit (they then release what they hold,
+    e.g. tqdm's semaphores, which a killed worker leaks)."""
     executor = reusable_executor._executor   # joblib keeps its one executor here
     if executor is not None:
-        executor.shutdown(wait=True, kill_workers=True)
+        executor.shutdown(wait=True, kill_workers=kill)
 
 
 def _terminate(signum: int, frame: Any) -> None:
@@ -62,15 +64,17 @@ def handled_signals() -> Iterator[None]:
     relay = threading.Thread(target=_relay, args=(threading.get_ident(), stop), daemon=True,
                              name="rbrdo-sigint-relay")
     relay.start()
+    ok = False
     try:
         yield
+        ok = True
     finally:
         stop.set()
         relay.join()
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
         for sig, handler in old.items():
             signal.signal(sig, handler)
-        stop_workers()
+        stop_workers(kill=not ok)
 
 
 __all__ = ["handled_signals", "stop_workers"]

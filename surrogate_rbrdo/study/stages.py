@@ -16,6 +16,7 @@ the FE model itself (``structure = "fe"``) its calls are counted as FE calls.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import partial
@@ -128,6 +129,9 @@ def _run_one(problem: Problem, trained: TrainedSurrogate, design_model: Any, run
     form = formulation(problem, model, dm, *run, options, crn)
     pbar = None
     if bar is not None:
+        # a thread lock: tqdm's default process lock is a semaphore that a killed worker
+        # would leak (the resource tracker then warns at exit)
+        tqdm.set_lock(threading.RLock())
         pbar = tqdm(total=options.n_gen, desc=bar[0], unit="gen", position=bar[1], leave=False)
         form = _TrackedFormulation(form, pbar)
     try:
@@ -140,6 +144,12 @@ def _run_one(problem: Problem, trained: TrainedSurrogate, design_model: Any, run
     return res, {trained.in_loop: model.counter.calls, "design_model": dm.counter.calls}
 
 
+def _bar_label(label: str, name: str, p_target: float) -> str:
+    """``"quick/r1 rbrdo P_target=5%"`` (P_target only where the formulation has one)."""
+    pt = f" P_target={p_target * 100:g}%" if name in ("rbrdo", "rbdo") else ""
+    return f"{label} {name}{pt}".strip()
+
+
 def optimise(problem: Problem, trained: TrainedSurrogate, design_model: Any,
              options: OptimizationOptions, *, crn: np.random.SeedSequence,
              rng: np.random.Generator, progress: bool = False, label: str = "") -> Optimisation:
@@ -148,8 +158,8 @@ def optimise(problem: Problem, trained: TrainedSurrogate, design_model: Any,
     runs = options.runs
     labels = tuple(run_label(n, p) for n, p in runs)
     tasks = [partial(_run_one, problem, trained, design_model, run, options, crn, r,
-                     (f"{label} {lab} P_target={run[1]:.0%}".strip(),
-                      i if options.n_jobs > 1 else 0) if progress else None)
+                     (_bar_label(label, *run), i if options.n_jobs > 1 else 0)
+                     if progress else None)
              for i, (run, lab, r) in enumerate(zip(runs, labels, rng.spawn(len(runs)),
                                                    strict=True))]
     out = run_many(tasks, n_jobs=options.n_jobs)
