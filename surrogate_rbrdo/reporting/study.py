@@ -28,7 +28,13 @@ from surrogate_rbrdo.reporting.plots_spindle import plot_campbell, plot_unbalanc
 from surrogate_rbrdo.spindle.harmonic import tool_amplitude
 from surrogate_rbrdo.spindle.modal import campbell
 from surrogate_rbrdo.study.problem import DESIGN_NAMES
-from surrogate_rbrdo.study.stages import Optimisation, Verification, run_label
+from surrogate_rbrdo.study.stages import (
+    Optimisation,
+    Refinement,
+    Verification,
+    merge_calls,
+    run_label,
+)
 
 
 def front_rows(opt: Optimisation) -> list[dict[str, Any]]:
@@ -213,5 +219,31 @@ def spotlight(opt: Optimisation, ver: Verification) -> dict[str, np.ndarray]:
     return out
 
 
+def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt: Optimisation,
+               ref: Refinement, ver: Verification) -> dict[str, Any]:
+    """For ``meta.json``: the model calls per stage and model (all counted where the model
+    was called), the optimiser's seeds and run times, the refinement rounds."""
+    final_sur, final_opt = ref.surrogate or trained, ref.optimisation or opt
+    stages = {"optimization": merge_calls(opt.calls, {k: v for k, v in ref.calls.items()
+                                                      if k != "fe"}),
+              "refine": {"fe": ref.calls.get("fe", 0)}, "verification": ver.calls}
+    fe = {"doe": trained.fe_calls, "design_model": design_model.validation["n_fe_calls"],
+          **{k: int(c.get("fe", 0)) for k, c in stages.items()}}
+    sc = {k: int(c.get("surrogate", 0)) for k, c in stages.items() if k != "refine"}
+    dm = {k: int(c.get("design_model", 0)) for k, c in stages.items() if k != "refine"}
+    runs = final_opt.by_label()
+    return {"model_in_loop": trained.in_loop, "response": problem.response.label,
+            "fe_calls": {**fe, "total": sum(fe.values())},
+            "fe_cache_hits": {"doe": trained.fe_cache_hits},
+            "surrogate_calls": {**sc, "total": sum(sc.values())},
+            "design_model_calls": {**dm, "total": sum(dm.values())},
+            "optimizer": options.optimizer,
+            "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in runs.items()},
+            "optimizer_wall_time_s": {lab: r.wall_time_s for lab, r in runs.items()},
+            "refine": [dict(r) for r in ref.rounds],
+            "surrogate": final_sur.options.to_dict() if hasattr(final_sur.options, "to_dict")
+            else {}}
+
+
 __all__ = ["compromise_rows", "front_figures", "front_rows", "mbr_rows", "refine_rows",
-           "spindle_figures", "spotlight", "strategy_rows", "verification_rows"]
+           "spindle_figures", "spotlight", "strategy_rows", "study_meta", "verification_rows"]

@@ -37,7 +37,7 @@ from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
 from surrogate_rbrdo.study.problem import Problem
-from surrogate_rbrdo.study.stages import merge_calls, optimise, refine, verify
+from surrogate_rbrdo.study.stages import optimise, refine, verify
 from surrogate_rbrdo.surrogates.design_model import DesignModelOptions, fit_design_model
 from surrogate_rbrdo.surrogates.refine import RefineOptions
 from surrogate_rbrdo.surrogates.structured import STRUCTURES, train_surrogate
@@ -191,31 +191,6 @@ def _verify(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
                   label=ctx.label)
 
 
-def _meta(p: StudyPlan, done: Mapping[str, Any]) -> dict[str, Any]:
-    """Counted model calls per stage and model, optimiser seeds and run times."""
-    sur, opt = _final(done)
-    trained = done["surrogate"]
-    stages = {"optimization": merge_calls(done["optimise"].calls,
-                                          done["refine"].optimisation.calls
-                                          if done["refine"].optimisation else {}),
-              "refine": {"fe": done["refine"].calls.get("fe", 0)},
-              "verification": done["verify"].calls}
-    fe = {"doe": trained.fe_calls, "design_model": done["design_model"].validation[
-        "n_fe_calls"], **{k: int(c.get("fe", 0)) for k, c in stages.items()}}
-    sc = {k: int(c.get("surrogate", 0)) for k, c in stages.items() if k != "refine"}
-    dm = {k: int(c.get("design_model", 0)) for k, c in stages.items() if k != "refine"}
-    return {"model_in_loop": trained.in_loop, "response": p.problem.response.label,
-            "fe_calls": {**fe, "total": sum(fe.values())},
-            "fe_cache_hits": {"doe": trained.fe_cache_hits},
-            "surrogate_calls": {**sc, "total": sum(sc.values())},
-            "design_model_calls": {**dm, "total": sum(dm.values())},
-            "optimizer": p.optimization.optimizer,
-            "optimizer_seeds": {lab: r.optimizer.get("seed") for lab, r in opt.by_label().items()},
-            "optimizer_wall_time_s": {lab: r.wall_time_s for lab, r in opt.by_label().items()},
-            "refine": [dict(r) for r in done["refine"].rounds],
-            "surrogate": sur.options.to_dict() if hasattr(sur.options, "to_dict") else {}}
-
-
 def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
             ) -> dict[str, Any]:
     sur, opt = _final(done)
@@ -241,7 +216,8 @@ def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
     tables.spindle_figures(run, p.problem.spindle, tables.spotlight(opt, ver),
                            n_speeds=rep.n_speeds, campbell_speeds=rep.campbell_speeds,
                            n_modes=rep.n_modes, limit_um=p.problem.limit.threshold * 1e6)
-    meta = _meta(p, done)
+    meta = tables.study_meta(p.problem, p.optimization, done["surrogate"], done["design_model"],
+                             done["optimise"], done["refine"], done["verify"])
     run.write_json("study_meta.json", meta)
     keep = ("design", "preload_N", "span_mm", "diameter_mm", "mean_um_fe", "std_um_fe",
             "pf_pct_fe", "mean_um_surrogate", "std_um_surrogate", "pf_pct_surrogate")

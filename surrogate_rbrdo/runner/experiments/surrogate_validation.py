@@ -21,10 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.counting import CallCounter, CountingResponse
-from surrogate_rbrdo.core.protocols import Prediction
 from surrogate_rbrdo.core.validate import check_int, check_positive
-from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.reporting import tables_surrogate as tab
 from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
 from surrogate_rbrdo.runner.experiments.study import surrogate_options
@@ -37,15 +34,10 @@ from surrogate_rbrdo.runner.tables import (
     build_spindle,
     require_memory,
 )
-from surrogate_rbrdo.sampling.fe import fe_cache, sample_designs, sample_positive
-from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse, ResponseSpec
-from surrogate_rbrdo.surrogates.structured import (
-    STRUCTURES,
-    JointDOEOptions,
-    sample_resonance,
-    train_surrogate,
-)
-from surrogate_rbrdo.surrogates.validation import compare_mc
+from surrogate_rbrdo.sampling.fe import fe_cache
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.surrogates.assessment import Assessment, FETruth, assess, fe_truth
+from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions, train_surrogate
 
 DEFAULT_DESIGNS = {
     "resonant": (2000.0, 650.0, 60.0),
@@ -140,121 +132,64 @@ def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
     return Plan(spindle, inputs, c.limit.limit(), variants, box, designs, v)
 
 
-@dataclass(frozen=True, eq=False)
-class Truth:
-    """FE values: test points ``Z``/``y``, the θ sample, FE-MC ``y_fe`` at the designs,
-    resonance quantities (``None`` without a resonance variant) and counted FE calls."""
-
-    Z: np.ndarray
-    y: np.ndarray
-    theta: np.ndarray
-    y_fe: np.ndarray
-    resonance: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None
-    calls: Mapping[str, int]
+def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
+    need_res = any(v.structure == "resonance" for v in p.variants.values())
+    return fe_truth(p.spindle, p.inputs, np.vstack(list(p.designs.values())), p.test_box,
+                    n_test=p.validation.n_test, n_theta=p.validation.n_theta,
+                    rng_test=ctx.stream(1), rng_theta=ctx.stream(2),
+                    n_theta_nc=p.validation.n_theta_nc if need_res else None,
+                    cache=fe_cache(ctx.cache_dir), mc_cache=fe_cache(ctx.cache_dir, "fe_mc"),
+                    progress=ctx.progress, label=ctx.label)
 
 
-def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Truth:
-    cache, box = fe_cache(ctx.cache_dir), p.test_box
-    c_test, c_mc = CallCounter(), CallCounter()
-    Z = lhs(p.validation.n_test, box.bounds(p.spindle, p.inputs), rng=ctx.stream(1))
-    Z, y = sample_positive(ResponseSpec().pointwise(p.spindle), Z, n_jobs=box.n_jobs,
-                           backend=box.backend, cache=cache, counter=c_test,
-                           progress=ctx.progress, desc=f"{ctx.label} FE test points")
-    theta = p.inputs.sample(p.validation.n_theta, rng=ctx.stream(2))
-    X = np.vstack(list(p.designs.values()))
-    y_fe = sample_designs(PeakAmplitudeResponse(p.spindle), X, theta, n_jobs=box.n_jobs,
-                          cache=fe_cache(ctx.cache_dir, "fe_mc"), counter=c_mc,
-                          progress=ctx.progress, desc=f"{ctx.label} full-FE MC")
-    res = None
-    if any(v.structure == "resonance" for v in p.variants.values()):
-        n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
-        Z_t, Q_t = sample_resonance(p.spindle, Z, box, cache=cache, counter=c_test,
-                                    progress=ctx.progress, label=ctx.label)
-        Z_d = np.column_stack([np.repeat(X, n_th, axis=0), np.tile(theta[:n_th], (len(X), 1))])
-        Z_d, Q_d = sample_resonance(p.spindle, Z_d, box, cache=cache, counter=c_test,
-                                    progress=ctx.progress, label=ctx.label)
-        if Z_d.shape[0] != X.shape[0] * n_th:
-            raise ValueError("FE resonance quantities failed at a validation design")
-        res = (Z_t, Q_t, Z_d, Q_d)
-    return Truth(Z, y, theta, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls})
+def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Assessment, ...]:
+    """Every variant trained from the same seed stream (same DOE settings, same DOE)."""
+    return tuple(assess(name, train_surrogate(
+        p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0), cache=fe_cache(ctx.cache_dir),
+        progress=ctx.progress, label=f"{ctx.label} {name}"), done["truth"], p.limit,
+        rel_tol=p.validation.rel_tol) for name, options in p.variants.items())
 
 
-@dataclass(frozen=True, eq=False)
-class VariantResult:
-    """One variant's tables, test-point predictions, training info and counted calls."""
-
-    name: str
-    y_pred: np.ndarray
-    rows: Mapping[str, Any]
-    info: Mapping[str, Any]
-    calls: Mapping[str, int]
-
-
-def _one(p: Plan, t: Truth, name: str, options: Any, ctx: StageContext) -> VariantResult:
-    tr = train_surrogate(p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0),
-                         cache=fe_cache(ctx.cache_dir), progress=ctx.progress,
-                         label=f"{ctx.label} {name}")
-    model = CountingResponse(tr.model.response)
-    yp = tr.model.response_points(t.Z)
-    X, labels = np.vstack(list(p.designs.values())), list(p.designs)
-    cmp = compare_mc(_Grid(model), X, t.theta, p.limit, y_true=t.y_fe,
-                     rel_tol=p.validation.rel_tol)
-    rows: dict[str, Any] = {
-        "metrics": tab.metrics_row(name, t.y, yp, p.limit.threshold),
-        "loo": tab.loo_rows(name, tr.model.loo_summary()),
-        "mc": tab.mc_rows(name, labels, X, cmp),
-        "cost": tab.cost_row(name, getattr(options, "active_learning", False), tr.structure,
-                             tr.model.info.get("transform", getattr(options, "transform", "")),
-                             tr.model.n_train, tr.model.n_train, cmp)}
+def _rows(p: Plan, t: FETruth, a: Assessment) -> dict[str, list[Any]]:
+    labels, tr = list(p.designs), a.trained
+    rows: dict[str, list[Any]] = {
+        "metrics": [tab.metrics_row(a.name, t.y, a.y_pred, p.limit.threshold)],
+        "loo": tab.loo_rows(a.name, a.loo), "mc": tab.mc_rows(a.name, labels, t.X, a.mc),
+        "cost": [tab.cost_row(a.name, getattr(tr.options, "active_learning", False),
+                              tr.structure, tr.model.info.get("transform", ""),
+                              tr.model.n_train, tr.model.n_train, a.mc)]}
     if tr.structure == "resonance":
         n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
-        rows["sub"], rows["nc"] = tab.resonance_rows(name, tr.model, *t.resonance, labels, n_th)
-    info = {k: v for k, v in tr.to_dict().items() if k != "options"}
-    return VariantResult(name, yp, rows, info, {"fe_train": tr.fe_calls,
-                                                "surrogate": yp.size + model.counter.calls})
-
-
-class _Grid:
-    """``compare_mc`` sees the model's response (the median for a log transform)."""
-
-    def __init__(self, model: Any) -> None:
-        self.model = model
-
-    def predict_grid(self, x: np.ndarray, theta: np.ndarray) -> Prediction:
-        y = self.model(x, theta)
-        return Prediction(mean=y, std=np.full_like(y, np.nan))
-
-
-def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[VariantResult, ...]:
-    return tuple(_one(p, done["truth"], n, o, ctx) for n, o in p.variants.items())
+        rows["sub"], rows["nc"] = tab.resonance_rows(a.name, tr.model, *t.resonance, labels,
+                                                     n_th)
+    return rows
 
 
 def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
     t, vs = done["truth"], done["variants"]
-    sub = [r for v in vs for r in v.rows.get("sub", [])]
-    nc = [r for v in vs for r in v.rows.get("nc", [])]
-    mc = [r for v in vs for r in v.rows["mc"]]
-    for name, header, rows in (
-            ("metrics.csv", tab.METRICS_HEADER, [v.rows["metrics"] for v in vs]),
-            ("loo.csv", tab.LOO_HEADER, [r for v in vs for r in v.rows["loo"]]),
-            ("mc_comparison.csv", tab.MC_HEADER, mc),
-            ("cost.csv", tab.COST_HEADER, [v.rows["cost"] for v in vs])):
-        run.write_csv(name, header, rows)
-    if sub:
-        run.write_csv("resonance_submodels.csv", tab.SUB_HEADER, sub)
-        run.write_csv("nc_at_designs.csv", tab.NC_HEADER, nc)
+    rows = [_rows(p, t, a) for a in vs]
+    table = {k: [r for v in rows for r in v.get(k, [])] for k in
+             ("metrics", "loo", "mc", "cost", "sub", "nc")}
+    for name, key, header in (("metrics.csv", "metrics", tab.METRICS_HEADER),
+                              ("loo.csv", "loo", tab.LOO_HEADER),
+                              ("mc_comparison.csv", "mc", tab.MC_HEADER),
+                              ("cost.csv", "cost", tab.COST_HEADER),
+                              ("resonance_submodels.csv", "sub", tab.SUB_HEADER),
+                              ("nc_at_designs.csv", "nc", tab.NC_HEADER)):
+        if table[key] or key not in ("sub", "nc"):
+            run.write_csv(name, header, table[key])
     n = t.y.size
-    for v in vs:
-        run.save_figure(f"parity_{v.name}.png", parity_plot(
-            t.y * 1e6, v.y_pred * 1e6, title=f"{v.name}: peak amplitude at {n} fresh LHS "
+    for a in vs:
+        run.save_figure(f"parity_{a.name}.png", parity_plot(
+            t.y * 1e6, a.y_pred * 1e6, title=f"{a.name}: peak amplitude at {n} fresh LHS "
             "points", label="peak amplitude [µm]"))
-        run.save_figure(f"parity_log_{v.name}.png", parity_plot(
-            np.log10(t.y), np.log10(v.y_pred), title=f"{v.name}: log10 of the peak amplitude "
+        run.save_figure(f"parity_log_{a.name}.png", parity_plot(
+            np.log10(t.y), np.log10(a.y_pred), title=f"{a.name}: log10 of the peak amplitude "
             f"at {n} fresh LHS points", label="log10(y / 1 m)"))
-    run.write_json("surrogate_info.json", {v.name: dict(v.info) for v in vs})
-    fe = {"test": t.calls["test"], "mc": t.calls["mc"],
-          **{f"train_{v.name}": v.calls["fe_train"] for v in vs}}
-    sur = {v.name: v.calls["surrogate"] for v in vs}
+    run.write_json("surrogate_info.json", {a.name: {k: v for k, v in a.trained.to_dict().items()
+                                                    if k != "options"} for a in vs})
+    fe = {**t.calls, **{f"train_{a.name}": a.trained.fe_calls for a in vs}}
+    sur = {a.name: a.surrogate_calls for a in vs}
     meta = {"fe_calls": {**fe, "total": sum(fe.values())},
             "surrogate_calls": {**sur, "total": sum(sur.values())},
             "n_theta": p.validation.n_theta, "n_test": int(n),
@@ -263,9 +198,9 @@ def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> di
     run.write_json("calls.json", meta)
     keep = ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe", "pf_sur", "ok_mean",
             "ok_std", "ok_pf")
-    return {"variants": [v.name for v in vs], "meta": meta,
+    return {"variants": [a.name for a in vs], "meta": meta,
             "summary": [{k: x for k, x in zip(tab.MC_HEADER, r, strict=True) if k in keep}
-                        for r in mc]}
+                        for r in table["mc"]]}
 
 
 register_kind(Kind(
