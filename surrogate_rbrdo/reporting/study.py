@@ -24,9 +24,7 @@ from surrogate_rbrdo.reporting.plots_optimization import (
     plot_front_designs,
     plot_pareto_fronts,
 )
-from surrogate_rbrdo.reporting.plots_spindle import plot_campbell, plot_unbalance_response
-from surrogate_rbrdo.spindle.harmonic import tool_amplitude
-from surrogate_rbrdo.spindle.modal import campbell
+from surrogate_rbrdo.reporting.spindle import spindle_overview, write_overview
 from surrogate_rbrdo.study.problem import DESIGN_NAMES
 from surrogate_rbrdo.study.stages import (
     Optimisation,
@@ -187,22 +185,10 @@ def spindle_figures(out: Any, spindle: Any, designs: Mapping[str, np.ndarray], *
                     limit_um: float | None = None) -> None:
     """``critical_speeds.csv``, ``unbalance_response.csv``, ``campbell.png`` and
     ``unbalance_response.png`` of ``designs`` (nominal θ)."""
-    g = spindle.geometry
-    speeds = np.linspace(g.speed_min_rpm, g.speed_max_rpm, n_speeds)
-    camp_speeds = np.linspace(0.0, g.speed_max_rpm, campbell_speeds)
-    curves, camps, rows = {}, {}, []
-    for label, x in designs.items():
-        model = spindle.model(np.asarray(x, float))
-        curves[label] = (speeds, tool_amplitude(model, speeds)[0] * 1e6)
-        camps[label] = campbell(model, camp_speeds, n_modes=n_modes)
-        rows.append([label, *np.round(x, 3),
-                     " ".join(f"{c:.0f}" for c in camps[label].critical_speeds_rpm)])
-    out.write_csv("critical_speeds.csv", ["design", *DESIGN_NAMES, "critical_speeds_rpm"], rows)
-    out.write_csv("unbalance_response.csv", ["speed_rpm", *[f"{k}_um" for k in curves]],
-                  np.column_stack([speeds, *[c[1] for c in curves.values()]]).tolist())
-    out.save_figure("campbell.png", plot_campbell(camps, speed_max_rpm=g.speed_max_rpm))
-    out.save_figure("unbalance_response.png",
-                    plot_unbalance_response(curves, limit_um=limit_um))
+    ov = spindle_overview(spindle, designs, n_speeds=n_speeds, campbell_speeds=campbell_speeds,
+                          n_modes=n_modes)
+    write_overview(out, ov, n_modes=n_modes, speed_max_rpm=spindle.geometry.speed_max_rpm,
+                   limit_um=limit_um, critical_csv=True)
 
 
 def spotlight(opt: Optimisation, ver: Verification) -> dict[str, np.ndarray]:

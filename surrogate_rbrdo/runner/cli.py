@@ -37,7 +37,7 @@ def describe_kinds() -> str:
         stages = " → ".join(s.name for s in kind.stages) or "(report only)"
         out.append(f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
                    f"  stages: {stages} → report")
-    return "\n".join(out)
+    return "\n\n".join(out)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -190,20 +190,7 @@ def evaluate_points(
     """
     t0 = time.perf_counter()
     X = check_finite_array("points", np.atleast_2d(np.asarray(points, dtype=float)), ndim=2)
-    check_choice("backend", backend, BACKENDS)
-    check_choice("on_nonfinite", on_nonfinite, ("raise", "exclude"))
-    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 \
-            or n_jobs < -1:
-        raise ValueError(f"n_jobs = {n_jobs!r} is not allowed: must be -1 or an integer >= 1")
-    if cache is not None and not isinstance(cache, joblib.Memory):
-        raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
-    if not callable(func):
-        raise ValueError(f"func = {func!r} is not allowed: must be callable")
-    if n_outputs is not None and (isinstance(n_outputs, bool) or not isinstance(
-            n_outputs, (int, np.integer)) or n_outputs < 1):
-        raise ValueError(f"n_outputs = {n_outputs!r} is not allowed: must be None or an "
-                         "integer >= 1")
-
+    _check_args(func, backend, on_nonfinite, n_jobs, cache, n_outputs)
     n = X.shape[0]
     y = np.full(n if n_outputs is None else (n, int(n_outputs)), np.nan)
     from_cache = np.zeros(n, dtype=bool)
@@ -220,25 +207,7 @@ def evaluate_points(
         counter.add_cached(int(from_cache.sum()))
 
     if todo.size:
-        done: list[float] = []
-        try:
-            if backend == "sequential" or (backend != "dask" and n_jobs == 1):
-                _collect((target(func, X[i]) for i in todo), todo.size, progress, done, desc)
-            else:
-                ctx, closer = _parallel_config(backend, int(n_jobs), client)
-                try:
-                    with ctx:
-                        par = joblib.Parallel(return_as="generator")
-                        it = par(joblib.delayed(target)(func, X[i]) for i in todo)
-                        _collect(it, todo.size, progress, done, desc)
-                finally:
-                    if closer is not None and closer[0] is not None:
-                        closer[1].close()
-                        closer[0].close()
-        finally:
-            # count what was computed even if a later point raised (it is cached already)
-            if counter is not None and done:
-                counter.add(len(done))
+        done = _compute(target, func, X[todo], backend, n_jobs, client, counter, progress, desc)
         if n_outputs is not None:
             bad = [len(v) for v in done if len(v) != n_outputs]
             if bad:
@@ -256,6 +225,49 @@ def evaluate_points(
     return SampleResult(points=X, y=y, ok_mask=ok, from_cache=from_cache,
                         n_evaluated=int(todo.size), backend=backend,
                         wall_time_s=time.perf_counter() - t0)
+
+
+def _check_args(func: Any, backend: str, on_nonfinite: str, n_jobs: Any, cache: Any,
+                n_outputs: Any) -> None:
+    check_choice("backend", backend, BACKENDS)
+    check_choice("on_nonfinite", on_nonfinite, ("raise", "exclude"))
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 \
+            or n_jobs < -1:
+        raise ValueError(f"n_jobs = {n_jobs!r} is not allowed: must be -1 or an integer >= 1")
+    if cache is not None and not isinstance(cache, joblib.Memory):
+        raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
+    if not callable(func):
+        raise ValueError(f"func = {func!r} is not allowed: must be callable")
+    if n_outputs is not None and (isinstance(n_outputs, bool) or not isinstance(
+            n_outputs, (int, np.integer)) or n_outputs < 1):
+        raise ValueError(f"n_outputs = {n_outputs!r} is not allowed: must be None or an "
+                         "integer >= 1")
+
+
+def _compute(target: Callable[..., Any], func: Any, points: np.ndarray, backend: str,
+             n_jobs: int, client: Any, counter: CallCounter | None, progress: bool,
+             desc: str) -> list[Any]:
+    """``target(func, point)`` for every row, in this process or in parallel; counted (also
+    when a later point raises: the finished ones are cached already)."""
+    done: list[Any] = []
+    try:
+        if backend == "sequential" or (backend != "dask" and n_jobs == 1):
+            _collect((target(func, p) for p in points), len(points), progress, done, desc)
+        else:
+            ctx, closer = _parallel_config(backend, int(n_jobs), client)
+            try:
+                with ctx:
+                    par = joblib.Parallel(return_as="generator")
+                    it = par(joblib.delayed(target)(func, p) for p in points)
+                    _collect(it, len(points), progress, done, desc)
+            finally:
+                if closer is not None and closer[0] is not None:
+                    closer[1].close()
+                    closer[0].close()
+    finally:
+        if counter is not None and done:
+            counter.add(len(done))
+    return done
 
 
 def _collect(it: Any, total: int, progress: bool, out: list[float], desc: str) -> None:

@@ -251,49 +251,57 @@ def ak_mcs(
 
     X, y = initial if initial is not None else run(lhs(o.n_initial, b, rng=rng))
     pool = candidates if grid else np.asarray(candidates, dtype=float)
-    used = np.zeros(pool.shape if grid else pool.shape[0], dtype=bool)  # already in the design
+    bar = tqdm(total=o.max_added, desc="active learning", unit="pt") if progress else None
+    try:
+        return _learn(X, y, pool, limit, surrogate_factory, run, o, rng=rng, bar=bar,
+                      n_calls=lambda: counter.calls - start, width=width)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _learn(X: np.ndarray, y: np.ndarray, pool: np.ndarray | GridPool, limit: LimitState,
+           surrogate_factory: Callable[[np.random.Generator], Any],
+           run: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], o: AKMCSOptions, *,
+           rng: np.random.Generator, bar: Any, n_calls: Callable[[], int], width: int
+           ) -> AKMCSResult:
+    """The AK-MCS loop (module docstring) from the evaluated points ``X``, ``y``."""
+    used = np.zeros(pool.shape if isinstance(pool, GridPool) else pool.shape[0], dtype=bool)
     added: list[np.ndarray] = []
     history: list[dict[str, Any]] = []
     pf_hist: list[float] = []
     reason, converged = "max_added reached", False
-    bar = tqdm(total=o.max_added, desc="active learning", unit="pt") if progress else None
-    try:
-        while True:
-            model = surrogate_factory(rng.spawn(1)[0]).fit(X, y)
-            p = _predict(model, pool, o.predict_chunk)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                U = np.where(p.std > 0, np.abs(p.mean - limit.threshold) / p.std, np.inf)
-            U[used] = np.inf  # known exactly: never re-added (round-off can leave σ > 0)
-            pf_hist.append(float(np.mean(limit.failed(p.mean))))
-            history.append({"n_points": int(y.size), "pf": pf_hist[-1],
-                            "min_u": float(U.min()), "n_uncertain": int(np.sum(U < o.u_stop)),
-                            "uncertain_frac": float(np.mean(U < o.u_stop))})
-            fired = _stop(U, pf_hist, o)
-            if fired is not None:
-                reason, converged = fired, True
-                break
-            n_added = sum(a.shape[0] for a in added)
-            if n_added >= o.max_added:
-                break
-            idx, new = _pick(U, min(o.batch_size, o.max_added - n_added), pool)
-            if new.shape[0] == 0:
-                reason = "pool exhausted"
-                break
-            used[idx] = True
-            Xn, yn = run(new)
-            added.append(new)
-            X, y = np.vstack([X, Xn]), np.concatenate([y, yn])
-            if bar is not None:
-                bar.update(new.shape[0])
-    finally:
+    while True:
+        model = surrogate_factory(rng.spawn(1)[0]).fit(X, y)
+        p = _predict(model, pool, o.predict_chunk)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            U = np.where(p.std > 0, np.abs(p.mean - limit.threshold) / p.std, np.inf)
+        U[used] = np.inf  # known exactly: never re-added (round-off can leave σ > 0)
+        pf_hist.append(float(np.mean(limit.failed(p.mean))))
+        history.append({"n_points": int(y.size), "pf": pf_hist[-1], "min_u": float(U.min()),
+                        "n_uncertain": int(np.sum(U < o.u_stop)),
+                        "uncertain_frac": float(np.mean(U < o.u_stop))})
+        fired = _stop(U, pf_hist, o)
+        if fired is not None:
+            reason, converged = fired, True
+            break
+        n_added = sum(a.shape[0] for a in added)
+        if n_added >= o.max_added:
+            break
+        idx, new = _pick(U, min(o.batch_size, o.max_added - n_added), pool)
+        if new.shape[0] == 0:
+            reason = "pool exhausted"
+            break
+        used[idx] = True
+        Xn, yn = run(new)
+        added.append(new)
+        X, y = np.vstack([X, Xn]), np.concatenate([y, yn])
         if bar is not None:
-            bar.close()
-    return AKMCSResult(
-        model=model, X=X, y=y,
-        added=np.vstack(added) if added else np.empty((0, width)),
-        n_calls=counter.calls - start, pf=pf_hist[-1], converged=converged,
-        stop_reason=reason, history=history,
-    )
+            bar.update(new.shape[0])
+    return AKMCSResult(model=model, X=X, y=y,
+                       added=np.vstack(added) if added else np.empty((0, width)),
+                       n_calls=n_calls(), pf=pf_hist[-1], converged=converged,
+                       stop_reason=reason, history=history)
 
 
 __all__ = ["AKMCSOptions", "AKMCSResult", "GridPool", "ak_mcs"]

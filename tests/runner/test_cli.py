@@ -123,3 +123,26 @@ def test_run_ids_never_collide(tmp_path):
     a = RunFolder.open(tmp_path, "e")
     b = RunFolder.open(tmp_path, "e")
     assert a.path != b.path
+
+
+def test_version_and_kinds_describe_each_kind(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.startswith("rbrdo 0.")
+    assert main(["kinds"]) == 0
+    out = capsys.readouterr().out
+    for kind in ("study", "surrogate_validation", "spindle_report"):
+        block = out.split(f"{kind}\n", 1)[1].split("\n\n")[0]
+        assert "tables: [experiment]" in block and "stages:" in block
+    assert "stages: surrogate → design_model → optimise → refine → verify → report" in out
+
+
+def test_a_truncated_terminal_table_says_so(tmp_path, capsys):
+    designs = ", ".join(f"d{i} = [2000.0, {300.0 + 20 * i}, 65.0]" for i in range(14))
+    cfg = write(tmp_path, SPINDLE_CFG.replace("designs = { a = [3000.0, 300.0, 80.0] }",
+                                              f"designs = {{ {designs} }}")
+                .replace("campbell_speeds = 3", "campbell_speeds = 3\nn_campbell = 1"))
+    assert main(["run", str(cfg), "--results", str(tmp_path / "res"), "--no-progress"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len([line for line in out if line.startswith("  design=")]) == 12
+    assert out[-1].startswith("  ... first 12 of 14 rows shown; all in ")

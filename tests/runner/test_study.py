@@ -231,3 +231,19 @@ def test_bad_config_fails_before_work(tmp_path, old, new, match):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="bad")
     # nothing happened: no run folder, no FE cache
     assert not (tmp_path / "res").exists()
+
+
+def test_optimizer_is_chosen_from_the_config(tmp_path):
+    """optimization.optimizer selects from the OPTIMIZERS registry (optuna's NSGA-II here):
+    the same stages, the runs recorded with the optimiser's name and seed."""
+    text = TINY.replace("n_jobs = 1\n\n[verification]",
+                        'n_jobs = 1\noptimizer = "optuna"\n\n[verification]')
+    assert 'optimizer = "optuna"' in text
+    run = run_experiment(_write(tmp_path, text), results_dir=tmp_path / "res", run_id="o",
+                         progress=False)
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["status"] == "complete" and meta["optimizer"] == "optuna"
+    assert set(meta["optimizer_seeds"]) == {"rbrdo 10%", "rbrdo 1%", "rdo 5%", "rbdo 5%",
+                                            "deterministic 5%"}
+    rows = list(csv.DictReader((run.path / "compromises.csv").open()))
+    assert len(rows) == 5

@@ -248,6 +248,34 @@ class ResonanceSurrogate:
         return self.Q_train[:, 3].copy(), y_loo
 
 
+def _sub_model_data(Q: np.ndarray, cfg: Any, n_max_rpm: float, band: np.ndarray,
+                    threshold_m: float | None
+                    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float, int]:
+    """Training rows and targets of every sub-model, the constant ζ and the flank count."""
+    nc, ares, atop, y = Q.T
+    r = n_max_rpm / nc
+    ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
+    rows = {"nc": np.arange(Q.shape[0]), "ares": np.flatnonzero(ares_ok),
+            "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
+    targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc, "ares_local": ares}
+    if cfg.res_nc_local > 0:
+        rows["nc_local"] = np.flatnonzero(np.abs(r - 1.0) <= cfg.res_nc_local)
+    if cfg.res_ares_local > 0:
+        if threshold_m is None or not threshold_m > 0:
+            raise ValueError(f"threshold_m = {threshold_m!r} is not allowed with "
+                             "res_ares_local > 0: give delta_lim in metres (> 0)")
+        rows["ares_local"] = np.flatnonzero(
+            (r >= 1.0) & (np.abs(np.log(ares / threshold_m)) <= cfg.res_ares_local))
+    ratio = atop / ares
+    zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
+    zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
+    if zrows.size >= cfg.res_zeta_min_points:
+        rows["zeta"], targets["zeta"] = zrows, np.zeros(Q.shape[0])
+        targets["zeta"][zrows] = zeta_pts
+    zeta_const = float(np.exp(np.mean(np.log(zeta_pts)))) if zrows.size else 0.003
+    return rows, targets, zeta_const, int(zrows.size)
+
+
 def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                             rng: np.random.Generator, n_max_rpm: float,
                             n_design: int = 3,
@@ -282,32 +310,11 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     if Q.ndim != 2 or Q.shape != (Z.shape[0], 4) or not np.all(np.isfinite(Q) & (Q > 0)):
         raise ValueError(f"Q with shape {Q.shape} is not allowed: must be ({Z.shape[0]}, 4), "
                          "finite and positive")
-    nc, ares, atop, y = Q.T
-    r = n_max_rpm / nc
-    all_rows = np.arange(Z.shape[0])
     band = np.zeros(Z.shape[0], bool) if is_band is None else np.asarray(is_band, bool)
     if band.shape != (Z.shape[0],):
         raise ValueError(f"is_band with shape {band.shape} is not allowed: must be "
                          f"({Z.shape[0]},)")
-    ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
-    rows = {"nc": all_rows, "ares": np.flatnonzero(ares_ok),
-            "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
-    targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc, "ares_local": ares}
-    if cfg.res_nc_local > 0:
-        rows["nc_local"] = np.flatnonzero(np.abs(r - 1.0) <= cfg.res_nc_local)
-    if cfg.res_ares_local > 0:
-        if threshold_m is None or not threshold_m > 0:
-            raise ValueError(f"threshold_m = {threshold_m!r} is not allowed with "
-                             "res_ares_local > 0: give delta_lim in metres (> 0)")
-        rows["ares_local"] = np.flatnonzero(
-            (r >= 1.0) & (np.abs(np.log(ares / threshold_m)) <= cfg.res_ares_local))
-    ratio = atop / ares
-    zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
-    zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
-    if zrows.size >= cfg.res_zeta_min_points:
-        rows["zeta"], targets["zeta"] = zrows, np.zeros(Z.shape[0])
-        targets["zeta"][zrows] = zeta_pts
-    zeta_const = float(np.exp(np.mean(np.log(zeta_pts)))) if zrows.size else 0.003
+    rows, targets, zeta_const, n_zeta = _sub_model_data(Q, cfg, n_max_rpm, band, threshold_m)
     min_rows = Z.shape[1] + 2
     subs: dict[str, Any] = {}
     children = dict(zip(("nc", "ares", "bg", "zeta"), rng.spawn(4), strict=True))
@@ -337,7 +344,7 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
         "sub_models": {k: {"n_train": int(rows[k].size),
                            "hyperparameters": s.info["hyperparameters"]}
                        for k, s in subs.items()},
-        "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
+        "zeta_const": zeta_const, "zeta_points": n_zeta, "n_band": int(band.sum()),
         **opts,
         "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
         "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
