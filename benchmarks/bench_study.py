@@ -37,18 +37,23 @@ from threadpoolctl import threadpool_limits
 from surrogate_rbrdo.core import LimitState
 from surrogate_rbrdo.formulations import DeterministicOptions, FormulationOptions, make_formulation
 from surrogate_rbrdo.optimization import NSGA2Options, run_many, run_nsga2
-from surrogate_rbrdo.runner.config import TABLE4_STD
-from surrogate_rbrdo.runner.design_model import DesignModelOptions, fit_design_model
-from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
+from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle import reference_spindle
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.study import TABLE4_STD
+from surrogate_rbrdo.surrogates.design_model import DesignModelOptions, fit_design_model
+from surrogate_rbrdo.surrogates.structured import (
+    GlobalOptions,
+    SubstructureOptions,
+    train_surrogate,
+)
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 PROBLEMS = {
     # name: (surrogate config, response, delta_lim in m)
-    "rated": (SurrogateConfig(structure="substructure", n_doe=60, n_start=3, n_jobs=2),
+    "rated": (SubstructureOptions(n_doe=60, n_start=3, n_jobs=2),
               ResponseSpec("at_speed", 24000.0), 1.5e-6),
-    "peak": (SurrogateConfig(n_doe=200, n_jobs=2), ResponseSpec(), 19.5e-6),
+    "peak": (GlobalOptions(n_doe=200, n_jobs=2), ResponseSpec(), 19.5e-6),
 }
 
 
@@ -58,8 +63,9 @@ def build(problem: str, seed: int = 7):
     cfg, resp, dlim = PROBLEMS[problem]
     limit = LimitState(dlim)
     r_sur, r_dm, r_crn, r_opt = np.random.default_rng(seed).spawn(4)
-    sur, info = train_peak_surrogate(sp, inputs, limit, cfg, rng=r_sur,
-                                     cache_dir="results/_bench_cache", response=resp)
+    tr = train_surrogate(sp, inputs, limit, cfg, rng=r_sur,
+                         cache=fe_cache("results/_bench_cache"), response=resp)
+    sur, info = tr.model, {**tr.info, "fe_calls": tr.fe_calls}
     dm = fit_design_model(sp, DesignModelOptions(n_train=30, n_validate=0, n_jobs=2), rng=r_dm)
     lo, hi = sp.design_map.bounds[:, 0], sp.design_map.bounds[:, 1]
     det = DeterministicOptions(resonance="none")

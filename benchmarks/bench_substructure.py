@@ -22,20 +22,22 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from surrogate_rbrdo.doe import lhs  # noqa: E402
-from surrogate_rbrdo.runner.config import TABLE4_STD  # noqa: E402
-from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate  # noqa: E402
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec  # noqa: E402
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
+from surrogate_rbrdo.study import TABLE4_STD  # noqa: E402
+from surrogate_rbrdo.surrogates.structured import (  # noqa: E402
+    SubstructureOptions,
+    train_surrogate,
+)
 
 STD = np.array(TABLE4_STD)   # the paper's Table 4 CoVs of the bearing stiffness
 
 
 def one(sp, resp, n_doe, P, N, seed):
-    cfg = SurrogateConfig(structure="substructure", n_doe=n_doe, n_jobs=1,
-                          backend="sequential", n_start=3)
+    cfg = SubstructureOptions(n_doe=n_doe, n_jobs=1, backend="sequential", n_start=3)
     t0 = time.perf_counter()
-    sur, info = train_peak_surrogate(sp, None, None, cfg, rng=np.random.default_rng(seed),
-                                     response=resp)
+    tr = train_surrogate(sp, None, None, cfg, rng=np.random.default_rng(seed), response=resp)
+    sur, info = tr.model, {**tr.info, "fe_calls": tr.fe_calls}
     train = time.perf_counter() - t0
     X = lhs(P, sp.design_map.bounds, rng=np.random.default_rng(seed + 1))
     th = np.random.default_rng(seed + 2).normal(1.0, STD, size=(N, 2))

@@ -41,12 +41,15 @@ import numpy as np  # noqa: E402
 from pymoo.indicators.hv import HV  # noqa: E402
 
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
-from surrogate_rbrdo.runner.config import (  # noqa: E402
-    limit_from_config,
-    response_from_config,
-    spindle_from_config,
-    uncertainty_from_config,
+from surrogate_rbrdo.runner.schema import parse  # noqa: E402
+from surrogate_rbrdo.runner.tables import (  # noqa: E402
+    LimitTable,
+    SpindleTable,
+    UncertaintyTable,
+    build_inputs,
+    build_spindle,
 )
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec  # noqa: E402
 
 
 def fronts(run: Path, max_points: int) -> dict[str, tuple[float, np.ndarray]]:
@@ -90,10 +93,11 @@ def main() -> None:
             raise SystemExit(f"{r}: its config differs from {a.runs[0]}'s in {differ}: not the "
                              "same problem")
     cfg = cfgs[0]
-    sp = spindle_from_config(cfg.get("spindle", {}))
-    inputs = uncertainty_from_config(cfg.get("uncertainty", {}), sp.theta_bearings)
-    limit = limit_from_config(cfg.get("limit", {}))
-    resp = response_from_config(cfg.get("response", {}))
+    sp = build_spindle(parse(SpindleTable, cfg.get("spindle", {}), "spindle"))
+    inputs = build_inputs(parse(UncertaintyTable, cfg.get("uncertainty", {}), "uncertainty"),
+                          sp.theta_bearings)
+    limit = parse(LimitTable, cfg.get("limit", {}), "limit").limit()
+    resp = parse(ResponseSpec, cfg.get("response", {}), "response")
     fe = (resp.fe_response(sp, "condensed") if resp.kind == "at_speed"
           else resp.fe_response(sp))
     theta = inputs.sample(a.n_theta, rng=np.random.default_rng(a.seed))

@@ -23,9 +23,9 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from surrogate_rbrdo.runner.config import TABLE4_STD  # noqa: E402
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse  # noqa: E402
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
+from surrogate_rbrdo.study import TABLE4_STD  # noqa: E402
 
 STD = np.array(TABLE4_STD)   # the paper's Table 4 CoVs of the bearing stiffness
 DESIGNS = {  # experiments/surrogate_validation.toml

@@ -40,7 +40,6 @@ import numpy as np  # noqa: E402
 from joblib import Parallel, delayed  # noqa: E402
 
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
-from surrogate_rbrdo.runner.config import TABLE4_STD  # noqa: E402
 from surrogate_rbrdo.spindle.assembly import build_model  # noqa: E402
 from surrogate_rbrdo.spindle.harmonic import (  # noqa: E402
     _parabola_peak,
@@ -49,6 +48,7 @@ from surrogate_rbrdo.spindle.harmonic import (  # noqa: E402
     unbalance_response,
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle  # noqa: E402
+from surrogate_rbrdo.study import TABLE4_STD  # noqa: E402
 
 STD = np.array(TABLE4_STD)   # the paper's Table 4 CoVs of the bearing stiffness
 

@@ -15,13 +15,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import ModelError
+
 
 @dataclass
 class CallCounter:
-    """Thread-safe counter of model evaluations (one call = one (x, θ) point)."""
+    """Thread-safe counter of model evaluations (one call = one (x, θ) point).
+
+    ``calls`` counts evaluations actually computed; ``cached`` counts results a cached
+    sampler loaded instead of computing them (``add_cached``), so a resumed run can say both.
+    """
 
     calls: int = 0
     batches: int = 0
+    cached: int = 0
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     def add(self, n: int) -> None:
@@ -29,10 +36,15 @@ class CallCounter:
             self.calls += int(n)
             self.batches += 1
 
+    def add_cached(self, n: int) -> None:
+        with self._lock:
+            self.cached += int(n)
+
     def reset(self) -> None:
         with self._lock:
             self.calls = 0
             self.batches = 0
+            self.cached = 0
 
 
 class CountingResponse:
@@ -48,8 +60,6 @@ class CountingResponse:
         self.counter = counter if counter is not None else CallCounter()
 
     def __call__(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        from surrogate_rbrdo.core.errors import ModelError
-
         x = np.atleast_2d(np.asarray(x, dtype=float))
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         y = np.asarray(self.func(x, theta), dtype=float)
@@ -64,3 +74,25 @@ class CountingResponse:
                 f"theta={theta[j].tolist()}"
             )
         return y
+
+
+class CountingDesigns:
+    """Wrap a per-design function ``f(x (P, d)) -> anything`` and count designs (rows).
+
+    For deterministic models called once per population (e.g. the g_det design model).
+
+    >>> f = CountingDesigns(lambda x: x.sum(axis=1))
+    >>> f(np.ones((4, 3))).tolist(), f.counter.calls
+    ([3.0, 3.0, 3.0, 3.0], 4)
+    """
+
+    def __init__(self, func: Callable[[np.ndarray], object],
+                 counter: CallCounter | None = None) -> None:
+        self.func = func
+        self.counter = counter if counter is not None else CallCounter()
+
+    def __call__(self, x: np.ndarray) -> object:
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        out = self.func(x)
+        self.counter.add(x.shape[0])
+        return out

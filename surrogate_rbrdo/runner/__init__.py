@@ -1,1 +1,2 @@
-"""Configs -> objects, run folders, and the ``rbrdo`` command line."""
+"""Config schema and parsing, run folders, the ``rbrdo`` command line and the experiment kinds
+(thin compositions of library calls; ``docs/runner.md``)."""

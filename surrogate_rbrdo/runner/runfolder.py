@@ -1,8 +1,18 @@
-"""Run folders: ``results/<experiment>/<run-id>/`` with atomic writes and ``meta.json``.
+"""Run folders ``results/<experiment>/<run-id>/``: status, stage results, atomic 0644 files.
 
-A run never overwrites another: the run id is a UTC timestamp plus a short random suffix.
-Every file is written to a temporary name in the same folder and moved into place with
-``os.replace``, so a crash never leaves a half-written table.
+Rules (tested in ``tests/runner/test_runfolder.py``):
+
+* a run id and an experiment name are one folder name each (letters, digits, ``._-``), so a
+  run folder never lies outside the results root;
+* a folder that holds a run is never reused silently: a finished run is replaced only with
+  ``overwrite``, an unfinished one is continued with ``resume`` (or replaced);
+* ``meta.json`` says ``status``: ``running`` (with the pid), ``complete`` (written last),
+  ``failed`` (with the error) or ``interrupted`` (with the signal); only ``complete`` is
+  finished;
+* every stage's frozen result is pickled to ``stages/<n>-<name>.pkl`` when the stage ends, so
+  a resumed run loads it instead of recomputing;
+* every file is written to a temporary name in the same folder, made 0644 and moved into
+  place with ``os.replace``, so a crash never leaves a half-written table.
 """
 
 from __future__ import annotations
@@ -11,8 +21,12 @@ import csv
 import io
 import json
 import os
+import pickle
 import platform
+import re
 import secrets
+import shutil
+import socket
 import subprocess
 import time
 from collections.abc import Iterable, Mapping, Sequence
@@ -22,28 +36,61 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 PACKAGES = ("surrogate_rbrdo", "numpy", "scipy", "scikit-learn", "smt", "pymoo", "optuna",
-            "joblib", "matplotlib", "dask", "distributed")
+            "joblib", "matplotlib", "pydantic", "dask", "distributed")
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
+FILE_MODE = 0o644
 
 
-def atomic_write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically (temporary file + ``os.replace``)."""
+def check_name(where: str, value: Any) -> str:
+    """A run id or experiment name: one folder name (no path separators, no ``..``)."""
+    if not isinstance(value, str) or not NAME.fullmatch(value) or ".." in value:
+        raise ValueError(f"{where} = {value!r} is not allowed: must be 1-128 letters, digits, "
+                         "'.', '_' or '-', starting with a letter or digit (it names a folder "
+                         "under the results root)")
+    return value
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``), mode 0644."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    try:
+        tmp.write_bytes(data)
+        os.chmod(tmp, FILE_MODE)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
     return path
 
 
-def atomic_write_csv(path: str | Path, header: Sequence[str], rows: Iterable[Sequence[Any]]
-                     ) -> Path:
+def atomic_write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically, mode 0644."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def csv_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """CSV with ``\\n`` line ends."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(header)
-    for r in rows:
-        w.writerow(r)
-    return atomic_write_text(path, buf.getvalue())
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def rows_text(rows: Sequence[Mapping[str, Any]]) -> str:
+    """CSV of dict rows (columns: the union of keys in first-seen order; the csv module's
+    default ``\\r\\n`` line ends, as the study's tables always had)."""
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(dict.fromkeys(k for r in rows for k in r)),
+                       extrasaction="raise")
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
 
 
 def git_sha(cwd: str | Path | None = None) -> str | None:
@@ -65,82 +112,183 @@ def package_versions() -> dict[str, str | None]:
     return out
 
 
-@dataclass
-class RunFolder:
-    """A results folder for one run of one experiment, with timings and a manifest."""
-
-    path: Path
-    experiment: str
-    started: float = field(default_factory=time.time)
-    timings: dict[str, float] = field(default_factory=dict)
-    files: list[str] = field(default_factory=list)
-
-    @classmethod
-    def create(cls, root: str | Path, experiment: str, run_id: str | None = None) -> RunFolder:
-        if run_id is None:
-            stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-            run_id = f"{stamp}-{secrets.token_hex(3)}"
-        path = Path(root) / experiment / run_id
-        path.mkdir(parents=True, exist_ok=True)
-        return cls(path=path, experiment=experiment)
-
-    def file(self, name: str) -> Path:
-        self.files.append(name)
-        return self.path / name
-
-    def write_text(self, name: str, text: str) -> Path:
-        return atomic_write_text(self.file(name), text)
-
-    def write_json(self, name: str, data: Any) -> Path:
-        return self.write_text(name, json.dumps(data, indent=2, default=_json_default) + "\n")
-
-    def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Path:
-        return atomic_write_csv(self.file(name), header, rows)
-
-    def timed(self, step: str) -> _Timer:
-        return _Timer(self, step)
-
-    def write_meta(self, *, seeds: Mapping[str, Any], extra: Mapping[str, Any] | None = None
-                   ) -> Path:
-        meta = {
-            "experiment": self.experiment,
-            "run_folder": str(self.path),
-            "started_utc": datetime.fromtimestamp(self.started, UTC).isoformat(),
-            "wall_time_s": time.time() - self.started,
-            "timings_s": self.timings,
-            "git_sha": git_sha(Path(__file__).parent),
-            "python": platform.python_version(),
-            "platform": platform.platform(),
-            "packages": package_versions(),
-            "seeds": dict(seeds),
-            "files": sorted(set(self.files)),
-            **(dict(extra) if extra else {}),
-        }
-        return self.write_json("meta.json", meta)
-
-
-class _Timer:
-    def __init__(self, run: RunFolder, step: str) -> None:
-        self.run, self.step = run, step
-
-    def __enter__(self) -> _Timer:
-        self.t0 = time.perf_counter()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.run.timings[self.step] = self.run.timings.get(self.step, 0.0) + (
-            time.perf_counter() - self.t0)
-
-
-def _json_default(o: Any) -> Any:
-    import numpy as np
-
+def json_default(o: Any) -> Any:
     if isinstance(o, np.ndarray):
         return o.tolist()
     if isinstance(o, (np.floating, np.integer, np.bool_)):
         return o.item()
     if isinstance(o, Path):
         return str(o)
+    if isinstance(o, Mapping):
+        return dict(o)
+    if isinstance(o, (tuple, set, frozenset)):
+        return list(o)
     if hasattr(o, "to_dict"):
         return o.to_dict()
     raise TypeError(f"cannot serialise {type(o).__name__}")
+
+
+def read_meta(path: Path) -> dict[str, Any] | None:
+    """``meta.json`` of a run folder (``None``: none or unreadable)."""
+    try:
+        return json.loads((path / "meta.json").read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _alive(meta: Mapping[str, Any]) -> bool:
+    """Whether the process that wrote a ``running`` meta.json still runs (same host)."""
+    pid = meta.get("pid")
+    if meta.get("status") != "running" or meta.get("host") != socket.gethostname() \
+            or not isinstance(pid, int):
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class AlreadyComplete(Exception):
+    """``resume`` of a run that has finished: nothing to do."""
+
+
+@dataclass
+class RunFolder:
+    """One run's folder: files, stage results and ``meta.json``."""
+
+    path: Path
+    experiment: str
+    run_id: str
+    meta: dict[str, Any] = field(default_factory=dict)
+    started: float = field(default_factory=time.time)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def open(cls, root: str | Path, experiment: str, run_id: str | None = None, *,
+             resume: bool = False, overwrite: bool = False) -> RunFolder:
+        """Create (or, with ``resume``, reopen) ``root/experiment/run_id``.
+
+        Raises ``ValueError`` naming ``--overwrite``/``--resume``/a new id when the folder
+        holds a run that may not be reused, :class:`AlreadyComplete` when ``resume`` finds a
+        finished run.
+        """
+        check_name("experiment.name", experiment)
+        if run_id is None:
+            run_id = f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}-{secrets.token_hex(3)}"
+        check_name("--run-id", run_id)
+        path = Path(root) / experiment / run_id
+        meta = read_meta(path) if path.exists() else None
+        if path.exists():
+            cls._check_reuse(path, meta, resume=resume, overwrite=overwrite)
+        elif resume:
+            raise ValueError(f"--resume: there is no run folder {str(path)!r} to continue")
+        if overwrite and path.exists():
+            shutil.rmtree(path)
+        if meta is None or overwrite:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.mkdir()
+            meta = {}
+        return cls(path=path, experiment=experiment, run_id=run_id, meta=dict(meta))
+
+    @staticmethod
+    def _check_reuse(path: Path, meta: Mapping[str, Any] | None, *, resume: bool,
+                     overwrite: bool) -> None:
+        where = repr(str(path))
+        if meta is None:
+            raise ValueError(f"{where} exists and is not a run folder (no readable meta.json): "
+                             "choose another --run-id")
+        status = meta.get("status", "unknown")
+        if _alive(meta):
+            raise ValueError(f"{where} is being written by process {meta.get('pid')} (status "
+                             "'running'): wait for it or choose another --run-id")
+        if overwrite:
+            return
+        if status == "complete":
+            if resume:
+                raise AlreadyComplete(f"{where} is already complete: nothing to resume")
+            raise ValueError(f"{where} holds a finished run: pass --overwrite to replace it or "
+                             "choose another --run-id")
+        if not resume:
+            raise ValueError(f"{where} holds an unfinished run (status {status!r}): pass "
+                             "--resume to continue it, --overwrite to start over, or choose "
+                             "another --run-id")
+
+    # ------------------------------------------------------------------ files
+    def file(self, name: str) -> Path:
+        return self.path / name
+
+    def write_bytes(self, name: str, data: bytes) -> Path:
+        return atomic_write_bytes(self.file(name), data)
+
+    def write_text(self, name: str, text: str) -> Path:
+        return atomic_write_text(self.file(name), text)
+
+    def write_json(self, name: str, data: Any) -> Path:
+        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+
+    def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Path:
+        return self.write_text(name, csv_text(header, rows))
+
+    def write_rows(self, name: str, rows: Sequence[Mapping[str, Any]]) -> Path:
+        return self.write_text(name, rows_text(rows))
+
+    def save_figure(self, name: str, fig: Any) -> Path:
+        """Save a matplotlib figure (format from the suffix, 120 dpi)."""
+        buf = io.BytesIO()
+        fig.savefig(buf, dpi=120, format=Path(name).suffix[1:])
+        return self.write_bytes(name, buf.getvalue())
+
+    # ------------------------------------------------------------------ stage results
+    def _stage_file(self, index: int, name: str) -> Path:
+        return self.path / "stages" / f"{index:02d}-{name}.pkl"
+
+    def has_stage(self, index: int, name: str) -> bool:
+        return self._stage_file(index, name).is_file()
+
+    def save_stage(self, index: int, name: str, result: Any, seconds: float) -> None:
+        atomic_write_bytes(self._stage_file(index, name),
+                           pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        self.timings[name] = seconds
+        self.meta.setdefault("stages", {})[name] = {"status": "done", "time_s": seconds}
+        self.write_meta()
+
+    def load_stage(self, index: int, name: str) -> Any:
+        try:
+            return pickle.loads(self._stage_file(index, name).read_bytes())
+        except Exception as exc:  # noqa: BLE001 - any unpickling trouble means "cannot resume"
+            raise ValueError(f"--resume: the saved result of stage {name!r} in "
+                             f"{str(self.path)!r} cannot be loaded ({type(exc).__name__}: "
+                             f"{exc}); start over with --overwrite") from None
+
+    # ------------------------------------------------------------------ meta.json
+    def write_meta(self, **update: Any) -> Path:
+        self.meta.update(update)
+        return self.write_json("meta.json", self.meta)
+
+    def start(self, *, kind: str, seeds: Mapping[str, Any]) -> None:
+        """Mark the run ``running`` (this process) with the environment it runs in."""
+        sessions = list(self.meta.get("sessions", []))
+        now = datetime.fromtimestamp(self.started, UTC).isoformat()
+        sessions.append(now)
+        self.write_meta(
+            experiment=self.experiment, run_id=self.run_id, kind=kind, status="running",
+            pid=os.getpid(), host=socket.gethostname(),
+            started_utc=self.meta.get("started_utc", now), sessions=sessions,
+            git_sha=git_sha(Path(__file__).parent), python=platform.python_version(),
+            platform=platform.platform(), packages=package_versions(), seeds=dict(seeds))
+
+    def stop(self, status: str, **info: Any) -> None:
+        """Mark the run ``complete``, ``failed`` or ``interrupted``."""
+        files = sorted(p.name for p in self.path.iterdir() if p.is_file()
+                       and not p.name.startswith("."))
+        self.write_meta(status=status, finished_utc=datetime.now(UTC).isoformat(),
+                        wall_time_s=time.time() - self.started,
+                        timings_s={**self.meta.get("timings_s", {}), **self.timings},
+                        files=sorted(set(files) | {"meta.json"}), **info)
+
+
+__all__ = ["AlreadyComplete", "RunFolder", "atomic_write_bytes", "atomic_write_text",
+           "check_name", "csv_text", "json_default", "read_meta", "rows_text"]

@@ -33,11 +33,14 @@ shared file system.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import joblib
 import numpy as np
+from tqdm.auto import tqdm
 
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.errors import ModelError
@@ -110,11 +113,9 @@ def _call_vector(func: Callable[[np.ndarray], np.ndarray], point: np.ndarray) ->
 
 def _parallel_config(backend: str, n_jobs: int, client: Any) -> tuple[Any, Any]:
     """Return (context manager, cluster-to-close)."""
-    import joblib
-
     if backend != "dask":
         return joblib.parallel_config(backend=backend, n_jobs=n_jobs), None
-    try:
+    try:  # optional dependency (the [dask] extra), imported only for this backend
         from distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - optional dependency
         raise ValueError(
@@ -147,6 +148,7 @@ def evaluate_points(
     progress: bool = False,
     client: Any = None,
     n_outputs: int | None = None,
+    desc: str = "evaluating",
 ) -> SampleResult:
     """Evaluate ``func`` on every row of ``points``.
 
@@ -174,6 +176,8 @@ def evaluate_points(
         ``None`` (default): ``func`` returns a float and ``y`` is ``(n,)``. An integer ``k``:
         ``func`` returns ``k`` values (any array-like) and ``y`` is ``(n, k)``; a return of
         another length raises ``ValueError``.
+    desc : str
+        Label of the progress bar.
 
     Returns
     -------
@@ -184,26 +188,9 @@ def evaluate_points(
     ModelError
         With ``on_nonfinite="raise"``, if ``func`` returns NaN or inf (message names the point).
     """
-    import time
-
-    import joblib
-
     t0 = time.perf_counter()
     X = check_finite_array("points", np.atleast_2d(np.asarray(points, dtype=float)), ndim=2)
-    check_choice("backend", backend, BACKENDS)
-    check_choice("on_nonfinite", on_nonfinite, ("raise", "exclude"))
-    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 \
-            or n_jobs < -1:
-        raise ValueError(f"n_jobs = {n_jobs!r} is not allowed: must be -1 or an integer >= 1")
-    if cache is not None and not isinstance(cache, joblib.Memory):
-        raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
-    if not callable(func):
-        raise ValueError(f"func = {func!r} is not allowed: must be callable")
-    if n_outputs is not None and (isinstance(n_outputs, bool) or not isinstance(
-            n_outputs, (int, np.integer)) or n_outputs < 1):
-        raise ValueError(f"n_outputs = {n_outputs!r} is not allowed: must be None or an "
-                         "integer >= 1")
-
+    _check_args(func, backend, on_nonfinite, n_jobs, cache, n_outputs)
     n = X.shape[0]
     y = np.full(n if n_outputs is None else (n, int(n_outputs)), np.nan)
     from_cache = np.zeros(n, dtype=bool)
@@ -216,27 +203,11 @@ def evaluate_points(
                 y[i] = target(func, X[i])
                 from_cache[i] = True
     todo = np.flatnonzero(~from_cache)
+    if counter is not None and from_cache.any():
+        counter.add_cached(int(from_cache.sum()))
 
     if todo.size:
-        done: list[float] = []
-        try:
-            if backend == "sequential" or (backend != "dask" and n_jobs == 1):
-                _collect((target(func, X[i]) for i in todo), todo.size, progress, done)
-            else:
-                ctx, closer = _parallel_config(backend, int(n_jobs), client)
-                try:
-                    with ctx:
-                        par = joblib.Parallel(return_as="generator")
-                        it = par(joblib.delayed(target)(func, X[i]) for i in todo)
-                        _collect(it, todo.size, progress, done)
-                finally:
-                    if closer is not None and closer[0] is not None:
-                        closer[1].close()
-                        closer[0].close()
-        finally:
-            # count what was computed even if a later point raised (it is cached already)
-            if counter is not None and done:
-                counter.add(len(done))
+        done = _compute(target, func, X[todo], backend, n_jobs, client, counter, progress, desc)
         if n_outputs is not None:
             bad = [len(v) for v in done if len(v) != n_outputs]
             if bad:
@@ -256,10 +227,51 @@ def evaluate_points(
                         wall_time_s=time.perf_counter() - t0)
 
 
-def _collect(it: Any, total: int, progress: bool, out: list[float]) -> None:
-    if progress:
-        from tqdm.auto import tqdm
+def _check_args(func: Any, backend: str, on_nonfinite: str, n_jobs: Any, cache: Any,
+                n_outputs: Any) -> None:
+    check_choice("backend", backend, BACKENDS)
+    check_choice("on_nonfinite", on_nonfinite, ("raise", "exclude"))
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 \
+            or n_jobs < -1:
+        raise ValueError(f"n_jobs = {n_jobs!r} is not allowed: must be -1 or an integer >= 1")
+    if cache is not None and not isinstance(cache, joblib.Memory):
+        raise ValueError(f"cache = {cache!r} is not allowed: must be a joblib.Memory or None")
+    if not callable(func):
+        raise ValueError(f"func = {func!r} is not allowed: must be callable")
+    if n_outputs is not None and (isinstance(n_outputs, bool) or not isinstance(
+            n_outputs, (int, np.integer)) or n_outputs < 1):
+        raise ValueError(f"n_outputs = {n_outputs!r} is not allowed: must be None or an "
+                         "integer >= 1")
 
-        it = tqdm(it, total=total, desc="evaluating", unit="pt")
+
+def _compute(target: Callable[..., Any], func: Any, points: np.ndarray, backend: str,
+             n_jobs: int, client: Any, counter: CallCounter | None, progress: bool,
+             desc: str) -> list[Any]:
+    """``target(func, point)`` for every row, in this process or in parallel; counted (also
+    when a later point raises: the finished ones are cached already)."""
+    done: list[Any] = []
+    try:
+        if backend == "sequential" or (backend != "dask" and n_jobs == 1):
+            _collect((target(func, p) for p in points), len(points), progress, done, desc)
+        else:
+            ctx, closer = _parallel_config(backend, int(n_jobs), client)
+            try:
+                with ctx:
+                    par = joblib.Parallel(return_as="generator")
+                    it = par(joblib.delayed(target)(func, p) for p in points)
+                    _collect(it, len(points), progress, done, desc)
+            finally:
+                if closer is not None and closer[0] is not None:
+                    closer[1].close()
+                    closer[0].close()
+    finally:
+        if counter is not None and done:
+            counter.add(len(done))
+    return done
+
+
+def _collect(it: Any, total: int, progress: bool, out: list[float], desc: str) -> None:
+    if progress:
+        it = tqdm(it, total=total, desc=desc, unit="pt", leave=False)
     for v in it:
         out.append(v)

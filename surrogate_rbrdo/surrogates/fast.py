@@ -277,7 +277,11 @@ def _from_smt(m: object) -> dict:
 
 
 def _from_sklearn(g: object, offset: np.ndarray | None, scale: np.ndarray | None) -> dict:
-    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Product
+    from sklearn.gaussian_process.kernels import (  # heavy (~0.8 s): only for a GPR
+        RBF,
+        ConstantKernel,
+        Product,
+    )
 
     k = g.kernel_
     amp = 1.0

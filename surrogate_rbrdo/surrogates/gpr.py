@@ -85,6 +85,7 @@ class GPR(SurrogateWrapper):
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> GPR:
         """Fit on ``X`` (n, D) and ``y`` (n,); returns ``self``."""
+        # heavy (~0.8 s import): only when a GPR is fitted
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel
 

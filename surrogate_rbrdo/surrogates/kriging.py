@@ -97,7 +97,7 @@ class _SmtKriging(SurrogateWrapper):
 
     def fit(self, X: np.ndarray, y: np.ndarray) -> _SmtKriging:
         """Fit on ``X`` (n, D) and ``y`` (n,); returns ``self``."""
-        from smt.surrogate_models import KRG
+        from smt.surrogate_models import KRG  # heavy (~1 s import): only when fitting
 
         rng, X, y = self._start_fit(X, y)
         o = self.options

@@ -141,6 +141,26 @@ def _closed_form_loo(surrogate: Any) -> tuple[np.ndarray, np.ndarray]:
     return surrogate.y_train_ - resid, np.sqrt(sigma2 / q)
 
 
+@dataclass(frozen=True, eq=False)
+class LOOSummary:
+    """Leave-one-out of a fitted structure at its training points, in ``y`` units.
+
+    ``method`` names how (``closed_form``: Dubrule's formula on the Kriging of ``t(y)``;
+    ``closed_form_combined``: each sub-model's closed form, combined by the structure's rule;
+    ``closed_form_condensed``: the Kriging of the condensed rotor, coupled at nominal θ);
+    ``r2_fitted``/``rmse_fitted`` are in the space the model was fitted in (``log y`` for the
+    structured models); ``sub`` holds each sub-model's own :class:`LOOResult`.
+    """
+
+    method: str
+    n_train: int
+    r2_fitted: float
+    rmse_fitted: float
+    y_true: np.ndarray
+    y_loo: np.ndarray
+    sub: dict[str, LOOResult]
+
+
 @dataclass(frozen=True)
 class MCComparison:
     """Surrogate-MC vs true-MC statistics at designs, with the same θ sample.

@@ -48,8 +48,9 @@ def test_spindle_report_runs_and_writes_a_run_folder(tmp_path, capsys):
 HEAD = "[experiment]\nname='t'\nkind='spindle_report'\n"
 BAD_CONFIGS = [
     ("[experiment]\nname='t'\nkind='nope'\n",
-     r"unknown experiment kind 'nope'; known: .*spindle_report"),
-    (HEAD + "colour=1\n", r"unknown key\(s\) \['colour'\] in \[experiment\]"),
+     r"experiment.kind = 'nope' is not allowed: unknown experiment kind; known: "
+     r".*spindle_report"),
+    (HEAD + "colour=1\n", r"unknown key experiment.colour; allowed: \['description', 'kind'"),
     (HEAD + "[report]\nn_speeds=1\n", r"report.n_speeds = 1 is not allowed"),
     (HEAD + "[report]\ndesigns={a=[9000.0, 300.0, 60.0]}\n",
      r"preload_N = 9000.0 is not allowed: must lie in \[1000.0, 3000.0\]"),
@@ -62,7 +63,7 @@ BAD_CONFIGS = [
     (HEAD + "[spindle]\ntheta_bearings=['front', 'front']\n",
      r"theta_bearings = \['front', 'front'\] is not allowed.*appears twice"),
     (HEAD + "[spindle]\ntheta_bearings=['nose']\n", r"theta_bearings: 'nose' is not a bearing"),
-    ("[experiment]\nname='t'\n", r"experiment.kind = None is not allowed"),
+    ("[experiment]\nname='t'\n", r"experiment.kind is missing: it is required"),
     ("[experiment\n", r"not valid TOML"),
 ]
 
@@ -119,6 +120,29 @@ def test_atomic_write_leaves_no_temporary_files(tmp_path):
 
 
 def test_run_ids_never_collide(tmp_path):
-    a = RunFolder.create(tmp_path, "e")
-    b = RunFolder.create(tmp_path, "e")
+    a = RunFolder.open(tmp_path, "e")
+    b = RunFolder.open(tmp_path, "e")
     assert a.path != b.path
+
+
+def test_version_and_kinds_describe_each_kind(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.startswith("rbrdo 0.")
+    assert main(["kinds"]) == 0
+    out = capsys.readouterr().out
+    for kind in ("study", "surrogate_validation", "spindle_report"):
+        block = out.split(f"{kind}\n", 1)[1].split("\n\n")[0]
+        assert "tables: [experiment]" in block and "stages:" in block
+    assert "stages: surrogate → design_model → optimise → refine → verify → report" in out
+
+
+def test_a_truncated_terminal_table_says_so(tmp_path, capsys):
+    designs = ", ".join(f"d{i} = [2000.0, {300.0 + 20 * i}, 65.0]" for i in range(14))
+    cfg = write(tmp_path, SPINDLE_CFG.replace("designs = { a = [3000.0, 300.0, 80.0] }",
+                                              f"designs = {{ {designs} }}")
+                .replace("campbell_speeds = 3", "campbell_speeds = 3\nn_campbell = 1"))
+    assert main(["run", str(cfg), "--results", str(tmp_path / "res"), "--no-progress"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len([line for line in out if line.startswith("  design=")]) == 12
+    assert out[-1].startswith("  ... first 12 of 14 rows shown; all in ")

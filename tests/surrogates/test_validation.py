@@ -94,5 +94,10 @@ def test_compare_mc_grid_and_joint_agree(fitted5):
 
 
 def test_parity_plot(tmp_path):
-    p = parity_plot([1.0, 2.0, 3.0], [1.1, 1.9, 3.2], tmp_path / "parity.png", y_std=[0.1] * 3)
-    assert p.exists() and p.stat().st_size > 1000
+    fig = parity_plot([1.0, 2.0, 3.0], [1.1, 1.9, 3.2], y_std=[0.1] * 3, label="y [m]")
+    ax = fig.axes[0]
+    assert ax.get_title() and ax.get_xlabel() == "true y [m]"
+    lo, hi = ax.get_ylim()
+    assert lo <= 1.0 - 0.2 and hi >= 3.2 + 0.2           # every error bar inside the axes
+    fig.savefig(tmp_path / "parity.png")
+    assert (tmp_path / "parity.png").stat().st_size > 1000

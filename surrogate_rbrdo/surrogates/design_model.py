@@ -30,11 +30,15 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.doe.lhs import lhs
+from surrogate_rbrdo.sampling.evaluate import evaluate_points
 from surrogate_rbrdo.spindle.harmonic import peak_tool_amplitude
 from surrogate_rbrdo.spindle.modal import first_natural_frequency
 from surrogate_rbrdo.spindle.stress import max_von_mises
+from surrogate_rbrdo.surrogates.fast import ProductKernelPredictor
+from surrogate_rbrdo.surrogates.kriging import KrgSE, KrigingOptions
 
 QUANTITIES = ("stress_ratio", "first_natural_frequency_hz")
 
@@ -83,15 +87,23 @@ def fe_design_quantities(spindle, x: np.ndarray) -> np.ndarray:
     return out
 
 
-def _fe_batches(spindle, X: np.ndarray, n_jobs: int) -> np.ndarray:
-    if n_jobs == 1 or X.shape[0] < 4:
-        return fe_design_quantities(spindle, X)
-    from joblib import Parallel, delayed
+@dataclass(frozen=True)
+class PointwiseDesignQuantities:
+    """``f(x) -> [stress_ratio, f_n1_hz]`` of one design (for counted, parallel sampling)."""
 
-    parts = np.array_split(X, n_jobs)
-    res = Parallel(n_jobs=n_jobs, backend="loky")(
-        delayed(fe_design_quantities)(spindle, p) for p in parts)
-    return np.vstack(res)
+    spindle: Any
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return fe_design_quantities(self.spindle, x)[0]
+
+
+def _fe_designs(spindle, X: np.ndarray, n_jobs: int, counter: CallCounter | None,
+                progress: bool, desc: str) -> np.ndarray:
+    """FE design quantities of the rows of ``X`` (one counted FE call per design)."""
+    res = evaluate_points(PointwiseDesignQuantities(spindle), X, n_jobs=n_jobs,
+                          counter=counter, n_outputs=len(QUANTITIES), progress=progress,
+                          desc=desc)
+    return res.y
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,8 +131,6 @@ class DesignModel:
     def __post_init__(self) -> None:
         # separable predictor with an empty θ part: a plain numpy kernel product, ~10x less
         # overhead per call than smt's predict_values (called once per generation)
-        from surrogate_rbrdo.surrogates import ProductKernelPredictor
-
         fast = tuple(ProductKernelPredictor.from_model(m, n_design=self.lower.size)
                      for m in self.models)
         blocks = tuple(f.prepare_theta(np.empty((1, 0))) for f in fast)
@@ -137,7 +147,8 @@ class DesignModel:
 
 
 def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Generator,
-                     progress: bool = False) -> DesignModel:
+                     progress: bool = False, counter: CallCounter | None = None,
+                     label: str = "") -> DesignModel:
     """Fit the g_det design model on FE designs and validate it on fresh ones.
 
     Parameters
@@ -147,16 +158,21 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
     rng : numpy.random.Generator
         Children are spawned for the training LHS, the validation LHS and the Kriging fits.
     progress : bool
-        Print nothing extra (FE work is short); kept for a uniform signature.
+        Progress bars over the FE designs.
+    counter : CallCounter, optional
+        Receives every FE call (``validation["n_fe_calls"]`` is this fit's share).
+    label : str
+        Prefix of the progress bars.
     """
-    from surrogate_rbrdo.surrogates import KrgSE, KrigingOptions
-
+    counter = counter if counter is not None else CallCounter()
+    start = counter.calls
     r_train, r_val, r_fit = rng.spawn(3)
     b = spindle.design_map.bounds
     lo, hi = b[:, 0].astype(float), b[:, 1].astype(float)
     t0 = time.perf_counter()
     X = lhs(options.n_train, b, rng=r_train)
-    Y = _fe_batches(spindle, X, options.n_jobs)
+    Y = _fe_designs(spindle, X, options.n_jobs, counter, progress,
+                    f"{label} FE: design-model DOE".strip())
     U = (X - lo) / (hi - lo)
     kopts = KrigingOptions(theta0=1.0, theta_lower=1e-3, theta_upper=100.0, n_start=5)
     models = tuple(KrgSE(kopts, rng=r).fit(U, np.log(Y[:, j]))
@@ -165,12 +181,11 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
     dm = DesignModel(lower=lo, upper=hi, yield_pa=yield_pa, models=models)
     val: dict[str, Any] = {"n_train": options.n_train, "n_validate": options.n_validate,
                            "fit_time_s": time.perf_counter() - t0}
-    n_fe = options.n_train
     if options.n_validate:
         Xv = lo + r_val.random((options.n_validate, lo.size)) * (hi - lo)  # fresh, uniform
-        Yv = _fe_batches(spindle, Xv, options.n_jobs)
+        Yv = _fe_designs(spindle, Xv, options.n_jobs, counter, progress,
+                         f"{label} FE: design-model validation".strip())
         Pv = dm.quantities(Xv)
-        n_fe += options.n_validate
         for j, name in enumerate(QUANTITIES):
             rel = np.abs(Pv[:, j] - Yv[:, j]) / np.abs(Yv[:, j])
             val[f"{name}_max_rel_err"] = float(rel.max())
@@ -178,6 +193,6 @@ def fit_design_model(spindle, options: DesignModelOptions, *, rng: np.random.Gen
         val["stress_ratio_max_abs_err"] = float(np.abs(Pv[:, 0] - Yv[:, 0]).max())
         val["stress_ratio_max_fe"] = float(Yv[:, 0].max())
         val["validation_designs"] = Xv.tolist()
-    val["n_fe_calls"] = n_fe
+    val["n_fe_calls"] = counter.calls - start
     val["time_s"] = time.perf_counter() - t0
     return DesignModel(lower=lo, upper=hi, yield_pa=yield_pa, models=models, validation=val)

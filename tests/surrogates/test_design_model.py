@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.runner.design_model import (
+from surrogate_rbrdo.spindle import reference_spindle
+from surrogate_rbrdo.surrogates.design_model import (
     DesignModelOptions,
     fe_design_quantities,
     fit_design_model,
 )
-from surrogate_rbrdo.spindle import reference_spindle
 
 
 @pytest.fixture(scope="module")

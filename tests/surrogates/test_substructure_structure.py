@@ -4,21 +4,27 @@ Known answers: the full FE model (``AtSpeedAmplitudeResponse``, ``PeakAmplitudeR
 polynomials for the Chebyshev interpolation, the training data for the Kriging.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
+from scipy.optimize import approx_fprime
 
-from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
-from surrogate_rbrdo.runner.substructure_surrogate import (
-    MultiOutputKriging,
-    barycentric_weights,
-    chebyshev_nodes,
-)
+import surrogate_rbrdo.spindle.coupling as mod
+from surrogate_rbrdo.spindle.effects import HousingFlexibility
 from surrogate_rbrdo.spindle.evaluate import (
     AtSpeedAmplitudeResponse,
     PeakAmplitudeResponse,
     ResponseSpec,
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.surrogates.multioutput import MultiOutputKriging
+from surrogate_rbrdo.surrogates.refine import refine_surrogate
+from surrogate_rbrdo.surrogates.structured import SubstructureOptions, train_surrogate
+from surrogate_rbrdo.surrogates.structured.substructure import (
+    barycentric_weights,
+    chebyshev_nodes,
+)
 
 SP = reference_spindle()
 AT = ResponseSpec("at_speed", 24000.0)
@@ -29,11 +35,10 @@ DESIGNS = np.array([[3000.0, 442.5, 65.7], [3000.0, 594.5, 80.0], [2000.0, 500.0
 THETA = np.random.default_rng(3).normal(1.0, [0.0605, 0.0641], size=(60, 2))
 
 
-def _train(n_doe, response, **kw):
-    cfg = SurrogateConfig(structure="substructure", n_doe=n_doe, n_jobs=1,
-                          backend="sequential", n_start=2, **kw)
-    return train_peak_surrogate(SP, None, None, cfg, rng=np.random.default_rng(0),
-                                response=response)
+def _train(n_doe, response, sp=SP, **kw):
+    cfg = SubstructureOptions(n_doe=n_doe, n_jobs=1, backend="sequential", n_start=2, **kw)
+    tr = train_surrogate(sp, None, None, cfg, rng=np.random.default_rng(0), response=response)
+    return tr.model, {**tr.info, "fe_calls": tr.fe_calls, "trained": tr}
 
 
 @pytest.fixture(scope="module")
@@ -98,17 +103,9 @@ def test_falls_back_to_rows_without_theta_affinity_or_with_a_wide_sample(monkeyp
     """With a housing stage on a θ bearing the impedance is rational in θ: the surrogate must
     couple row by row (known answer: the FE model). A sample over 0.001–1 000 exceeds the
     round-off bound and is coupled row by row too."""
-    from dataclasses import replace
-
-    import surrogate_rbrdo.spindle.coupling as mod
-    from surrogate_rbrdo.spindle.effects import HousingFlexibility
-
     sp = replace(SP, effects=(*SP.effects, HousingFlexibility(
         bearings=("front",), k_N_per_m=3e8, m_kg=12.0, c_Ns_per_m=3000.0)))
-    cfg = SurrogateConfig(structure="substructure", n_doe=40, n_jobs=1, backend="sequential",
-                          n_start=2)
-    sur, _ = train_peak_surrogate(sp, None, None, cfg, rng=np.random.default_rng(0),
-                                  response=AT)
+    sur, _ = _train(40, AT, sp=sp)
     assert not sur.theta_affine
     y = sur(DESIGNS[:3], THETA)
     y_fe = AtSpeedAmplitudeResponse(sp, 24000.0)(DESIGNS[:3], THETA)
@@ -118,8 +115,7 @@ def test_falls_back_to_rows_without_theta_affinity_or_with_a_wide_sample(monkeyp
     assert np.abs(sur(DESIGNS[:3], THETA) / y - 1).max() > 1e-4
     # a wide sample on an affine spindle: flagged, then coupled row by row
     wide = np.exp(np.random.default_rng(8).uniform(np.log(1e-3), np.log(1e3), size=(60, 2)))
-    sur2, _ = train_peak_surrogate(SP, None, None, cfg, rng=np.random.default_rng(0),
-                                   response=AT)
+    sur2, _ = _train(40, AT)
     y_wide = sur2(DESIGNS[:2], wide)
     monkeypatch.setattr(mod, "POLY_MIN_RATIO", 10**9)
     np.testing.assert_array_equal(y_wide, sur2(DESIGNS[:2], wide))
@@ -150,8 +146,6 @@ def test_peak_surrogate_matches_the_fe_peak():
 
 
 def test_likelihood_gradient_matches_finite_differences():
-    from scipy.optimize import approx_fprime
-
     rng = np.random.default_rng(2)
     X = rng.random((18, 3))
     Y = np.column_stack([np.sin(3 * X[:, 0]), X[:, 1] ** 2, X[:, 2] * X[:, 0]])
@@ -177,20 +171,15 @@ def test_bad_designs_and_theta_are_refused(at_speed, x, theta, match):
         sur(x, theta)
 
 
-@pytest.mark.parametrize("kw,match", [
-    ({"active_learning": True}, "active_learning = True is not allowed with structure = "
-     "'substructure'"),
-    ({"sub_n_speeds": 1}, "sub_n_speeds = 1 is not allowed"),
-])
-def test_bad_config(kw, match):
-    with pytest.raises(ValueError, match=match):
-        SurrogateConfig(structure="substructure", **kw)
+def test_bad_options():
+    with pytest.raises(ValueError, match="sub_n_speeds = 1 is not allowed"):
+        SubstructureOptions(sub_n_speeds=1)
+    with pytest.raises(TypeError, match="active_learning"):
+        SubstructureOptions(active_learning=True)     # no such option: the DOE is static
 
 
 def test_refine_refuses_the_substructure_surrogate(at_speed):
-    from surrogate_rbrdo.runner.refine import refine_surrogate
-
-    sur, _ = at_speed
+    _, info = at_speed
     with pytest.raises(ValueError, match="'substructure' is not allowed in refine_surrogate"):
-        refine_surrogate(sur, SP, DESIGNS[:1], THETA[:2], SurrogateConfig(), None,
-                         rng=np.random.default_rng(0), response=AT)
+        refine_surrogate(info["trained"], SP, DESIGNS[:1], THETA[:2], None,
+                         rng=np.random.default_rng(0))

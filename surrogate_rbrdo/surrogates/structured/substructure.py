@@ -1,4 +1,4 @@
-"""Substructure surrogate (``[surrogate] structure = "substructure"``): Kriging of the rotor's
+"""Structure ``"substructure"``: Kriging of the rotor's
 condensed dynamic stiffness over the design, exact bearing coupling for θ.
 
 What is modelled
@@ -31,39 +31,46 @@ degree-2 polynomial in ``Ω`` plus a rational part with poles far outside the ra
 interpolation converges geometrically), and the peak is searched exactly as the FE model's
 (``harmonic.peak_search``).
 
-Multi-output Kriging (:class:`MultiOutputKriging`, written here): one correlation shared by
-all entries of ``S``, its likelihood from the ``n × n`` matrix ``Y Yᵀ``. smt's ``KRG`` warns
-that multi-output training is unsupported and may become an error; one smt model per entry
-(hundreds to thousands) would cost minutes of fitting and of prediction; scikit-learn's
-multi-output GP works but its likelihood gradient builds an ``n × n × k`` array (800 MB and
-minutes for 200 designs × 2 500 outputs).
+The Kriging of ``S`` is :class:`~surrogate_rbrdo.surrogates.multioutput.MultiOutputKriging`
+(one correlation shared by all entries, its likelihood from the ``n × n`` matrix ``Y Yᵀ``).
 """
-
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.protocols import LimitState, Prediction
 from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.core.validate import check_int
+from surrogate_rbrdo.doe import lhs
+from surrogate_rbrdo.sampling.evaluate import evaluate_points
 from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta, theta_affine
 from surrogate_rbrdo.spindle.coupling import (
     coupled_tool_amplitude,
     coupled_tool_amplitude_sample,
 )
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.substructure import (
+    PointwiseCondensed,
     RetainedLayout,
     condensed_from_vector,
     condensed_vector,
     retained_layout,
     unbalance_force,
 )
-from surrogate_rbrdo.surrogates._common import blas_threads
+from surrogate_rbrdo.surrogates.multioutput import MultiOutputKriging
+from surrogate_rbrdo.surrogates.structured.base import (
+    SamplingOptions,
+    TrainedSurrogate,
+    register_structure,
+)
+from surrogate_rbrdo.surrogates.validation import LOOSummary, validation_metrics
 
 #: entries of S smaller than this fraction of ``sqrt(|S_ii| |S_jj|)`` at every training design
 #: are round-off of exact zeros (e.g. x–y coupling without gyroscopics) and are set to zero
@@ -104,163 +111,6 @@ def barycentric_weights(nodes: np.ndarray, at: np.ndarray) -> np.ndarray:
         c = w / d
     c = np.where(hit.any(axis=1, keepdims=True), hit.astype(float), c)
     return c / c.sum(axis=1, keepdims=True)
-
-
-def _corr(U: np.ndarray, V: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Anisotropic squared-exponential correlation ``exp(-Σ_j θ_j (u_j - v_j)²)``."""
-    d2 = (U[:, None, :] - V[None, :, :]) ** 2
-    return np.exp(-(d2 @ theta))
-
-
-@dataclass(eq=False)
-class MultiOutputKriging:
-    """Kriging of many outputs with one anisotropic squared-exponential correlation.
-
-    Inputs are scaled to the unit box ``bounds``; every output column is centred and scaled
-    (columns that do not vary are kept as constants). Model: each standardised column
-    ``(y_c − μ_c) / s_c`` is a zero-mean Gaussian process with covariance ``σ² R_θ``, one
-    ``σ²`` and one correlation ``θ`` for all columns, chosen to maximise the concentrated
-    likelihood summed over the ``k`` columns,
-
-        ℓ(θ) = −(n k / 2) log σ̂² − (k / 2) log |R_θ|,   σ̂² = tr(R_θ⁻¹ Y Yᵀ) / (n k),
-
-    which needs only the ``n × n`` matrix ``Y Yᵀ``: the cost does not grow with ``k`` (the
-    condensed stiffness at 12 speeds has ~2 500 outputs). This is smt's reduced likelihood
-    (Jones et al. 1998) with the trend replaced by the column mean, for several outputs.
-    ``θ`` is optimised in ``log10`` by L-BFGS-B from ``n_start`` starts (the first at
-    ``θ = 1``, the others log-uniform in ``[0.01, 100]``), bounds ``[1e-8, 1e4]`` (an input
-    ``S`` does not depend on, the preload, goes to the lower bound).
-    """
-
-    bounds: np.ndarray
-    n_start: int = 3
-    nugget: float = 1e-12
-    theta_: np.ndarray | None = None
-    mean_: np.ndarray | None = None
-    std_: np.ndarray | None = None
-    vary_: np.ndarray | None = None
-    U_: np.ndarray | None = field(default=None, repr=False)
-    W_: np.ndarray | None = field(default=None, repr=False)
-    Rinv_diag_: np.ndarray | None = field(default=None, repr=False)
-    Yn_: np.ndarray | None = field(default=None, repr=False)
-    nugget_used_: float | None = None
-
-    def _nll(self, log_theta: np.ndarray, D2: np.ndarray, YY: np.ndarray, k: int
-             ) -> tuple[float, np.ndarray]:
-        """``−ℓ / k`` and its gradient in ``log10 θ`` (``D2``: squared distances, (n, n, d)).
-
-        ``∂/∂θ_j = −tr(R⁻¹ R_j R⁻¹ YYᵀ) / (2 k σ̂²) + tr(R⁻¹ R_j) / 2`` with
-        ``R_j = −D2_j ∘ R``.
-        """
-        n = D2.shape[0]
-        th = 10.0 ** log_theta
-        R = np.exp(-(D2 @ th)) + self.nugget * np.eye(n)
-        try:
-            L = np.linalg.cholesky(R)
-        except np.linalg.LinAlgError:
-            return np.inf, np.zeros_like(log_theta)
-        from scipy.linalg import cho_solve
-
-        Ri = cho_solve((L, True), np.eye(n))
-        RiYY = cho_solve((L, True), YY)
-        s2 = np.trace(RiYY) / (n * k)
-        if not s2 > 0:
-            return np.inf, np.zeros_like(log_theta)
-        f = 0.5 * n * np.log(s2) + np.sum(np.log(np.diag(L)))
-        A = RiYY @ Ri                                        # R⁻¹ YYᵀ R⁻¹ (symmetric)
-        dR = -D2 * R[..., None]                              # (n, n, d)
-        g = (-np.einsum("ij,ijk->k", A, dR) / (2.0 * k * s2)
-             + 0.5 * np.einsum("ij,ijk->k", Ri, dR))
-        return float(f), g * th * np.log(10.0)
-
-    def fit(self, X: np.ndarray, Y: np.ndarray, *, rng: np.random.Generator
-            ) -> MultiOutputKriging:
-        from scipy.optimize import minimize
-
-        X = np.asarray(X, dtype=float)
-        Y = np.asarray(Y, dtype=float)
-        d = X.shape[1]
-        if X.shape[0] < d + 1:
-            raise ValueError(f"n_doe = {X.shape[0]} is not allowed: the Kriging of the "
-                             f"condensed rotor needs at least d + 1 = {d + 1} designs")
-        self.mean_ = Y.mean(axis=0)
-        sd = Y.std(axis=0)
-        scale = np.abs(Y).max(axis=0)
-        self.vary_ = sd > 1e-13 * np.where(scale > 0, scale, 1.0)
-        self.std_ = np.where(self.vary_, sd, 1.0)
-        if not self.vary_.any():
-            raise ModelError("MultiOutputKriging: no output varies over the training designs "
-                             "(the condensed rotor does not depend on the design variables)")
-        Yn = (Y[:, self.vary_] - self.mean_[self.vary_]) / self.std_[self.vary_]
-        U = self._u(X)
-        D2 = (U[:, None, :] - U[None, :, :]) ** 2
-        YY = Yn @ Yn.T
-        k = Yn.shape[1]
-        starts = [np.zeros(d)] + [rng.uniform(-2.0, 2.0, d) for _ in range(self.n_start - 1)]
-        best = None
-        with blas_threads(1):
-            for x0 in starts:
-                r = minimize(self._nll, x0, args=(D2, YY, k), method="L-BFGS-B",
-                             jac=True, bounds=[(-8.0, 4.0)] * d)
-                if best is None or r.fun < best.fun:
-                    best = r
-        if best is None or not np.isfinite(best.fun):
-            raise ModelError("MultiOutputKriging: no correlation parameters with a finite "
-                             "likelihood (duplicate designs?)")
-        self.theta_ = 10.0 ** best.x
-        self.U_, self.Yn_ = U, Yn
-        self._condition()
-        return self
-
-    def _condition(self) -> None:
-        """Weights ``R⁻¹ Y`` by Cholesky solves (an explicit inverse loses digits: ``R`` of
-        smooth data has a condition number near ``1 / nugget``)."""
-        from scipy.linalg import cho_factor, cho_solve
-
-        n = self.U_.shape[0]
-        R = _corr(self.U_, self.U_, self.theta_)
-        for nug in self.nugget * 10.0 ** np.arange(5):
-            try:
-                c = cho_factor(R + nug * np.eye(n), lower=True)
-                break
-            except np.linalg.LinAlgError:
-                continue
-        else:
-            raise ModelError("MultiOutputKriging: the correlation matrix is singular "
-                             "(duplicate designs?)")
-        self.nugget_used_ = float(nug)
-        self.W_ = cho_solve(c, self.Yn_)
-        self.Rinv_diag_ = np.diag(cho_solve(c, np.eye(n))).copy()
-
-    def _u(self, X: np.ndarray) -> np.ndarray:
-        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
-        return (np.atleast_2d(np.asarray(X, dtype=float)) - lo) / (hi - lo)
-
-    def predict(self, X: np.ndarray) -> np.ndarray:
-        """Predicted outputs ``(P, n_out)`` (the Kriging mean)."""
-        U = self._u(X)
-        out = np.tile(self.mean_, (U.shape[0], 1))   # the constant columns: their mean
-        out[:, self.vary_] = (_corr(U, self.U_, self.theta_) @ self.W_) * self.std_[self.vary_] \
-            + self.mean_[self.vary_]
-        return out
-
-    def loo(self) -> np.ndarray:
-        """Closed-form leave-one-out predictions of the training outputs, ``(n, n_out)``.
-
-        Simple-Kriging identity ``e_i = (R⁻¹ y)_i / (R⁻¹)_ii`` (Dubrule 1983), with the
-        correlation, the column means and the scaling all fixed at the full-data fit (Dubrule's
-        ordinary-Kriging form re-estimates the mean; measured: it changes S by ≤ 1.4e-6 and
-        the LOO y by ≤ 3e-6 relative at n = 30).
-        """
-        e = self.W_ / self.Rinv_diag_[:, None]
-        out = np.tile(self.mean_, (self.U_.shape[0], 1))
-        out[:, self.vary_] = (self.Yn_ - e) * self.std_[self.vary_] + self.mean_[self.vary_]
-        return out
-
-    @property
-    def length_scales(self) -> list[float]:
-        """``1 / sqrt(2 θ)`` per input (unit box), comparable to an RBF length scale."""
-        return (1.0 / np.sqrt(2.0 * self.theta_)).tolist()
 
 
 @dataclass(eq=False)
@@ -363,6 +213,19 @@ class SubstructureSurrogate:
             raise ModelError("substructure surrogate: non-finite amplitude")
         return out
 
+    def predict(self, Z: np.ndarray) -> Prediction:
+        """Point predictions at joint points; no predictive std (NaN): the Kriging of ``S``
+        has one per entry of ``S``, not one of ``y``."""
+        y = self.response_points(Z)
+        return Prediction(mean=y, std=np.full_like(y, np.nan))
+
+    def loo_summary(self) -> LOOSummary:
+        """LOO of the Kriging of ``S`` at the training designs, ``y`` at nominal θ (metrics of
+        ``log y``)."""
+        y_tr, y_lo = self.loo_points()
+        lm = validation_metrics(np.log(y_tr), np.log(y_lo))
+        return LOOSummary("closed_form_condensed", self.n_train, lm.r2, lm.rmse, y_tr, y_lo, {})
+
     def loo_points(self) -> tuple[np.ndarray, np.ndarray]:
         """``y`` at the training designs (nominal θ): exact (their FE condensation, coupled)
         and leave-one-out (closed-form LOO of the Kriging of ``S``, coupled the same way)."""
@@ -431,5 +294,68 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
                                  info=info)
 
 
-__all__ = ["MultiOutputKriging", "SubstructureSurrogate", "barycentric_weights",
-           "chebyshev_nodes", "fit_substructure_surrogate", "speed_nodes"]
+@dataclass(frozen=True)
+class SubstructureOptions(SamplingOptions):
+    """Options of the substructure surrogate (``structure = "substructure"``; static DOE over
+    the designs only, θ is exact).
+
+    Attributes
+    ----------
+    n_doe : int
+        Training designs (maximin LHS over the design box; one FE condensation each), >= 7.
+    n_start : int
+        Multistarts of the multi-output Kriging's likelihood optimisation.
+    sub_n_speeds : int
+        The peak response: Chebyshev speed nodes at which ``S`` is trained and between which
+        it is interpolated (the at-speed response uses its one speed).
+    """
+
+    structure: ClassVar[str] = "substructure"
+    n_doe: int = 200
+    n_start: int = 5
+    sub_n_speeds: int = 12
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_int("n_doe", self.n_doe, minimum=7)
+        check_int("n_start", self.n_start, minimum=1)
+        check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
+
+
+@register_structure("substructure", SubstructureOptions, "Kriging of the rotor's condensed "
+                    "dynamic stiffness over the designs, bearings and θ coupled exactly")
+def train_substructure(spindle: Any, inputs: Any, limit: LimitState, response: ResponseSpec,
+                       options: SubstructureOptions, *, rng: np.random.Generator,
+                       cache: Any = None, counter: Any, progress: bool = False,
+                       label: str = "") -> TrainedSurrogate:
+    """LHS over the designs → FE condensations → fit (``inputs`` and ``limit`` are not
+    needed: θ is coupled exactly)."""
+    o = options
+    r_doe, r_fit = require_rng(rng).spawn(2)
+    start, start_cached = counter.calls, counter.cached
+    t0 = time.perf_counter()
+    xb = np.asarray(spindle.design_map.bounds, dtype=float)
+    nodes = speed_nodes(spindle, response.kind, response.speed_rpm, o.sub_n_speeds)
+    m0 = spindle.model(spindle.baseline)
+    lay = retained_layout(m0)
+    func = PointwiseCondensed(spindle, tuple(float(s) for s in nodes), lay.nodes,
+                              tuple(complex(u) for u in m0.unbalance))
+    X = lhs(o.n_doe, xb, rng=r_doe)
+    res = evaluate_points(
+        func, X, n_jobs=o.n_jobs, backend=o.backend, cache=cache, counter=counter,
+        on_nonfinite="raise", progress=progress, n_outputs=func.n_outputs(lay.n_dof),
+        client="local" if o.backend == "dask" else None,
+        desc=f"{label} FE: condensed rotor".strip())
+    sample_s = time.perf_counter() - t0
+    model = fit_substructure_surrogate(spindle, X, res.y, kind=response.kind,
+                                       speed_rpm=response.speed_rpm, nodes_rpm=nodes,
+                                       rng=r_fit, n_start=o.n_start)
+    info = {**model.info, "sampling_time_s": sample_s, "bounds": xb.tolist(),
+            "active_learning": False, "response": response.label}
+    model.info = dict(info)
+    return TrainedSurrogate("substructure", model, o, response, fe_calls=counter.calls - start,
+                            fe_cache_hits=counter.cached - start_cached, info=info)
+
+
+__all__ = ["SubstructureOptions", "SubstructureSurrogate", "barycentric_weights",
+           "chebyshev_nodes", "fit_substructure_surrogate", "speed_nodes", "train_substructure"]

@@ -17,7 +17,7 @@ Response definition (unchanged: ``y`` = peak over the speed range) and the struc
 lies at ``r_pk = 1 / sqrt(1 - 2ζ²)``; ``ρ_env(r) = max_{r' ≤ r} ρ(r')`` is ``ρ`` below
 ``r_pk`` and 1 above (the peak over a range ending at ``r`` is the resonance itself once it is
 inside). Sub-models (each a Kriging of the log of a positive quantity, fitted by
-:func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`):
+:func:`~surrogate_rbrdo.surrogates.transformed.fit_transformed`):
 
 * ``nc``: ``log n_c`` on all training points (smooth; decides where the step lies);
 * ``ares``: ``log A_res`` on the LHS points with ``r ≥ res_ares_r_min`` and the band points
@@ -45,136 +45,35 @@ Options (default off; ``docs/surrogates.md``, run ``struct3``):
   (``res_band_lim``): P_f of a design whose resonance is within ~1 % of δ_lim needs A_res to
   a fraction of a per cent there.
 
-The θ blocks of every sub-model are cached (one :class:`PeakSurrogate` per sub-model), so a
+The θ blocks of every sub-model are cached (one
+:class:`~surrogate_rbrdo.surrogates.transformed.TransformedKriging` per sub-model), so a
 population × θ sample costs a few matrix products.
 
->>> import numpy as np
->>> round(float(rho(np.array(1.0 / np.sqrt(1 - 2 * 0.01**2)), 0.01)), 12)
-1.0
->>> float(rho_env(np.array(1.2), 0.01)), round(float(zeta_from_ratio(rho(0.9, 0.003), 0.9)), 6)
-(1.0, 0.003)
 """
-
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from surrogate_rbrdo.core.protocols import Prediction
+from surrogate_rbrdo.surrogates.structured.sdof import (
+    bg_only,
+    combine,
+    combine_bg_only,
+    local_band,
+    nc_band,
+    rho_env,
+    select_local,
+    select_nc,
+    zeta_from_ratio,
+)
+from surrogate_rbrdo.surrogates.transformed import fit_transformed
+from surrogate_rbrdo.surrogates.validation import LOOSummary, loo_cv, validation_metrics
 
 #: Order of :class:`~surrogate_rbrdo.spindle.evaluate.PointwiseResonance` outputs.
 RESONANCE_OUTPUTS = ("critical_rpm", "amp_res_m", "amp_top_m", "peak_m")
-ZETA_BRACKET = (1e-5, 0.2)
-
-
-# ---------------------------------------------------------------------- the SDOF shape
-def rho(r: np.ndarray, zeta: np.ndarray) -> np.ndarray:
-    """Single-mode unbalance response at frequency ratio ``r``, normalised by its maximum.
-
-    ``ρ(r, ζ) = r² / sqrt((1 - r²)² + (2ζr)²) · 2ζ sqrt(1 - ζ²)``; 1 at ``r = 1/sqrt(1-2ζ²)``.
-
-    >>> round(float(rho(0.5, 0.05)), 6)   # 0.25 / sqrt(0.5625 + 0.0025) * 0.0998749
-    0.033218
-    """
-    r = np.asarray(r, dtype=float)
-    z = np.asarray(zeta, dtype=float)
-    return r**2 / np.sqrt((1.0 - r**2) ** 2 + (2.0 * z * r) ** 2) * (2.0 * z * np.sqrt(1 - z**2))
-
-
-def rho_env(r: np.ndarray, zeta: np.ndarray) -> np.ndarray:
-    """``max_{r' ≤ r} ρ(r', ζ)``: ``ρ`` below the peak ratio ``1/sqrt(1-2ζ²)``, 1 above."""
-    r = np.asarray(r, dtype=float)
-    z = np.asarray(zeta, dtype=float)
-    r_pk = 1.0 / np.sqrt(1.0 - 2.0 * z**2)
-    return np.where(r >= r_pk, 1.0, np.minimum(rho(np.minimum(r, r_pk), z), 1.0))
-
-
-def zeta_from_ratio(ratio: np.ndarray, r: np.ndarray, *, n_iter: int = 80) -> np.ndarray:
-    """Solve ``ρ(r, ζ) = ratio`` for ``ζ`` in ``ZETA_BRACKET`` (bisection in ``log ζ``).
-
-    ``ρ`` increases with ``ζ`` on the bracket for ``r`` off resonance; values outside the
-    attainable range are clipped to the bracket ends.
-
-    >>> round(float(zeta_from_ratio(rho(0.95, 0.004), 0.95)), 8)
-    0.004
-    """
-    ratio = np.asarray(ratio, dtype=float)
-    r = np.asarray(r, dtype=float)
-    lo = np.full(np.broadcast(ratio, r).shape, np.log(ZETA_BRACKET[0]))
-    hi = np.full_like(lo, np.log(ZETA_BRACKET[1]))
-    for _ in range(n_iter):
-        mid = 0.5 * (lo + hi)
-        up = rho(r, np.exp(mid)) < ratio
-        lo = np.where(up, mid, lo)
-        hi = np.where(up, hi, mid)
-    return np.exp(0.5 * (lo + hi))
-
-
-def combine(nc: np.ndarray, ares: np.ndarray, zeta: np.ndarray, bg: np.ndarray | None,
-            n_max: float) -> np.ndarray:
-    """The combination rule ``ŷ = max(A_res · ρ_env(n_max / n_c, ζ), bg)`` (broadcasting).
-
-    >>> float(combine(np.array(20e3), np.array(30e-6), 0.003, np.array(1e-6), 24e3)) * 1e6
-    30.0
-    """
-    flank = np.asarray(ares) * rho_env(n_max / np.asarray(nc), zeta)
-    return flank if bg is None else np.maximum(flank, bg)
-
-
-def nc_band(nc: np.ndarray, n_max: float, band: float) -> np.ndarray:
-    """Where the local n_c model applies: ``|n_max / nc - 1| <= band``."""
-    return np.abs(n_max / np.asarray(nc, dtype=float) - 1.0) <= band
-
-
-def local_band(ln_glob: np.ndarray, center: float, band: float) -> np.ndarray:
-    """Where a local model of ``log glob`` applies: ``|log glob - center| <= band``."""
-    return np.abs(np.asarray(ln_glob, dtype=float) - center) <= band
-
-
-def bg_only(nc: np.ndarray, n_max: float, bg_only_r: float) -> np.ndarray:
-    """Where the background alone is used: ``n_max / nc <= bg_only_r``."""
-    return n_max / np.asarray(nc, dtype=float) <= bg_only_r
-
-
-def select_nc(nc: np.ndarray, nc_local: np.ndarray | None, n_max: float,
-              band: float) -> np.ndarray:
-    """``nc_local`` where ``|n_max / nc - 1| <= band`` (the global model's band), else ``nc``.
-
-    >>> select_nc(np.array([20e3, 24.5e3]), np.array([1.0, 2.0]), 24e3, 0.05).tolist()
-    [20000.0, 2.0]
-    """
-    nc = np.asarray(nc, dtype=float)
-    if nc_local is None or band <= 0:
-        return nc
-    return np.where(nc_band(nc, n_max, band), nc_local, nc)
-
-
-def select_local(glob: np.ndarray, local: np.ndarray | None, center: float,
-                 band: float) -> np.ndarray:
-    """``local`` where ``|log glob - center| <= band``, else ``glob``.
-
-    >>> select_local(np.array([1.0, 2.0]), np.array([5.0, 6.0]), np.log(2.0), 0.1).tolist()
-    [1.0, 6.0]
-    """
-    glob = np.asarray(glob, dtype=float)
-    if local is None or band <= 0:
-        return glob
-    return np.where(local_band(np.log(glob), center, band), local, glob)
-
-
-def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max: float,
-                    bg_only_r: float) -> np.ndarray:
-    """``bg`` where ``n_max / nc <= bg_only_r`` (background alone), else ``y``.
-
-    >>> combine_bg_only(np.array([5.0, 5.0]), np.array([30e3, 24e3]), np.array([1.0, 1.0]),
-    ...                 24e3, 0.95).tolist()
-    [1.0, 5.0]
-    """
-    if bg is None or bg_only_r <= 0:
-        return y
-    return np.where(bg_only(nc, n_max, bg_only_r), bg, y)
 
 
 # ---------------------------------------------------------------------- the fitted model
@@ -182,15 +81,16 @@ def combine_bg_only(y: np.ndarray, nc: np.ndarray, bg: np.ndarray | None, n_max:
 class ResonanceSurrogate:
     """Structured peak-amplitude surrogate (see the module docstring); metres at the interface.
 
-    Same interface as :class:`~surrogate_rbrdo.runner.pipeline.PeakSurrogate`:
+    A :class:`~surrogate_rbrdo.surrogates.structured.base.SurrogateModel`:
     ``response(x, theta)`` / ``__call__`` → ``(P, N)`` (the sub-models' medians combined),
-    ``predict(Z)`` → mean/std, ``n_train``, ``info``.
+    ``response_points(Z)``, ``predict(Z)`` → mean/std, ``n_train``, ``info``.
 
     Attributes
     ----------
     subs : dict
         ``"nc"``, ``"ares"``, ``"bg"`` (or absent) and ``"zeta"`` (or absent: constant
-        ``zeta_const``) → fitted log-transform :class:`PeakSurrogate`.
+        ``zeta_const``) → fitted log-transform
+        :class:`~surrogate_rbrdo.surrogates.transformed.TransformedKriging`.
     rows : dict
         Training-row indices (into ``Z_train``) of each sub-model.
     zeta_const : float
@@ -320,9 +220,15 @@ class ResonanceSurrogate:
     def sub_loo(self) -> dict[str, Any]:
         """Closed-form LOO (:func:`~surrogate_rbrdo.surrogates.validation.loo_cv`) of every
         sub-model, in its own log units."""
-        from surrogate_rbrdo.surrogates.validation import loo_cv
-
         return {k: loo_cv(s.model, method="closed_form") for k, s in self.subs.items()}
+
+    def loo_summary(self) -> LOOSummary:
+        """The combined model's LOO (:meth:`loo_points`; metrics of ``log y``) and every
+        sub-model's own."""
+        sub = self.sub_loo()
+        y_tr, y_lo = self.loo_points(sub)
+        lm = validation_metrics(np.log(y_tr), np.log(y_lo))
+        return LOOSummary("closed_form_combined", self.n_train, lm.r2, lm.rmse, y_tr, y_lo, sub)
 
     def loo_points(self, sub_loo: dict[str, Any] | None = None
                    ) -> tuple[np.ndarray, np.ndarray]:
@@ -342,52 +248,14 @@ class ResonanceSurrogate:
         return self.Q_train[:, 3].copy(), y_loo
 
 
-def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
-                            rng: np.random.Generator, n_max_rpm: float,
-                            n_design: int = 3,
-                            is_band: np.ndarray | None = None,
-                            threshold_m: float | None = None,
-                            like: ResonanceSurrogate | None = None,
-                            like_mode: str = "warm") -> ResonanceSurrogate:
-    """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
-
-    Parameters
-    ----------
-    Z : ndarray, shape (n, d + m)
-    Q : ndarray, shape (n, 4)
-        ``RESONANCE_OUTPUTS`` columns (rpm, m, m, m), all finite and positive.
-    cfg : SurrogateConfig
-        ``surrogate``, ``n_start`` and the ``res_*`` options are used.
-    rng : numpy.random.Generator
-    n_max_rpm : float
-        Top of the speed range.
-    n_design : int
-    is_band : ndarray of bool, shape (n,), optional
-        Rows added near the boundary (``band_points``); default none.
-    threshold_m : float, optional
-        δ_lim (m); required when ``cfg.res_ares_local > 0``.
-    like : ResonanceSurrogate, optional
-        Start from (``like_mode = "warm"``) or keep (``"keep"``) the physical length scales of
-        its sub-models (see :func:`~surrogate_rbrdo.runner.pipeline.fit_surrogate`).
-    like_mode : {"warm", "keep"}
-    """
-    from surrogate_rbrdo.runner.pipeline import fit_surrogate
-
-    Z = np.asarray(Z, dtype=float)
-    Q = np.asarray(Q, dtype=float)
-    if Q.ndim != 2 or Q.shape != (Z.shape[0], 4) or not np.all(np.isfinite(Q) & (Q > 0)):
-        raise ValueError(f"Q with shape {Q.shape} is not allowed: must be ({Z.shape[0]}, 4), "
-                         "finite and positive")
-    sub_cfg = replace(cfg, transform="log", structure="global")
+def _sub_model_data(Q: np.ndarray, cfg: Any, n_max_rpm: float, band: np.ndarray,
+                    threshold_m: float | None
+                    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], float, int]:
+    """Training rows and targets of every sub-model, the constant ζ and the flank count."""
     nc, ares, atop, y = Q.T
     r = n_max_rpm / nc
-    all_rows = np.arange(Z.shape[0])
-    band = np.zeros(Z.shape[0], bool) if is_band is None else np.asarray(is_band, bool)
-    if band.shape != (Z.shape[0],):
-        raise ValueError(f"is_band with shape {band.shape} is not allowed: must be "
-                         f"({Z.shape[0]},)")
     ares_ok = np.where(band, r >= 1.0, r >= cfg.res_ares_r_min)
-    rows = {"nc": all_rows, "ares": np.flatnonzero(ares_ok),
+    rows = {"nc": np.arange(Q.shape[0]), "ares": np.flatnonzero(ares_ok),
             "bg": np.flatnonzero(r <= cfg.res_bg_r_max)}
     targets = {"nc": nc, "ares": ares, "bg": y, "nc_local": nc, "ares_local": ares}
     if cfg.res_nc_local > 0:
@@ -402,9 +270,51 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
     zrows = np.flatnonzero((r >= cfg.res_zeta_r_min) & (r < 1.0) & (ratio < 0.9))
     zeta_pts = zeta_from_ratio(ratio[zrows], r[zrows])
     if zrows.size >= cfg.res_zeta_min_points:
-        rows["zeta"], targets["zeta"] = zrows, np.zeros(Z.shape[0])
+        rows["zeta"], targets["zeta"] = zrows, np.zeros(Q.shape[0])
         targets["zeta"][zrows] = zeta_pts
     zeta_const = float(np.exp(np.mean(np.log(zeta_pts)))) if zrows.size else 0.003
+    return rows, targets, zeta_const, int(zrows.size)
+
+
+def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
+                            rng: np.random.Generator, n_max_rpm: float,
+                            n_design: int = 3,
+                            is_band: np.ndarray | None = None,
+                            threshold_m: float | None = None,
+                            like: ResonanceSurrogate | None = None,
+                            like_mode: str = "warm") -> ResonanceSurrogate:
+    """Fit the sub-models of :class:`ResonanceSurrogate` to FE outputs ``Q`` at points ``Z``.
+
+    Parameters
+    ----------
+    Z : ndarray, shape (n, d + m)
+    Q : ndarray, shape (n, 4)
+        ``RESONANCE_OUTPUTS`` columns (rpm, m, m, m), all finite and positive.
+    cfg : ResonanceOptions
+        ``surrogate``, ``n_start`` and the ``res_*`` options are used.
+    rng : numpy.random.Generator
+    n_max_rpm : float
+        Top of the speed range.
+    n_design : int
+    is_band : ndarray of bool, shape (n,), optional
+        Rows added near the boundary (``band_points``); default none.
+    threshold_m : float, optional
+        δ_lim (m); required when ``cfg.res_ares_local > 0``.
+    like : ResonanceSurrogate, optional
+        Start from (``like_mode = "warm"``) or keep (``"keep"``) the physical length scales of
+        its sub-models (see :func:`~surrogate_rbrdo.surrogates.transformed.fit_transformed`).
+    like_mode : {"warm", "keep"}
+    """
+    Z = np.asarray(Z, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    if Q.ndim != 2 or Q.shape != (Z.shape[0], 4) or not np.all(np.isfinite(Q) & (Q > 0)):
+        raise ValueError(f"Q with shape {Q.shape} is not allowed: must be ({Z.shape[0]}, 4), "
+                         "finite and positive")
+    band = np.zeros(Z.shape[0], bool) if is_band is None else np.asarray(is_band, bool)
+    if band.shape != (Z.shape[0],):
+        raise ValueError(f"is_band with shape {band.shape} is not allowed: must be "
+                         f"({Z.shape[0]},)")
+    rows, targets, zeta_const, n_zeta = _sub_model_data(Q, cfg, n_max_rpm, band, threshold_m)
     min_rows = Z.shape[1] + 2
     subs: dict[str, Any] = {}
     children = dict(zip(("nc", "ares", "bg", "zeta"), rng.spawn(4), strict=True))
@@ -420,10 +330,11 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                                  f"allowed: need >= {min_rows} (widen the DOE or res_* bounds)")
             rows.pop(k)
             continue
-        subs[k] = fit_surrogate(Z[rows[k]], targets[k][rows[k]], sub_cfg, rng=children[k],
-                                n_design=n_design,
-                                like=like.subs.get(k) if like is not None else None,
-                                like_mode=like_mode)
+        subs[k] = fit_transformed(Z[rows[k]], targets[k][rows[k]], rng=children[k],
+                                  surrogate=cfg.surrogate, transform="log",
+                                  n_start=cfg.n_start, n_design=n_design,
+                                  like=like.subs.get(k) if like is not None else None,
+                                  like_mode=like_mode)
     opts = {"nc_local_band": float(cfg.res_band) if "nc_local" in subs else 0.0,
             "bg_only_r": float(cfg.res_bg_only_r),
             "ares_local_band": float(cfg.res_band_lim) if "ares_local" in subs else 0.0}
@@ -433,7 +344,7 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
         "sub_models": {k: {"n_train": int(rows[k].size),
                            "hyperparameters": s.info["hyperparameters"]}
                        for k, s in subs.items()},
-        "zeta_const": zeta_const, "zeta_points": int(zrows.size), "n_band": int(band.sum()),
+        "zeta_const": zeta_const, "zeta_points": n_zeta, "n_band": int(band.sum()),
         **opts,
         "n_max_rpm": float(n_max_rpm), "surrogate": cfg.surrogate, "transform": "log",
         "hyperparameters": {k: s.info["hyperparameters"] for k, s in subs.items()},
@@ -445,6 +356,4 @@ def fit_resonance_surrogate(Z: np.ndarray, Q: np.ndarray, cfg: Any, *,
                               if "ares_local" in subs else 0.0)
 
 
-__all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "combine", "combine_bg_only",
-           "fit_resonance_surrogate", "rho", "rho_env", "select_local", "select_nc",
-           "zeta_from_ratio"]
+__all__ = ["RESONANCE_OUTPUTS", "ResonanceSurrogate", "fit_resonance_surrogate"]

@@ -22,12 +22,18 @@ each front); :func:`refine_surrogate` evaluates them with the FE model, reports 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
+from surrogate_rbrdo.doe.infill import maximin_select
+from surrogate_rbrdo.sampling.fe import sample_positive
+from surrogate_rbrdo.surrogates.structured.base import STRUCTURES, TrainedSurrogate
+from surrogate_rbrdo.surrogates.structured.resonance import fit_resonance_surrogate
+from surrogate_rbrdo.surrogates.structured.resonance_train import sample_resonance
+from surrogate_rbrdo.surrogates.transformed import fit_transformed
 
 
 @dataclass(frozen=True)
@@ -96,97 +102,95 @@ def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarr
         add(f[-1])
     X = np.array(chosen).reshape(-1, bounds.shape[0])
     if F and len(chosen) < n:  # the spread: greedy maximin over the fronts' designs
-        from surrogate_rbrdo.runner.pipeline import _maximin_select
-
-        X = np.vstack([X, _maximin_select(np.vstack(F), X, bounds, n - len(chosen),
-                                          min_dist=min_dist)])
+        X = np.vstack([X, maximin_select(np.vstack(F), X, bounds, n - len(chosen),
+                                         min_dist=min_dist)])
     return X
 
 
-def refine_surrogate(surrogate: Any, spindle: Any, X: np.ndarray, theta: np.ndarray,
-                     cfg: Any, limit: Any, *, rng: np.random.Generator, cache: Any = None,
-                     counter: Any = None, progress: bool = False, tol: float | None = None,
-                     hyper: str = "warm", response: Any = None
-                     ) -> tuple[Any, dict[str, Any]]:
-    """FE at designs ``X`` (P, 3) × ``theta`` (M, m), the error there, and a refit.
-
-    Returns ``(new_surrogate, stats)``. ``stats`` has the error of the surrogate given *before*
-    the refit: ``max_rel_err_y`` (pointwise), ``max_rel_err_mean`` (per design, over its θ
-    sample) and the per-design means. If ``tol`` is given and ``max_rel_err_mean <= tol``,
-    no refit is done and the input surrogate is returned (``stats["refit"] = False``).
-    ``hyper``: how the refit treats the Kriging length scales of ``surrogate`` (smt
-    Kriging): ``"warm"`` one local likelihood optimisation started from them, ``"keep"`` kept
-    (conditioning only), ``"refit"`` a fresh multistart optimisation. ``response``: the
-    ``ResponseSpec`` of ``y`` (default the peak amplitude).
-    """
-    check_choice("hyper", hyper, ("warm", "keep", "refit"))
-    if getattr(surrogate, "info", {}).get("structure") in ("substructure", "fe"):
-        raise ValueError(f"surrogate structure {surrogate.info['structure']!r} is not allowed "
-                         "in refine_surrogate: it adds (x, θ) FE points to a Kriging of y")
-    from surrogate_rbrdo.spindle.evaluate import ResponseSpec
-
-    label = (ResponseSpec() if response is None else response).label
-    trained = getattr(surrogate, "info", {}).get("response", label)
-    if trained != label:
-        raise ValueError(f"response = {label!r} is not allowed: the surrogate was trained on "
-                         f"{trained!r} (pass that response to refine_surrogate)")
-    like_mode = "keep" if hyper == "keep" else "warm"
-    like = None if hyper == "refit" else surrogate
-    from surrogate_rbrdo.runner.pipeline import fit_surrogate, sample_fe, sample_resonance
-
-    X = np.atleast_2d(np.asarray(X, dtype=float))
-    theta = np.atleast_2d(np.asarray(theta, dtype=float))
-    P, M = X.shape[0], theta.shape[0]
-    Z = np.hstack([np.repeat(X, M, axis=0), np.tile(theta, (P, 1))])
-    structured = hasattr(surrogate, "Q_train")
-    if structured:
-        Zn, Qn = sample_resonance(spindle, Z, cfg, cache=cache, counter=counter,
-                                  progress=progress)
-        yn = Qn[:, 3]
-    else:
-        Zn, yn = sample_fe(spindle, Z, cfg, cache=cache, counter=counter, progress=progress,
-                           response=response)
-    if Zn.shape[0] == 0:
-        raise ValueError("refine: the FE model gave no finite value at any refinement point")
-    y_hat = surrogate.response_points(Zn)
+def _errors(model: Any, Zn: np.ndarray, yn: np.ndarray, X: np.ndarray, M: int
+            ) -> dict[str, Any]:
+    """The surrogate's error at the refinement points (before a refit)."""
+    P = X.shape[0]
+    y_hat = model.response_points(Zn)
     rel = np.abs(y_hat - yn) / yn
     des = np.argmin(np.abs(Zn[:, None, :X.shape[1]] - X[None]).sum(axis=-1), axis=1)
     cnt = np.bincount(des, minlength=P)
     with np.errstate(invalid="ignore", divide="ignore"):
         mu_fe = np.bincount(des, yn, minlength=P) / cnt
         mu_sur = np.bincount(des, y_hat, minlength=P) / cnt
-    stats: dict[str, Any] = {
+    return {
         "n_designs": int(P), "n_theta": int(M), "fe_points": int(Zn.shape[0]),
         "max_rel_err_y": float(rel.max()), "median_rel_err_y": float(np.median(rel)),
         "max_rel_err_mean": float(np.nanmax(np.abs(mu_sur - mu_fe) / mu_fe)),
         "mean_um_fe": (mu_fe * 1e6).tolist(), "mean_um_surrogate": (mu_sur * 1e6).tolist(),
     }
+
+
+def refine_surrogate(trained: TrainedSurrogate, spindle: Any, X: np.ndarray,
+                     theta: np.ndarray, limit: Any, *, rng: np.random.Generator,
+                     cache: Any = None, counter: Any = None, progress: bool = False,
+                     tol: float | None = None, hyper: str = "warm"
+                     ) -> tuple[TrainedSurrogate, dict[str, Any]]:
+    """FE at designs ``X`` (P, d) × ``theta`` (M, m), the error there, and a refit.
+
+    Returns ``(new_trained, stats)``. ``stats`` has the error of the surrogate given *before*
+    the refit: ``max_rel_err_y`` (pointwise), ``max_rel_err_mean`` (per design, over its θ
+    sample) and the per-design means. If ``tol`` is given and ``max_rel_err_mean <= tol``,
+    no refit is done and ``trained`` is returned (``stats["refit"] = False``).
+    ``hyper``: how the refit treats the Kriging length scales of the model (smt Kriging):
+    ``"warm"`` one local likelihood optimisation started from them, ``"keep"`` kept
+    (conditioning only), ``"refit"`` a fresh multistart optimisation. Only structures
+    registered as ``refinable`` (``global``, ``resonance``) can be refined.
+    """
+    check_choice("hyper", hyper, ("warm", "keep", "refit"))
+    if not STRUCTURES[trained.structure].refinable:
+        raise ValueError(f"surrogate structure {trained.structure!r} is not allowed in "
+                         "refine_surrogate: it adds (x, θ) FE points to a Kriging of y")
+    o, model = trained.options, trained.model
+    like_mode = "keep" if hyper == "keep" else "warm"
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    P, M = X.shape[0], theta.shape[0]
+    Z = np.hstack([np.repeat(X, M, axis=0), np.tile(theta, (P, 1))])
+    start = counter.calls if counter is not None else 0
+    structured = trained.structure == "resonance"
+    if structured:
+        Zn, Qn = sample_resonance(spindle, Z, o, cache=cache, counter=counter,
+                                  progress=progress, label="refinement")
+        yn = Qn[:, 3]
+    else:
+        Zn, yn = sample_positive(trained.response.pointwise(spindle), Z, n_jobs=o.n_jobs,
+                                 backend=o.backend, cache=cache, counter=counter,
+                                 progress=progress, desc="FE: refinement points")
+    if Zn.shape[0] == 0:
+        raise ValueError("refine: the FE model gave no finite value at any refinement point")
+    stats = _errors(model, Zn, yn, X, M)
     if tol is not None and stats["max_rel_err_mean"] <= tol:
         stats["refit"] = False
-        return surrogate, stats
+        return trained, stats
     d = spindle.design_map.bounds.shape[0]
+    like = None if hyper == "refit" else model
     if structured:
-        from surrogate_rbrdo.runner.resonance_surrogate import fit_resonance_surrogate
-
         # band rows are n_lhs .. n_lhs + n_band (refinement rows of earlier rounds follow)
-        n_lhs = int(surrogate.info.get("n_lhs", surrogate.n_train))
-        n_band = int(surrogate.info.get("n_band", 0))
-        i = np.arange(surrogate.Z_train.shape[0] + Zn.shape[0])
+        n_lhs = int(model.info.get("n_lhs", model.n_train))
+        n_band = int(model.info.get("n_band", 0))
+        i = np.arange(model.Z_train.shape[0] + Zn.shape[0])
         is_band = (i >= n_lhs) & (i < n_lhs + n_band)
         new = fit_resonance_surrogate(
-            np.vstack([surrogate.Z_train, Zn]), np.vstack([surrogate.Q_train, Qn]), cfg,
-            rng=rng, n_max_rpm=surrogate.n_max_rpm, n_design=d, is_band=is_band,
+            np.vstack([model.Z_train, Zn]), np.vstack([model.Q_train, Qn]), o,
+            rng=rng, n_max_rpm=model.n_max_rpm, n_design=d, is_band=is_band,
             threshold_m=limit.threshold, like=like, like_mode=like_mode)
     else:
-        from surrogate_rbrdo.runner.pipeline import inverse
-
-        Zt = np.vstack([surrogate.model.X_train_, Zn])
-        yt = np.concatenate([inverse(surrogate.model.y_train_, surrogate.transform), yn])
-        new = fit_surrogate(Zt, yt, cfg, rng=rng, n_design=d, like=like, like_mode=like_mode)
-    new.info = {**surrogate.info, **new.info}  # keeps n_lhs (the fit's n_band is the same)
-    new.info["n_refine_points"] = int(surrogate.info.get("n_refine_points", 0) + Zn.shape[0])
+        Zt, yt = model.training_data()
+        new = fit_transformed(np.vstack([Zt, Zn]), np.concatenate([yt, yn]), rng=rng,
+                              surrogate=o.surrogate, transform=o.transform,
+                              n_start=o.n_start, n_design=d, like=like, like_mode=like_mode)
+    new.info = {**model.info, **new.info}  # keeps n_lhs (the fit's n_band is the same)
+    new.info["n_refine_points"] = int(model.info.get("n_refine_points", 0) + Zn.shape[0])
     stats["refit"] = True
-    return new, stats
+    calls = (counter.calls - start) if counter is not None else 0
+    return replace(trained, model=new, fe_calls=trained.fe_calls + calls,
+                   info={**trained.info, "n_refine_points": new.info["n_refine_points"]}), stats
 
 
 __all__ = ["RefineOptions", "refine_surrogate", "select_designs"]

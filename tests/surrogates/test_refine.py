@@ -8,15 +8,21 @@ import pytest
 
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
-from surrogate_rbrdo.runner.refine import RefineOptions, refine_surrogate, select_designs
+from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
 from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.surrogates import refine as refine_module
+from surrogate_rbrdo.surrogates.refine import RefineOptions, refine_surrogate, select_designs
+from surrogate_rbrdo.surrogates.structured import (
+    GlobalOptions,
+    ResonanceOptions,
+    train_surrogate,
+)
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 INPUTS = MultivariateNormal([1.0, 1.0], std=[0.0605, 0.0641])
 LIMIT = LimitState(19.5e-6)
-CFG = SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential")
+CFG = GlobalOptions(n_doe=16, n_start=1, n_jobs=1, backend="sequential")
 BOUNDS = np.array([[1000.0, 3000.0], [300.0, 750.0], [50.0, 80.0]])
 
 
@@ -45,10 +51,8 @@ def test_near_duplicates_are_skipped_and_count_is_capped():
 # ------------------------------------------------------------------ refine_surrogate
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
-    sur, _ = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, CFG,
-                                  rng=np.random.default_rng(4),
-                                  cache_dir=tmp_path_factory.mktemp("fe"))
-    return sur
+    return train_surrogate(reference_spindle(), INPUTS, LIMIT, CFG, rng=np.random.default_rng(4),
+                           cache=fe_cache(tmp_path_factory.mktemp("fe")))
 
 
 def test_refine_reports_the_error_against_independent_fe_and_interpolates(trained):
@@ -56,40 +60,40 @@ def test_refine_reports_the_error_against_independent_fe_and_interpolates(traine
     X = np.array([[3000.0, 480.0, 72.0], [2000.0, 380.0, 60.0]])
     theta = INPUTS.sample(3, rng=np.random.default_rng(1))
     counter = CallCounter()
-    new, st = refine_surrogate(trained, sp, X, theta, CFG, LIMIT,
-                               rng=np.random.default_rng(2), counter=counter)
+    new, st = refine_surrogate(trained, sp, X, theta, LIMIT, rng=np.random.default_rng(2),
+                               counter=counter)
     # independent FE evaluation of the same designs x θ
     y_fe = PeakAmplitudeResponse(sp)(X, theta)
     np.testing.assert_allclose(st["mean_um_fe"], y_fe.mean(axis=1) * 1e6, rtol=1e-9)
-    y_old = trained.response(X, theta)
+    y_old = trained.model.response(X, theta)
     np.testing.assert_allclose(st["mean_um_surrogate"], y_old.mean(axis=1) * 1e6, rtol=1e-6)
     err = np.abs(y_old.mean(1) - y_fe.mean(1)) / y_fe.mean(1)
     assert st["max_rel_err_mean"] == pytest.approx(err.max(), rel=1e-6)
     assert st["refit"] and st["fe_points"] == 6 == counter.calls
-    assert new.n_train == trained.n_train + 6
+    assert new.model.n_train == trained.model.n_train + 6 and new.fe_calls == 16 + 6
     # the refitted Kriging interpolates the new FE points
-    np.testing.assert_allclose(new.response(X, theta), y_fe, rtol=1e-3)
+    np.testing.assert_allclose(new.model.response(X, theta), y_fe, rtol=1e-3)
 
 
 def test_refit_keeps_the_physical_length_scales(trained):
     X = np.array([[2500.0, 450.0, 70.0]])
     theta = INPUTS.sample(4, rng=np.random.default_rng(7))
-    new, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+    new, _ = refine_surrogate(trained, reference_spindle(), X, theta, LIMIT,
                               rng=np.random.default_rng(0), hyper="keep")
-    old_f, new_f = trained.fast, new.fast
+    old_f, new_f = trained.model.fast, new.model.fast
     # squared exponential exp(-w (Δ/s)²): w / s² is the physical length scale, unchanged
     np.testing.assert_allclose(new_f.weights / new_f.scale**2, old_f.weights / old_f.scale**2,
                                rtol=1e-9)
-    refit, _ = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+    refit, _ = refine_surrogate(trained, reference_spindle(), X, theta, LIMIT,
                                 rng=np.random.default_rng(0), hyper="refit")
-    assert not np.allclose(refit.fast.weights / refit.fast.scale**2,
+    assert not np.allclose(refit.model.fast.weights / refit.model.fast.scale**2,
                            old_f.weights / old_f.scale**2, rtol=1e-3)
 
 
 def test_refine_within_tolerance_keeps_the_surrogate(trained):
     X = np.array([[2500.0, 420.0, 66.0]])
     theta = INPUTS.sample(2, rng=np.random.default_rng(5))
-    new, st = refine_surrogate(trained, reference_spindle(), X, theta, CFG, LIMIT,
+    new, st = refine_surrogate(trained, reference_spindle(), X, theta, LIMIT,
                                rng=np.random.default_rng(0), tol=1e9)
     assert new is trained and st["refit"] is False
 
@@ -108,37 +112,32 @@ def test_bad_refine_options(kw, match):
 
 def test_band_flags_survive_two_rounds(tmp_path, monkeypatch):
     """Rows added by refinement are ordinary rows in later rounds, not band rows."""
-    from surrogate_rbrdo.runner import resonance_surrogate as rs
-
-    cfg = SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential",
-                          structure="resonance", res_n_band=4)
-    sur, _ = train_peak_surrogate(reference_spindle(), INPUTS, LIMIT, cfg,
-                                  rng=np.random.default_rng(4), cache_dir=tmp_path)
-    assert sur.info["n_lhs"] == 16 and sur.info["n_band"] == 4
+    cfg = ResonanceOptions(n_doe=16, n_start=1, n_jobs=1, backend="sequential", res_n_band=4)
+    sur = train_surrogate(reference_spindle(), INPUTS, LIMIT, cfg, rng=np.random.default_rng(4),
+                          cache=fe_cache(tmp_path))
+    assert sur.model.info["n_lhs"] == 16 and sur.model.info["n_band"] == 4
     seen = []
-    real = rs.fit_resonance_surrogate
+    real = refine_module.fit_resonance_surrogate
 
     def spy(Z, Q, cfg_, **kw):
         seen.append(np.asarray(kw["is_band"]).copy())
         return real(Z, Q, cfg_, **kw)
 
-    monkeypatch.setattr(rs, "fit_resonance_surrogate", spy)
+    monkeypatch.setattr(refine_module, "fit_resonance_surrogate", spy)
     X = np.array([[3000.0, 480.0, 72.0]])
     for k in range(2):
         th = INPUTS.sample(2, rng=np.random.default_rng(10 + k))
-        sur, _ = refine_surrogate(sur, reference_spindle(), X, th, cfg, LIMIT,
+        sur, _ = refine_surrogate(sur, reference_spindle(), X, th, LIMIT,
                                   rng=np.random.default_rng(k))
     assert [b.size for b in seen] == [22, 24]
     for b in seen:
         assert b[16:20].all() and not b[:16].any() and not b[20:].any()
 
 
-def test_refine_refuses_a_response_other_than_the_trained_one():
-    """A surrogate trained on the at-speed amplitude cannot be refit on peak data."""
-    from types import SimpleNamespace
+def test_refine_refuses_structures_that_cannot_take_points(trained):
+    from dataclasses import replace
 
-    sur = SimpleNamespace(info={"response": "amplitude at 24000 rpm"})
-    with pytest.raises(ValueError, match=r"response = 'peak amplitude' is not allowed: the "
-                                         r"surrogate was trained on 'amplitude at 24000 rpm'"):
-        refine_surrogate(sur, reference_spindle(), np.array([[2000.0, 465.8, 65.0]]),
-                         np.ones((1, 2)), None, None, rng=np.random.default_rng(0))
+    fe = replace(trained, structure="fe")
+    with pytest.raises(ValueError, match=r"structure 'fe' is not allowed in refine_surrogate"):
+        refine_surrogate(fe, reference_spindle(), np.array([[2000.0, 465.8, 65.0]]),
+                         np.ones((2, 2)), LIMIT, rng=np.random.default_rng(0))

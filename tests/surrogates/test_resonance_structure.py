@@ -11,19 +11,27 @@ import pytest
 
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.runner.pipeline import SurrogateConfig, train_peak_surrogate
-from surrogate_rbrdo.runner.resonance_surrogate import (
+from surrogate_rbrdo.runner.experiments.study import surrogate_options
+from surrogate_rbrdo.sampling.fe import fe_cache
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.surrogates.structured import (
+    GlobalOptions,
+    ResonanceOptions,
     ResonanceSurrogate,
+    band_points,
+    fit_resonance_surrogate,
+    train_surrogate,
+)
+from surrogate_rbrdo.surrogates.structured.sdof import (
     combine,
     combine_bg_only,
-    fit_resonance_surrogate,
     rho,
     rho_env,
     select_local,
     select_nc,
     zeta_from_ratio,
 )
-from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 N_MAX = 24000.0
@@ -99,7 +107,7 @@ def _synthetic(n=48, seed=0):
 @pytest.fixture(scope="module")
 def synth():
     Z, Q = _synthetic()
-    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+    cfg = ResonanceOptions(n_start=1, res_zeta_min_points=5,
                           res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0)
     return fit_resonance_surrogate(Z, Q, cfg, rng=np.random.default_rng(1), n_max_rpm=N_MAX), Z, Q
 
@@ -152,12 +160,10 @@ def test_predict_moments_and_loo(synth):
 
 
 def test_band_points_lie_on_the_boundaries():
-    from surrogate_rbrdo.runner.pipeline import band_points
-
     Z, Q = _synthetic(60, seed=3)
     bounds = np.array([[1000, 3000], [300, 750], [50, 80], [0.75, 1.25], [0.75, 1.25]], float)
-    cfg = SurrogateConfig(structure="resonance", res_n_band=8, res_band=0.03, al_n_start=1,
-                          res_band_pool=4000, res_n_band_lim=5, res_band_lim=0.05)
+    cfg = ResonanceOptions(res_n_band=8, res_band=0.03, res_band_n_start=1,
+                           res_band_pool=4000, res_n_band_lim=5, res_band_lim=0.05)
     pts = band_points(Z, Q[:, 0], bounds, N_MAX, cfg, rng=np.random.default_rng(2))
     assert pts.shape == (8, 5)
 
@@ -182,7 +188,9 @@ def test_band_points_lie_on_the_boundaries():
 
 @pytest.mark.parametrize("over, match", [
     ({"structure": "bogus"}, r"structure = 'bogus' is not allowed.*global.*resonance"),
-    ({"structure": "resonance", "active_learning": True}, "active_learning = True"),
+    ({"structure": "resonance", "active_learning": True},
+     r"unknown key surrogate.active_learning; allowed: \[.*'res_band'"),
+    ({"structure": "resonance", "transform": "none"}, r"unknown key surrogate.transform"),
     ({"res_band": 0.0}, "res_band = 0.0"),
     ({"res_n_band": -1}, "res_n_band = -1"),
     ({"res_bg_r_max": 1.5}, "res_bg_r_max = 1.5"),
@@ -192,33 +200,34 @@ def test_band_points_lie_on_the_boundaries():
 ])
 def test_config_validation(over, match):
     with pytest.raises(ValueError, match=match):
-        SurrogateConfig(**over)
+        surrogate_options({"structure": "resonance", **over}, ResponseSpec(), "surrogate")
 
 
 def test_default_structure_is_global():
-    assert SurrogateConfig().structure == "global"
-    assert SurrogateConfig.from_dict({"structure": "resonance"}).structure == "resonance"
+    assert isinstance(surrogate_options({}, ResponseSpec(), "surrogate"), GlobalOptions)
+    o = surrogate_options({"structure": "resonance"}, ResponseSpec(), "surrogate")
+    assert type(o).structure == "resonance"
 
 
 def test_bad_outputs_rejected():
     Z, Q = _synthetic(12)
     Q[0, 1] = -1.0
     with pytest.raises(ValueError, match="finite and positive"):
-        fit_resonance_surrogate(Z, Q, SurrogateConfig(structure="resonance"),
+        fit_resonance_surrogate(Z, Q, ResonanceOptions(),
                                 rng=np.random.default_rng(0), n_max_rpm=N_MAX)
 
 
 def test_tiny_fe_run_counts_band_points_and_caches_apart(tmp_path):
     inputs = MultivariateNormal([1.0, 1.0], std=[0.0605, 0.0641])
     sp = reference_spindle()
-    cfg = SurrogateConfig(structure="resonance", n_doe=16, res_n_band=4, n_start=1,
-                          al_n_start=1, n_jobs=1, backend="sequential", res_band=0.1,
-                          res_band_pool=2000)
+    cfg = ResonanceOptions(n_doe=16, res_n_band=4, n_start=1, res_band_n_start=1, n_jobs=1,
+                           backend="sequential", res_band=0.1, res_band_pool=2000)
     c = CallCounter()
-    sur, info = train_peak_surrogate(sp, inputs, LimitState(19.5e-6), cfg,
-                                     rng=np.random.default_rng(4), cache_dir=tmp_path, counter=c)
+    tr = train_surrogate(sp, inputs, LimitState(19.5e-6), cfg, rng=np.random.default_rng(4),
+                         cache=fe_cache(tmp_path), counter=c)
+    sur, info = tr.model, tr.info
     assert isinstance(sur, ResonanceSurrogate)
-    assert info["n_lhs"] + info["n_band"] == sur.n_train == info["fe_calls"] == c.calls == 20
+    assert info["n_lhs"] + info["n_band"] == sur.n_train == tr.fe_calls == c.calls == 20
     r_band = N_MAX / sur.Q_train[16:, 0]
     assert np.all(np.abs(r_band - 1) <= 0.15)   # predicted within 0.1; the 16-point n_c fit
     y = sur.response(np.array([[2000.0, 330.0, 75.0], [2000.0, 650.0, 60.0]]),
@@ -226,9 +235,9 @@ def test_tiny_fe_run_counts_band_points_and_caches_apart(tmp_path):
     assert y.shape == (2, 3) and np.all(y > 0)
     # the scalar (global) path on the same DOE does not read the vector cache entries
     c2 = CallCounter()
-    train_peak_surrogate(sp, inputs, LimitState(19.5e-6),
-                         SurrogateConfig(n_doe=16, n_start=1, n_jobs=1, backend="sequential"),
-                         rng=np.random.default_rng(4), cache_dir=tmp_path, counter=c2)
+    train_surrogate(sp, inputs, LimitState(19.5e-6),
+                    GlobalOptions(n_doe=16, n_start=1, n_jobs=1, backend="sequential"),
+                    rng=np.random.default_rng(4), cache=fe_cache(tmp_path), counter=c2)
     assert c2.calls == 16
 
 
@@ -249,7 +258,7 @@ def test_select_nc_and_bg_only_known_values():
 @pytest.fixture(scope="module")
 def synth_opts():
     Z, Q = _synthetic(60, seed=4)
-    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+    cfg = ResonanceOptions(n_start=1, res_zeta_min_points=5,
                           res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
                           res_nc_local=0.15, res_band=0.1, res_bg_only_r=0.9)
     base = replace(cfg, res_nc_local=0.0, res_bg_only_r=0.0)
@@ -313,7 +322,7 @@ def test_select_local_known_values():
 def test_local_ares_model_interpolates_and_is_used_near_the_threshold():
     Z, Q = _synthetic(60, seed=4)
     thr = float(np.median(Q[:, 1]))
-    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+    cfg = ResonanceOptions(n_start=1, res_zeta_min_points=5,
                           res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
                           res_ares_local=0.3, res_band_lim=0.2)
     with pytest.raises(ValueError, match="threshold_m = None is not allowed"):
@@ -350,7 +359,7 @@ def test_predict_median_is_the_combined_response_with_every_option():
     (local n_c, local A_res and background-only rules all on)."""
     Z, Q = _synthetic(60, seed=4)
     thr = float(np.median(Q[:, 1]))
-    cfg = SurrogateConfig(structure="resonance", n_start=1, res_zeta_min_points=5,
+    cfg = ResonanceOptions(n_start=1, res_zeta_min_points=5,
                           res_zeta_r_min=0.7, res_bg_r_max=0.95, res_ares_r_min=0.0,
                           res_nc_local=0.15, res_band=0.1, res_bg_only_r=0.9,
                           res_ares_local=0.3, res_band_lim=0.2)

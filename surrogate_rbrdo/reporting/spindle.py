@@ -1,0 +1,106 @@
+"""Designs of a spindle at nominal θ: design quantities, tool-tip unbalance responses and
+Campbell diagrams, as one frozen :class:`SpindleOverview`, and its tables and figures.
+
+Used by the ``spindle_report`` kind (all of it) and by the study's report (the baseline and a
+compromise design).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from surrogate_rbrdo.reporting.plots_spindle import plot_campbell, plot_unbalance_response
+from surrogate_rbrdo.spindle.evaluate import design_quantities
+from surrogate_rbrdo.spindle.harmonic import tool_amplitude
+from surrogate_rbrdo.spindle.modal import campbell
+
+#: columns of :func:`quantity_rows`
+QUANTITY_HEADER = ["design", "preload_N", "span_mm", "diameter_mm", "rotor_mass_kg",
+                   "first_natural_frequency_hz", "critical_speeds_rpm", "peak_amplitude_um",
+                   "peak_speed_rpm", "max_von_mises_MPa", "stress_ratio"]
+
+
+@dataclass(frozen=True, eq=False)
+class SpindleOverview:
+    """Per design (label): ``X`` row, tool-tip amplitude (µm) at ``speeds_rpm``, the Campbell
+    diagram (the first ``n_campbell`` designs) and, if asked, the design quantities."""
+
+    labels: tuple[str, ...]
+    X: np.ndarray
+    speeds_rpm: np.ndarray
+    amplitude_um: dict[str, np.ndarray]
+    campbells: dict[str, Any]
+    quantities: dict[str, Any] | None = None
+
+
+def spindle_overview(spindle: Any, designs: Mapping[str, np.ndarray], *, n_speeds: int,
+                     campbell_speeds: int, n_modes: int, n_campbell: int | None = None,
+                     quantities: bool = False, progress: bool = False, label: str = ""
+                     ) -> SpindleOverview:
+    """Response curves over the spindle's speed range, Campbell diagrams over 0..top speed
+    (``n_campbell`` designs, default all) and optionally the design quantities."""
+    g = spindle.geometry
+    speeds = np.linspace(g.speed_min_rpm, g.speed_max_rpm, n_speeds)
+    camp_speeds = np.linspace(0.0, g.speed_max_rpm, campbell_speeds)
+    n_campbell = len(designs) if n_campbell is None else n_campbell
+    curves, camps, qs = {}, {}, {}
+    items: Any = list(designs.items())
+    if progress:
+        items = tqdm(items, desc=f"{label} designs".strip(), unit="design", leave=False)
+    for name, x in items:
+        if quantities:
+            qs[name] = design_quantities(spindle, x)
+        model = spindle.model(np.asarray(x, float))
+        curves[name] = tool_amplitude(model, speeds)[0] * 1e6
+        if len(camps) < n_campbell:
+            camps[name] = campbell(model, camp_speeds, n_modes=n_modes)
+    return SpindleOverview(tuple(designs), np.array(list(designs.values())), speeds, curves,
+                           camps, qs if quantities else None)
+
+
+def quantity_rows(ov: SpindleOverview) -> list[list[Any]]:
+    """``QUANTITY_HEADER`` rows (needs ``quantities=True``)."""
+    rows = []
+    for name, x in zip(ov.labels, ov.X, strict=True):
+        q = ov.quantities[name]
+        rows.append([name, *np.round(x, 3), round(q.rotor_mass_kg, 3),
+                     round(q.first_natural_frequency_hz, 2),
+                     " ".join(f"{c:.0f}" for c in q.critical_speeds_rpm),
+                     round(q.peak_amplitude_m * 1e6, 4), round(q.peak_speed_rpm, 1),
+                     round(q.max_von_mises_Pa / 1e6, 3), round(q.stress_ratio, 5)])
+    return rows
+
+
+def write_overview(out: Any, ov: SpindleOverview, *, n_modes: int, speed_max_rpm: float,
+                   limit_um: float | None = None, campbell_csv: bool = False,
+                   critical_csv: bool = False) -> None:
+    """``unbalance_response.csv``, ``campbell.png``, ``unbalance_response.png``; with
+    ``critical_csv`` ``critical_speeds.csv`` (from the Campbell diagrams), with
+    ``campbell_csv`` one ``campbell_<label>.csv`` per diagram."""
+    names = ["preload_N", "span_mm", "diameter_mm"]
+    out.write_csv("unbalance_response.csv", ["speed_rpm", *[f"{k}_um" for k in ov.labels]],
+                  np.column_stack([ov.speeds_rpm, *ov.amplitude_um.values()]).tolist())
+    if critical_csv:
+        out.write_csv("critical_speeds.csv", ["design", *names, "critical_speeds_rpm"],
+                      [[k, *np.round(x, 3), " ".join(f"{c:.0f}" for c in
+                                                     ov.campbells[k].critical_speeds_rpm)]
+                       for k, x in zip(ov.labels, ov.X, strict=True)])
+    for name, c in ov.campbells.items() if campbell_csv else ():
+        out.write_csv(f"campbell_{name.replace(' ', '_')}.csv",
+                      ["speed_rpm", *[f"mode{k + 1}_hz" for k in range(n_modes)],
+                       *[f"mode{k + 1}_whirl" for k in range(n_modes)]],
+                      [[s, *f, *w] for s, f, w in zip(c.speeds_rpm, c.frequency_hz.tolist(),
+                                                      c.whirl.tolist(), strict=True)])
+    out.save_figure("campbell.png", plot_campbell(ov.campbells, speed_max_rpm=speed_max_rpm,
+                                                  of_total=len(ov.labels)))
+    out.save_figure("unbalance_response.png", plot_unbalance_response(
+        {k: (ov.speeds_rpm, v) for k, v in ov.amplitude_um.items()}, limit_um=limit_um))
+
+
+__all__ = ["QUANTITY_HEADER", "SpindleOverview", "quantity_rows", "spindle_overview",
+           "write_overview"]

@@ -1,0 +1,238 @@
+"""Experiment kind ``study``: the RBRDO study end to end (:mod:`surrogate_rbrdo.study`).
+
+Stages: ``surrogate`` (the ``[surrogate]`` structure, trained on FE points) → ``design_model``
+(g_det) → ``optimise`` (RBRDO at every P_target, then RDO/RBDO/deterministic; one CRN sample)
+→ ``refine`` (``[refine]``, off by default) → ``verify`` (the chosen designs with the full FE
+model); the report writes the tables and figures. Streams of the seed: 0 surrogate, 1 design
+model, 2 the CRN sample, 3 optimisation, 4 verification, 5 refinement.
+
+Tables (every key optional; unknown keys raise): ``[spindle]``, ``[uncertainty]``,
+``[limit]``, ``[response]`` (``ResponseSpec``), ``[surrogate]`` (``structure`` selects the
+options class: ``GlobalOptions``, ``ResonanceOptions``, ``SubstructureOptions``,
+``FEOptions``), ``[design_model]``, ``[deterministic]``, ``[optimization]``
+(``OptimizationOptions``), ``[verification]``, ``[report]``, ``[refine]``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from surrogate_rbrdo.core.validate import check_int
+from surrogate_rbrdo.reporting import study as tables
+from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
+from surrogate_rbrdo.runner.schema import parse
+from surrogate_rbrdo.runner.tables import (
+    DeterministicTable,
+    LimitTable,
+    SpindleTable,
+    UncertaintyTable,
+    build_inputs,
+    build_spindle,
+    require_memory,
+)
+from surrogate_rbrdo.sampling.fe import fe_cache
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
+from surrogate_rbrdo.study.problem import Problem
+from surrogate_rbrdo.study.stages import optimise, refine, verify
+from surrogate_rbrdo.surrogates.design_model import DesignModelOptions, fit_design_model
+from surrogate_rbrdo.surrogates.refine import RefineOptions
+from surrogate_rbrdo.surrogates.structured import STRUCTURES, train_surrogate
+
+
+@dataclass(frozen=True)
+class StudyReportTable:
+    """``[report]``: the baseline design ``[F N, L mm, D mm]`` and the spindle figures."""
+
+    baseline: tuple[float, float, float] | None = None
+    n_speeds: int = 300
+    campbell_speeds: int = 25
+    n_modes: int = 6
+
+    def __post_init__(self) -> None:
+        check_int("n_speeds", self.n_speeds, minimum=2)
+        check_int("campbell_speeds", self.campbell_speeds, minimum=2)
+        check_int("n_modes", self.n_modes, minimum=1)
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """The tables of a ``study`` config."""
+
+    spindle: SpindleTable = field(default_factory=SpindleTable)
+    uncertainty: UncertaintyTable = field(default_factory=UncertaintyTable)
+    limit: LimitTable = field(default_factory=LimitTable)
+    response: ResponseSpec = field(default_factory=ResponseSpec)
+    surrogate: dict[str, Any] = field(default_factory=dict)
+    design_model: DesignModelOptions = field(default_factory=DesignModelOptions)
+    deterministic: DeterministicTable = field(default_factory=DeterministicTable)
+    optimization: OptimizationOptions = field(default_factory=OptimizationOptions)
+    verification: VerificationOptions = field(default_factory=VerificationOptions)
+    report: StudyReportTable = field(default_factory=StudyReportTable)
+    refine: RefineOptions = field(default_factory=RefineOptions)
+
+
+@dataclass(frozen=True, eq=False)
+class StudyPlan:
+    """The validated objects of a study config."""
+
+    problem: Problem
+    surrogate: Any
+    design_model: DesignModelOptions
+    optimization: OptimizationOptions
+    verification: VerificationOptions
+    report: StudyReportTable
+    refine: RefineOptions
+
+
+def surrogate_options(table: Mapping[str, Any], response: ResponseSpec, where: str) -> Any:
+    """The options of the structure a ``[surrogate]`` table selects (``structure``, default
+    ``"global"``), checked against ``response``."""
+    table = dict(table)
+    name = table.pop("structure", "global")
+    if not isinstance(name, str) or name not in set(STRUCTURES):
+        raise ValueError(f"{where}.structure = {name!r} is not allowed: must be one of "
+                         f"{sorted(STRUCTURES)}")
+    options = parse(STRUCTURES[name].options, table, where)
+    try:
+        options.check_response(response)
+    except ValueError as exc:
+        raise ValueError(f"{where}.{exc}") from None
+    return options
+
+
+def _memory(c: StudyConfig, sur: Any) -> None:
+    """Refuse sizes whose arrays would not fit (before any work)."""
+    o, v = c.optimization, c.verification
+    k = 1 + len(o.runs)
+    require_memory("verification.n_theta", v.n_theta, 4 * 8.0 * k * v.n_theta,
+                   f"{k} designs × n_theta × 4 arrays of 8 B")
+    require_memory("optimization.n_theta", o.n_theta, 8 * 8.0 * o.pop_size * o.n_theta *
+                   o.n_jobs, "pop_size × n_theta × 8 arrays of 8 B per worker")
+    require_memory("optimization.n_gen", o.n_gen, 2 * 16 * 8.0 * o.pop_size * o.n_gen *
+                   len(o.runs), "the archives (pop_size × n_gen × 16 values per run)")
+    require_memory("report.n_speeds", c.report.n_speeds, 2 * 65536.0 * c.report.n_speeds,
+                   "the unbalance responses (~64 kB per speed and design)")
+    n = getattr(sur, "n_doe", 0)
+    require_memory("surrogate.n_doe", n, 10 * 8.0 * n * n, "the Kriging matrices (10 n_doe²)")
+    pool = getattr(sur, "al_pool_designs", 0) * getattr(sur, "al_pool_theta", 0)
+    require_memory("surrogate.al_pool_theta", getattr(sur, "al_pool_theta", 0),
+                   8 * 8.0 * pool * max(n, 1), "the pool predictions (pool × n_doe)")
+
+
+def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
+    spindle = build_spindle(c.spindle, base_dir)
+    inputs = build_inputs(c.uncertainty, spindle.theta_bearings)
+    g, r = spindle.geometry, c.response
+    if r.kind == "at_speed" and not g.speed_min_rpm <= r.speed_rpm <= g.speed_max_rpm:
+        raise ValueError(f"response.speed_rpm = {r.speed_rpm} is not allowed: must lie in the "
+                         f"spindle's speed range [{g.speed_min_rpm}, {g.speed_max_rpm}] rpm "
+                         "(the bearing laws are fitted there)")
+    sur = surrogate_options(c.surrogate, r, "surrogate")
+    det = c.deterministic.options(g.speed_max_rpm)
+    if det.resonance == "separation":
+        raise ValueError("deterministic.resonance = 'separation' is not allowed in a study: the "
+                         "g_det design model has no critical-speed surrogate; use 'paper' or "
+                         "'none'")
+    if c.refine.rounds and not STRUCTURES[sur.structure].refinable:
+        why = ("there is no surrogate to refine" if sur.structure == "fe" else
+               "the refinement loop adds (x, θ) points, and this surrogate is trained on "
+               "designs only")
+        raise ValueError(f"refine.rounds = {c.refine.rounds} is not allowed with "
+                         f"surrogate.structure = {sur.structure!r}: {why} (use rounds = 0)")
+    base = c.report.baseline if c.report.baseline is not None else spindle.baseline
+    try:
+        problem = Problem(spindle, inputs, c.limit.limit(), r, det, base)
+    except ValueError as exc:
+        raise ValueError(f"report.baseline: {exc}") from None
+    _memory(c, sur)
+    return StudyPlan(problem, sur, c.design_model, c.optimization, c.verification, c.report,
+                     c.refine)
+
+
+def _surrogate(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    pr = p.problem
+    return train_surrogate(pr.spindle, pr.inputs, pr.limit, p.surrogate, rng=ctx.stream(0),
+                           response=pr.response, cache=fe_cache(ctx.cache_dir),
+                           progress=ctx.progress, label=ctx.label)
+
+
+def _design_model(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return fit_design_model(p.problem.spindle, p.design_model, rng=ctx.stream(1),
+                            progress=ctx.progress, label=ctx.label)
+
+
+def _optimise(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return optimise(p.problem, done["surrogate"], done["design_model"], p.optimization,
+                    crn=ctx.seed_sequence(2), rng=ctx.stream(3), progress=ctx.progress,
+                    label=ctx.label)
+
+
+def _refine(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return refine(p.problem, done["surrogate"], done["design_model"], done["optimise"],
+                  p.optimization, p.refine, crn=ctx.seed_sequence(2), rng=ctx.stream(5),
+                  cache=fe_cache(ctx.cache_dir), progress=ctx.progress, label=ctx.label)
+
+
+def _final(done: Mapping[str, Any]) -> tuple[Any, Any]:
+    """The surrogate and the optimisation the verification and the tables use."""
+    ref = done["refine"]
+    return ref.surrogate or done["surrogate"], ref.optimisation or done["optimise"]
+
+
+def _verify(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    sur, opt = _final(done)
+    return verify(p.problem, sur, done["design_model"], opt, p.optimization, p.verification,
+                  crn=ctx.seed_sequence(2), rng=ctx.stream(4),
+                  cache=fe_cache(ctx.cache_dir, "fe_verification"), progress=ctx.progress,
+                  label=ctx.label)
+
+
+def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
+            ) -> dict[str, Any]:
+    sur, opt = _final(done)
+    ver, w = done["verify"], p.optimization.weights
+    run.write_json("surrogate_info.json", {**sur.to_dict(), **dict(sur.model.info)})
+    run.write_json("design_model_validation.json", done["design_model"].validation)
+    if done["refine"].rounds:
+        run.write_rows("refine.csv", tables.refine_rows(done["refine"].rounds))
+    fronts = tables.front_rows(opt)
+    if fronts:
+        run.write_rows("pareto_fronts.csv", fronts)
+    tables.front_figures(run, opt, w, quantity=p.problem.response.label,
+                         model_in_loop=sur.in_loop, baseline=p.problem.baseline)
+    ver_rows = tables.verification_rows(ver)
+    run.write_rows("verification.csv", ver_rows)
+    run.write_rows("strategy_comparison.csv", tables.strategy_rows(opt, ver))
+    mbr = tables.mbr_rows(opt, ver, w)
+    if mbr:
+        run.write_rows("mbr.csv", mbr)
+    comp = tables.compromise_rows(opt, w)
+    run.write_rows("compromises.csv", comp)
+    rep = p.report
+    tables.spindle_figures(run, p.problem.spindle, tables.spotlight(opt, ver),
+                           n_speeds=rep.n_speeds, campbell_speeds=rep.campbell_speeds,
+                           n_modes=rep.n_modes, limit_um=p.problem.limit.threshold * 1e6)
+    meta = tables.study_meta(p.problem, p.optimization, done["surrogate"], done["design_model"],
+                             done["optimise"], done["refine"], done["verify"])
+    run.write_json("study_meta.json", meta)
+    keep = ("design", "preload_N", "span_mm", "diameter_mm", "mean_um_fe", "std_um_fe",
+            "pf_pct_fe", "mean_um_surrogate", "std_um_surrogate", "pf_pct_surrogate")
+    summary = [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()
+                if k in keep} for r in ver_rows]
+    return {"summary": summary, "mbr": mbr, "compromises": comp, "meta": meta}
+
+
+register_kind(Kind(
+    name="study",
+    summary="RBRDO study: surrogate → g_det design model → RBRDO per P_target, RDO, RBDO, "
+            "deterministic → refinement → full-FE verification → tables and figures",
+    schema=StudyConfig,
+    stages=(Stage("surrogate", _surrogate), Stage("design_model", _design_model),
+            Stage("optimise", _optimise), Stage("refine", _refine), Stage("verify", _verify)),
+    report=_report,
+    build=build,
+))

@@ -1,0 +1,214 @@
+"""Experiment kind ``surrogate_validation``: surrogate structures against the full FE model.
+
+The ``[surrogate]`` table is variant ``main``; ``[validation.variants]`` adds named variants
+as overrides of it (``raw = {transform = "none"}``, ``res = {structure = "resonance"}``; a
+variant of another structure inherits only the keys its structure has). Every variant trains
+from the same seed stream, so variants with the same DOE settings get the same DOE, and the
+FE cache is shared. Stages: ``truth`` (FE at ``n_test`` fresh LHS points of the joint box,
+full-FE MC at the ``designs`` on ``n_theta`` θ, FE resonance quantities if a resonance
+variant needs them) → ``variants`` (train, test points, LOO, MC comparison). Tables:
+``metrics.csv``, ``loo.csv``, ``mc_comparison.csv``, ``cost.csv`` (training FE calls and the
+P_f accuracy; no timings), ``resonance_submodels.csv`` and ``nc_at_designs.csv`` (resonance
+variants), parity figures per variant. ``y`` is the peak amplitude.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_int, check_positive
+from surrogate_rbrdo.reporting import tables_surrogate as tab
+from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
+from surrogate_rbrdo.runner.experiments.study import surrogate_options
+from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
+from surrogate_rbrdo.runner.tables import (
+    LimitTable,
+    SpindleTable,
+    UncertaintyTable,
+    build_inputs,
+    build_spindle,
+    require_memory,
+)
+from surrogate_rbrdo.sampling.fe import fe_cache
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.surrogates.assessment import Assessment, FETruth, assess, fe_truth
+from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions, train_surrogate
+
+DEFAULT_DESIGNS = {
+    "resonant": (2000.0, 650.0, 60.0),
+    "subcritical_far": (2000.0, 330.0, 75.0),
+    "boundary_a": (1000.0, 425.0, 60.0),
+    "boundary_b": (3000.0, 480.0, 70.0),
+    "boundary_c": (2000.0, 460.0, 65.0),
+}
+
+
+@dataclass(frozen=True)
+class ValidationTable:
+    """``[validation]``: test points, the θ sample, designs (label → ``[F N, L mm, D mm]``),
+    variants (name → ``[surrogate]`` overrides), tolerance, n_c check size."""
+
+    n_test: int = 120
+    n_theta: int = 1000
+    designs: dict[str, tuple[float, float, float]] = field(
+        default_factory=lambda: dict(DEFAULT_DESIGNS))
+    variants: dict[str, dict[str, Any]] = field(default_factory=dict)
+    rel_tol: float = 0.05
+    n_theta_nc: int = 40
+
+    def __post_init__(self) -> None:
+        check_int("n_test", self.n_test, minimum=2)
+        check_int("n_theta", self.n_theta, minimum=2)
+        check_positive("rel_tol", self.rel_tol)
+        check_int("n_theta_nc", self.n_theta_nc, minimum=2)
+        if not self.designs:
+            raise ValueError("designs = {} is not allowed: give at least one design")
+        if "main" in self.variants:
+            raise ValueError("variants.main is not allowed: 'main' is the [surrogate] table")
+
+
+@dataclass(frozen=True)
+class SurrogateValidationConfig:
+    spindle: SpindleTable = field(default_factory=SpindleTable)
+    uncertainty: UncertaintyTable = field(default_factory=UncertaintyTable)
+    limit: LimitTable = field(default_factory=LimitTable)
+    surrogate: dict[str, Any] = field(default_factory=dict)
+    validation: ValidationTable = field(default_factory=ValidationTable)
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    spindle: Any
+    inputs: Any
+    limit: Any
+    variants: dict[str, Any]
+    test_box: JointDOEOptions
+    designs: dict[str, np.ndarray]
+    validation: ValidationTable
+
+
+def _variant(base: Mapping[str, Any], over: Mapping[str, Any], name: str) -> Any:
+    name_s = over.get("structure", base.get("structure", "global"))
+    keep = base
+    if name_s != base.get("structure", "global") and isinstance(name_s, str) \
+            and name_s in set(STRUCTURES):
+        fields = STRUCTURES[name_s].options.__dataclass_fields__
+        keep = {k: v for k, v in base.items() if k in fields}
+    return surrogate_options({**keep, **over}, ResponseSpec(), f"validation.variants.{name}")
+
+
+def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
+    spindle = build_spindle(c.spindle, base_dir)
+    inputs = build_inputs(c.uncertainty, spindle.theta_bearings)
+    tables = {"surrogate": c.surrogate, **{f"validation.variants.{k}": {**c.surrogate, **v}
+                                            for k, v in c.validation.variants.items()}}
+    for where, t in tables.items():
+        if t.get("structure") == "fe":
+            raise ValueError(f"{where}.structure = 'fe' is not allowed here: a surrogate "
+                             "validation needs a surrogate (use 'global', 'resonance' or "
+                             "'substructure')")
+    variants = {"main": surrogate_options(c.surrogate, ResponseSpec(), "surrogate")}
+    for name, over in c.validation.variants.items():
+        variants[name] = _variant(c.surrogate, over, name)
+    designs = {}
+    for label, xv in c.validation.designs.items():
+        try:
+            designs[label] = spindle.design_map.check(np.asarray(xv, dtype=float))
+        except ValueError as exc:
+            raise ValueError(f"validation.designs.{label}: {exc}") from None
+    main = variants["main"]
+    box = main if isinstance(main, JointDOEOptions) else JointDOEOptions(
+        n_jobs=main.n_jobs, backend=main.backend)
+    v = c.validation
+    require_memory("validation.n_theta", v.n_theta, 4 * 8.0 * len(designs) * v.n_theta *
+                   (1 + len(variants)), "designs × n_theta × 4 arrays per variant")
+    require_memory("validation.n_test", v.n_test, 8 * 8.0 * v.n_test * len(variants),
+                   "the test points")
+    return Plan(spindle, inputs, c.limit.limit(), variants, box, designs, v)
+
+
+def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
+    need_res = any(v.structure == "resonance" for v in p.variants.values())
+    return fe_truth(p.spindle, p.inputs, np.vstack(list(p.designs.values())), p.test_box,
+                    n_test=p.validation.n_test, n_theta=p.validation.n_theta,
+                    rng_test=ctx.stream(1), rng_theta=ctx.stream(2),
+                    n_theta_nc=p.validation.n_theta_nc if need_res else None,
+                    cache=fe_cache(ctx.cache_dir), mc_cache=fe_cache(ctx.cache_dir, "fe_mc"),
+                    progress=ctx.progress, label=ctx.label)
+
+
+def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Assessment, ...]:
+    """Every variant trained from the same seed stream (same DOE settings, same DOE)."""
+    return tuple(assess(name, train_surrogate(
+        p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0), cache=fe_cache(ctx.cache_dir),
+        progress=ctx.progress, label=f"{ctx.label} {name}"), done["truth"], p.limit,
+        rel_tol=p.validation.rel_tol) for name, options in p.variants.items())
+
+
+def _rows(p: Plan, t: FETruth, a: Assessment) -> dict[str, list[Any]]:
+    labels, tr = list(p.designs), a.trained
+    rows: dict[str, list[Any]] = {
+        "metrics": [tab.metrics_row(a.name, t.y, a.y_pred, p.limit.threshold)],
+        "loo": tab.loo_rows(a.name, a.loo), "mc": tab.mc_rows(a.name, labels, t.X, a.mc),
+        "cost": [tab.cost_row(a.name, getattr(tr.options, "active_learning", False),
+                              tr.structure, tr.model.info.get("transform", ""),
+                              tr.model.n_train, tr.model.n_train, a.mc)]}
+    if tr.structure == "resonance":
+        n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
+        rows["sub"], rows["nc"] = tab.resonance_rows(a.name, tr.model, *t.resonance, labels,
+                                                     n_th)
+    return rows
+
+
+def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
+    t, vs = done["truth"], done["variants"]
+    rows = [_rows(p, t, a) for a in vs]
+    table = {k: [r for v in rows for r in v.get(k, [])] for k in
+             ("metrics", "loo", "mc", "cost", "sub", "nc")}
+    for name, key, header in (("metrics.csv", "metrics", tab.METRICS_HEADER),
+                              ("loo.csv", "loo", tab.LOO_HEADER),
+                              ("mc_comparison.csv", "mc", tab.MC_HEADER),
+                              ("cost.csv", "cost", tab.COST_HEADER),
+                              ("resonance_submodels.csv", "sub", tab.SUB_HEADER),
+                              ("nc_at_designs.csv", "nc", tab.NC_HEADER)):
+        if table[key] or key not in ("sub", "nc"):
+            run.write_csv(name, header, table[key])
+    n = t.y.size
+    for a in vs:
+        run.save_figure(f"parity_{a.name}.png", parity_plot(
+            t.y * 1e6, a.y_pred * 1e6, title=f"{a.name}: peak amplitude at {n} fresh LHS "
+            "points", label="peak amplitude [µm]"))
+        run.save_figure(f"parity_log_{a.name}.png", parity_plot(
+            np.log10(t.y), np.log10(a.y_pred), title=f"{a.name}: log10 of the peak amplitude "
+            f"at {n} fresh LHS points", label="log10(y / 1 m)"))
+    run.write_json("surrogate_info.json", {a.name: {k: v for k, v in a.trained.to_dict().items()
+                                                    if k != "options"} for a in vs})
+    fe = {**t.calls, **{f"train_{a.name}": a.trained.fe_calls for a in vs}}
+    sur = {a.name: a.surrogate_calls for a in vs}
+    meta = {"fe_calls": {**fe, "total": sum(fe.values())},
+            "surrogate_calls": {**sur, "total": sum(sur.values())},
+            "n_theta": p.validation.n_theta, "n_test": int(n),
+            "note": "fe_calls are computed points (cache misses); cost.csv has the training "
+                    "sizes"}
+    run.write_json("calls.json", meta)
+    keep = ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe", "pf_sur", "ok_mean",
+            "ok_std", "ok_pf")
+    return {"variants": [a.name for a in vs], "meta": meta,
+            "summary": [{k: x for k, x in zip(tab.MC_HEADER, r, strict=True) if k in keep}
+                        for r in table["mc"]]}
+
+
+register_kind(Kind(
+    name="surrogate_validation",
+    summary="surrogate variants (structures, transforms, active learning) against the full "
+            "FE model: test-point metrics, LOO, μ/σ/P_f at designs, cost",
+    schema=SurrogateValidationConfig,
+    stages=(Stage("truth", _truth), Stage("variants", _variants)),
+    report=_report,
+    build=build,
+))

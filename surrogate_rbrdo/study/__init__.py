@@ -1,0 +1,28 @@
+"""The RBRDO study as stage functions returning frozen results (``docs/api.md``).
+
+:class:`Problem` / :func:`reference_problem` say what is designed; :func:`optimise`,
+:func:`refine` and :func:`verify` are the study's stages after the surrogate
+(:func:`~surrogate_rbrdo.surrogates.structured.train_surrogate`) and the g_det design model
+(:func:`~surrogate_rbrdo.surrogates.design_model.fit_design_model`).
+"""
+
+from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
+from surrogate_rbrdo.study.problem import DESIGN_NAMES, TABLE4_STD, Problem, reference_problem
+from surrogate_rbrdo.study.stages import (
+    Optimisation,
+    Refinement,
+    Verification,
+    chosen_designs,
+    formulation,
+    merge_calls,
+    optimise,
+    refine,
+    run_label,
+    verify,
+)
+
+__all__ = [
+    "DESIGN_NAMES", "TABLE4_STD", "OptimizationOptions", "Optimisation", "Problem",
+    "Refinement", "Verification", "VerificationOptions", "chosen_designs", "formulation",
+    "merge_calls", "optimise", "reference_problem", "refine", "run_label", "verify",
+]

@@ -1,0 +1,110 @@
+"""A trained surrogate structure against the full FE model (the ``surrogate_validation`` kind).
+
+:func:`fe_truth` computes the FE side once (fresh LHS test points of the joint box, a θ
+sample and the full-FE Monte Carlo at designs, the FE resonance quantities if asked);
+:func:`assess` compares one trained structure with it: point predictions at the test points,
+its leave-one-out, and μ_y, σ_y, P_f on the same θ sample (common random numbers). Every FE
+and surrogate call is counted. ``y`` is the peak tool-tip amplitude.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.counting import CallCounter, CountingResponse
+from surrogate_rbrdo.core.protocols import LimitState, Prediction
+from surrogate_rbrdo.doe import lhs
+from surrogate_rbrdo.sampling.fe import sample_designs, sample_positive
+from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse, ResponseSpec
+from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate
+from surrogate_rbrdo.surrogates.structured.joint import JointDOEOptions
+from surrogate_rbrdo.surrogates.structured.resonance_train import sample_resonance
+from surrogate_rbrdo.surrogates.validation import LOOSummary, MCComparison, compare_mc
+
+
+@dataclass(frozen=True, eq=False)
+class FETruth:
+    """The FE side: test points ``Z`` and ``y``, the θ sample, designs ``X`` and their FE
+    values ``y_fe`` (X × θ), optional resonance quantities ``(Z_t, Q_t, Z_d, Q_d)`` (test
+    points; designs × the first θ rows), counted FE calls (``test``, ``mc``)."""
+
+    Z: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    X: np.ndarray
+    y_fe: np.ndarray
+    resonance: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+    calls: dict[str, int] = field(default_factory=dict)
+
+
+def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, n_test: int,
+             n_theta: int, rng_test: np.random.Generator, rng_theta: np.random.Generator,
+             n_theta_nc: int | None = None, cache: Any = None, mc_cache: Any = None,
+             progress: bool = False, label: str = "") -> FETruth:
+    """FE at ``n_test`` maximin-LHS points of ``box``'s joint box, and full-FE MC of the
+    designs ``X`` on ``n_theta`` θ; with ``n_theta_nc`` also the resonance quantities (test
+    points, and designs × the first ``n_theta_nc`` θ)."""
+    c_test, c_mc = CallCounter(), CallCounter()
+    Z, y = sample_positive(ResponseSpec().pointwise(spindle),
+                           lhs(n_test, box.bounds(spindle, inputs), rng=rng_test),
+                           n_jobs=box.n_jobs, backend=box.backend, cache=cache, counter=c_test,
+                           progress=progress, desc=f"{label} FE test points".strip())
+    theta = inputs.sample(n_theta, rng=rng_theta)
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    y_fe = sample_designs(PeakAmplitudeResponse(spindle), X, theta, n_jobs=box.n_jobs,
+                          cache=mc_cache, counter=c_mc, progress=progress,
+                          desc=f"{label} full-FE MC".strip())
+    res = None
+    if n_theta_nc is not None:
+        n = min(n_theta_nc, n_theta)
+        Z_t, Q_t = sample_resonance(spindle, Z, box, cache=cache, counter=c_test,
+                                    progress=progress, label=label)
+        Z_d = np.column_stack([np.repeat(X, n, axis=0), np.tile(theta[:n], (len(X), 1))])
+        Z_d, Q_d = sample_resonance(spindle, Z_d, box, cache=cache, counter=c_test,
+                                    progress=progress, label=label)
+        if Z_d.shape[0] != X.shape[0] * n:
+            raise ValueError("FE resonance quantities failed at a validation design")
+        res = (Z_t, Q_t, Z_d, Q_d)
+    return FETruth(Z, y, theta, X, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls})
+
+
+@dataclass(frozen=True, eq=False)
+class Assessment:
+    """One trained structure against :class:`FETruth`: ``y_pred`` at the test points, its
+    ``loo``, the Monte Carlo comparison ``mc`` and the counted surrogate calls."""
+
+    name: str
+    trained: TrainedSurrogate
+    y_pred: np.ndarray
+    loo: LOOSummary
+    mc: MCComparison
+    surrogate_calls: int
+
+
+class _Grid:
+    """``compare_mc`` sees the model's response (the median for a log transform)."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+
+    def predict_grid(self, x: np.ndarray, theta: np.ndarray) -> Prediction:
+        y = self.model(x, theta)
+        return Prediction(mean=y, std=np.full_like(y, np.nan))
+
+
+def assess(name: str, trained: TrainedSurrogate, truth: FETruth, limit: LimitState, *,
+           rel_tol: float = 0.05) -> Assessment:
+    """Compare ``trained`` with the FE side (μ, σ within ``rel_tol``; P_f within
+    max(1 point, 3 SE))."""
+    model = CountingResponse(trained.model.response)
+    yp = trained.model.response_points(truth.Z)
+    cmp = compare_mc(_Grid(model), truth.X, truth.theta, limit, y_true=truth.y_fe,
+                     rel_tol=rel_tol)
+    return Assessment(name, trained, yp, trained.model.loo_summary(), cmp,
+                      int(yp.size + model.counter.calls))
+
+
+__all__ = ["Assessment", "FETruth", "assess", "fe_truth"]

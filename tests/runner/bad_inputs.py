@@ -1,0 +1,471 @@
+"""A corpus of bad inputs: (name, config text, extra files, CLI args, expected message regex).
+
+Each must give exit code 2, one line ``rbrdo: error: ...`` naming the field (or file), and
+leave no run folder. ``{dir}`` in a config is replaced by the test's folder (for files).
+"""
+
+from __future__ import annotations
+
+STUDY = """[experiment]
+name = "s"
+kind = "study"
+seed = 1
+[surrogate]
+n_doe = 20
+n_jobs = 1
+n_start = 1
+[design_model]
+n_train = 10
+n_validate = 2
+[deterministic]
+resonance = "none"
+[optimization]
+p_targets = [0.10, 0.05]
+n_theta = 40
+pop_size = 8
+n_gen = 3
+n_jobs = 1
+[verification]
+n_theta = 6
+n_jobs = 1
+[report]
+n_speeds = 20
+campbell_speeds = 4
+n_modes = 2
+"""
+
+SPINDLE = """[experiment]
+name = "r"
+kind = "spindle_report"
+[report]
+designs = { a = [3000.0, 300.0, 80.0] }
+n_speeds = 20
+campbell_speeds = 3
+n_modes = 2
+"""
+
+VALIDATION = """[experiment]
+name = "v"
+kind = "surrogate_validation"
+seed = 1
+[surrogate]
+n_doe = 14
+n_jobs = 1
+[validation]
+n_test = 10
+n_theta = 20
+[validation.designs]
+a = [2000.0, 330.0, 75.0]
+"""
+
+GEOMETRY_OK = """[geometry]
+tool_tip_mm = 0.0
+[[geometry.sections]]
+length_mm = 100.0
+outer_diameter_mm = 60.0
+tag = "span"
+[[geometry.sections]]
+length_mm = 300.0
+outer_diameter_mm = 60.0
+tag = "span"
+[[geometry.bearings]]
+name = "front"
+position_mm = 100.0
+law = {type = "constant", k_N_per_m = 2e8}
+[[geometry.bearings]]
+name = "rear"
+position_mm = 400.0
+law = {type = "constant", k_N_per_m = 2e8}
+[[geometry.unbalances]]
+position_mm = 0.0
+magnitude_kgm = 1e-5
+"""
+
+
+def _set(base: str, table: str, line: str) -> str:
+    """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
+    head = f"[{table}]\n"
+    if head in base:
+        return base.replace(head, head + line + "\n", 1)
+    return base + f"\n{head}{line}\n"
+
+
+def _sub(base: str, old: str, new: str) -> str:
+    assert old in base, old
+    return base.replace(old, new, 1)
+
+
+def S(table: str, line: str) -> str:          # noqa: N802 - short names keep the corpus legible
+    return _set(STUDY, table, line)
+
+
+def R(table: str, line: str) -> str:          # noqa: N802
+    return _set(SPINDLE, table, line)
+
+
+def V(table: str, line: str) -> str:          # noqa: N802
+    return _set(VALIDATION, table, line)
+
+
+ARR = r"must be an array of"
+INT = r"must be an integer"
+NUM = r"must be a number"
+BOOL = r"must be true or false"
+STR = r"must be a string"
+TAB = r"must be a table"
+
+#: (id, config, files {name: text}, extra CLI args, regex)
+CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
+    # ------------------------------------------------------------------ the file itself
+    ("toml_syntax", "[experiment\n", {}, [], r"config file '.*exp.toml' is not valid TOML"),
+    ("no_experiment", "[report]\nn_speeds = 3\n", {}, [], r"missing \[experiment\] table"),
+    ("experiment_not_table", "experiment = 5\n", {}, [], r"missing \[experiment\] table"),
+    ("binary", "\x00\x01\x02", {}, [], r"is not valid TOML"),
+    ("empty", "", {}, [], r"missing \[experiment\] table"),
+    # ------------------------------------------------------------------ [experiment]
+    ("kind_missing", "[experiment]\nname = 'x'\n", {}, [], r"experiment.kind is missing"),
+    ("name_missing", "[experiment]\nkind = 'study'\n", {}, [], r"experiment.name is missing"),
+    ("kind_unknown", "[experiment]\nname = 'x'\nkind = 'nope'\n", {}, [],
+     r"experiment.kind = 'nope' is not allowed: unknown experiment kind; known: .*study"),
+    ("kind_int", "[experiment]\nname = 'x'\nkind = 3\n", {}, [],
+     r"experiment.kind = 3 is not allowed: " + STR),
+    ("name_int", "[experiment]\nname = 3\nkind = 'study'\n", {}, [],
+     r"experiment.name = 3 is not allowed: " + STR),
+    ("name_escape", _sub(SPINDLE, 'name = "r"', 'name = "../../x"'), {}, [],
+     r"experiment.name = '../../x' is not allowed: must be 1-128 letters"),
+    ("name_slash", _sub(SPINDLE, 'name = "r"', 'name = "a/b"'), {}, [],
+     r"experiment.name = 'a/b' is not allowed"),
+    ("name_dot", _sub(SPINDLE, 'name = "r"', 'name = "."'), {}, [],
+     r"experiment.name = '.' is not allowed"),
+    ("name_empty", _sub(SPINDLE, 'name = "r"', 'name = ""'), {}, [],
+     r"experiment.name = '' is not allowed"),
+    ("seed_neg", R("experiment", "seed = -3"), {}, [], r"experiment.seed = -3 is not allowed"),
+    ("seed_float", R("experiment", "seed = 1.5"), {}, [],
+     r"experiment.seed = 1.5 is not allowed: " + INT),
+    ("seed_str", R("experiment", "seed = '7'"), {}, [],
+     r"experiment.seed = '7' is not allowed: " + INT),
+    ("seed_bool", R("experiment", "seed = true"), {}, [],
+     r"experiment.seed = True is not allowed: " + INT),
+    ("experiment_unknown_key", R("experiment", "colour = 1"), {}, [],
+     r"unknown key experiment.colour; allowed: \['description', 'kind', 'name'"),
+    ("results_dir_int", R("experiment", "results_dir = 5"), {}, [],
+     r"experiment.results_dir = 5 is not allowed: " + STR),
+    ("description_list", R("experiment", "description = ['a']"), {}, [],
+     r"experiment.description = \['a'\] is not allowed: " + STR),
+    # ------------------------------------------------------------------ unknown tables
+    ("reprot", SPINDLE.replace("[report]", "[reprot]"), {}, [],
+     r"unknown table reprot; allowed: \['report', 'spindle'\]"),
+    ("study_unknown_table", S("optimisation", "n_gen = 3"), {}, [],
+     r"unknown table optimisation; allowed: \[.*'optimization'"),
+    ("validation_unknown_table", V("response", "kind = 'peak'"), {}, [],
+     r"unknown table response; allowed"),
+    ("top_level_key", "top = 1\n" + SPINDLE, {}, [], r"unknown key top"),
+    ("table_is_scalar", "report = 3\n" + SPINDLE.split("[report]")[0], {}, [],
+     r"report = 3 is not allowed: " + TAB),
+    # ------------------------------------------------------------------ [spindle]
+    ("geometry_int", R("spindle", "geometry = 5"), {}, [],
+     r"spindle.geometry = 5 is not allowed: " + STR),
+    ("geometry_missing_file", R("spindle", "geometry = 'nope.toml'"), {}, [],
+     r"spindle.geometry file '.*nope.toml' does not exist"),
+    ("geometry_missing_json", R("spindle", "geometry = 'nope.json'"), {}, [],
+     r"spindle.geometry file '.*nope.json' does not exist"),
+    ("geometry_suffix", R("spindle", "geometry = 'g.yaml'"), {"g.yaml": "a: 1"}, [],
+     r"spindle.geometry file '.*g.yaml' is not allowed: the suffix must be .toml or .json"),
+    ("geometry_json_syntax", R("spindle", "geometry = 'g.json'"), {"g.json": "{bad"}, [],
+     r"spindle.geometry file '.*g.json' is not valid JSON"),
+    ("geometry_json_list", R("spindle", "geometry = 'g.json'"), {"g.json": "[1, 2]"}, [],
+     r"spindle.geometry file '.*g.json' holds a list: must be a table"),
+    ("geometry_toml_syntax", R("spindle", "geometry = 'g.toml'"), {"g.toml": "[geometry"}, [],
+     r"spindle.geometry file '.*g.toml' is not valid TOML"),
+    ("geometry_bearing_no_name", R("spindle", "geometry = 'g.toml'"),
+     {"g.toml": GEOMETRY_OK.replace('name = "rear"\n', "")}, [],
+     r"spindle.geometry file '.*g.toml': a required key 'name' is missing"),
+    ("geometry_unknown_key", R("spindle", "geometry = 'g.toml'"),
+     {"g.toml": GEOMETRY_OK.replace("tool_tip_mm = 0.0", "tool_tip = 0.0")}, [],
+     r"spindle.geometry file '.*g.toml': unknown key\(s\) \['tool_tip'\]"),
+    ("geometry_zero_unbalance", R("spindle", "geometry = 'g.toml'"),
+     {"g.toml": GEOMETRY_OK.replace("magnitude_kgm = 1e-5", "magnitude_kgm = 0.0")}, [],
+     r"every unbalance is zero"),
+    ("geometry_no_unbalance", R("spindle", "geometry = 'g.toml'"),
+     {"g.toml": GEOMETRY_OK.split("[[geometry.unbalances]]")[0]}, [],
+     r"every unbalance is zero \(or there is none\)"),
+    ("geometry_bad_law", R("spindle", "geometry = 'g.toml'"),
+     {"g.toml": GEOMETRY_OK.replace('type = "constant", k_N', 'type = "magic", k_N')}, [],
+     r"spindle.geometry file '.*g.toml': bearings\[\].law.type = 'magic' is not allowed"),
+    ("grade_str", R("spindle", "balance_grade_mm_s = 'G2.5'"), {}, [],
+     r"spindle.balance_grade_mm_s = 'G2.5' is not allowed: " + NUM),
+    ("grade_neg", R("spindle", "balance_grade_mm_s = -1"), {}, [],
+     r"spindle.balance_grade_mm_s = -1.0 is not allowed: must be a finite number > 0"),
+    ("grade_nan", R("spindle", "balance_grade_mm_s = nan"), {}, [],
+     r"spindle.balance_grade_mm_s = nan is not allowed: must be a finite number"),
+    ("grade_inf", R("spindle", "balance_grade_mm_s = inf"), {}, [],
+     r"spindle.balance_grade_mm_s = inf is not allowed: must be a finite number"),
+    ("grade_with_file", R("spindle", "geometry = 'g.toml'\nbalance_grade_mm_s = 2.5"),
+     {"g.toml": GEOMETRY_OK}, [], r"spindle.balance_grade_mm_s applies only to geometry"),
+    ("effects_str", R("spindle", "effects = 'none'"), {}, [],
+     r"spindle.effects = 'none' is not allowed: " + ARR),
+    ("effects_unknown", R("spindle", "effects = [{name = 'warp'}]"), {}, [],
+     r"spindle.effects\[0\]: unknown effect 'warp'; known: .*speed_softening"),
+    ("effects_no_name", R("spindle", "effects = [{a = 0.1}]"), {}, [],
+     r"spindle.effects\[0\]: unknown effect None"),
+    ("effects_bad_param", R("spindle", "effects = [{name = 'speed_softening', b = 1}]"), {},
+     [], r"spindle.effects\[0\]: unknown key\(s\) \['b'\]"),
+    ("effects_scalar_item", R("spindle", "effects = [3]"), {}, [],
+     r"spindle.effects\[0\] = 3 is not allowed: " + TAB),
+    ("design_map_int", R("spindle", "design_map = 5"), {}, [],
+     r"spindle.design_map = 5 is not allowed: " + TAB),
+    ("design_map_key", R("spindle", "design_map = {lowr = [1.0, 2.0, 3.0]}"), {}, [],
+     r"unknown key spindle.design_map.lowr; allowed: \['lower', 'preload_bearing'"),
+    ("design_map_short", R("spindle", "design_map = {lower = [1000.0, 300.0]}"), {}, [],
+     r"spindle.design_map.lower = \[1000.0, 300.0\] is not allowed: must be an array of 3"),
+    ("design_map_order", R("spindle", "design_map = {lower = [3000.0, 300.0, 50.0], "
+                           "upper = [1000.0, 750.0, 80.0]}"), {}, [],
+     r"spindle.design_map: design bounds for preload_N = \[3000.0, 1000.0\] are not allowed"),
+    ("design_map_bore", R("spindle", "design_map = {lower = [1000.0, 300.0, 25.0]}"), {}, [],
+     r"\[spindle.design_map\] lower = \[1000.0, 300.0, 25.0\]: design diameter_mm = 25.0"),
+    ("baseline_outside", R("spindle", "baseline = [9000.0, 500.0, 65.0]"), {}, [],
+     r"spindle.baseline: design preload_N = 9000.0 is not allowed: must lie in"),
+    ("baseline_str", R("spindle", "baseline = '2000,500,65'"), {}, [],
+     r"spindle.baseline = '2000,500,65' is not allowed: " + ARR),
+    ("theta_bearings_str", R("spindle", "theta_bearings = 'front'"), {}, [],
+     r"spindle.theta_bearings = 'front' is not allowed: " + ARR),
+    ("theta_bearings_dup", R("spindle", "theta_bearings = ['front', 'front']"), {}, [],
+     r"theta_bearings = \['front', 'front'\] is not allowed.*appears twice"),
+    ("theta_bearings_unknown", R("spindle", "theta_bearings = ['nose']"), {}, [],
+     r"theta_bearings: 'nose' is not a bearing"),
+    ("spindle_unknown_key", R("spindle", "geometri = 'reference'"), {}, [],
+     r"unknown key spindle.geometri; allowed: \['balance_grade_mm_s', 'baseline'"),
+    # ------------------------------------------------------------------ [report] (spindle)
+    ("n_speeds_1", _sub(SPINDLE, "n_speeds = 20", "n_speeds = 1"), {}, [],
+     r"report.n_speeds = 1 is not allowed: must be an integer >= 2"),
+    ("n_speeds_float", _sub(SPINDLE, "n_speeds = 20", "n_speeds = 1e12"), {}, [],
+     r"report.n_speeds = 1000000000000.0 is not allowed: " + INT),
+    ("n_speeds_huge", _sub(SPINDLE, "n_speeds = 20", "n_speeds = 1000000000000"), {}, [],
+     r"report.n_speeds = 1000000000000 is not allowed: .* GB of memory, more than the"),
+    ("n_modes_0", _sub(SPINDLE, "n_modes = 2", "n_modes = 0"), {}, [],
+     r"report.n_modes = 0 is not allowed"),
+    ("include_box_str", R("report", "include_box = 'yes'"), {}, [],
+     r"report.include_box = 'yes' is not allowed: " + BOOL),
+    ("include_box_int", R("report", "include_box = 1"), {}, [],
+     r"report.include_box = 1 is not allowed: " + BOOL),
+    ("designs_str", _sub(SPINDLE, "designs = { a = [3000.0, 300.0, 80.0] }", "designs = 'a'"),
+     {}, [], r"report.designs = 'a' is not allowed: must be a (valid dictionary|table)"),
+    ("designs_empty", _sub(SPINDLE, "designs = { a = [3000.0, 300.0, 80.0] }",
+                           "designs = {}"), {}, [], r"report.designs = \{\} is not allowed"),
+    ("design_outside", _sub(SPINDLE, "a = [3000.0, 300.0, 80.0]", "a = [9000.0, 300.0, 80.0]"),
+     {}, [], r"report.designs.a: design preload_N = 9000.0 is not allowed: must lie in"),
+    ("design_short", _sub(SPINDLE, "a = [3000.0, 300.0, 80.0]", "a = [3000.0, 300.0]"),
+     {}, [], r"report.designs.a = \[3000.0, 300.0\] is not allowed: must be an array of 3"),
+    ("design_str_item", _sub(SPINDLE, "a = [3000.0, 300.0, 80.0]", "a = [3000.0, 'x', 80.0]"),
+     {}, [], r"report.designs.a\[1\] = 'x' is not allowed: " + NUM),
+    ("report_unknown_key", R("report", "n_speed = 3"), {}, [],
+     r"unknown key report.n_speed; allowed: \['campbell_speeds', 'designs'"),
+    # ------------------------------------------------------------------ [uncertainty]
+    ("mean_negative", S("uncertainty", "mean = [-1.0, 1.0]"), {}, [],
+     r"uncertainty.mean\[0\] = -1.0 is not allowed: θ scales a bearing stiffness"),
+    ("mean_str", S("uncertainty", "mean = '1,1'"), {}, [],
+     r"uncertainty.mean = '1,1' is not allowed: " + ARR),
+    ("mean_len", S("uncertainty", "mean = [1.0, 1.0, 1.0]"), {}, [],
+     r"uncertainty.mean = \[1.0, 1.0, 1.0\] is not allowed: need 2 values"),
+    ("std_neg", S("uncertainty", "std = [0.05, -0.1]"), {}, [],
+     r"uncertainty.std\[1\] = -0.1 is not allowed"),
+    ("std_zero", S("uncertainty", "std = [0.05, 0.0]"), {}, [],
+     r"uncertainty.std\[1\] = 0.0 is not allowed"),
+    ("std_wide", S("uncertainty", "std = [0.5, 0.06]"), {}, [],
+     r"uncertainty.mean\[0\] = 1.0 is not allowed: .*need mean > 8 std = 4"),
+    ("corr_not_pd", S("uncertainty", "corr = [[1.0, 2.0], [2.0, 1.0]]"), {}, [],
+     r"uncertainty.corr: "),
+    ("corr_str", S("uncertainty", "corr = 'none'"), {}, [],
+     r"uncertainty.corr = 'none' is not allowed: " + ARR),
+    ("uncertainty_key", S("uncertainty", "sigma = [0.1, 0.1]"), {}, [],
+     r"unknown key uncertainty.sigma"),
+    # ------------------------------------------------------------------ [limit], [response]
+    ("delta_neg", S("limit", "delta_lim_um = -1.5"), {}, [],
+     r"limit.delta_lim_um = -1.5 is not allowed: must be a finite number > 0"),
+    ("delta_str", S("limit", "delta_lim_um = '1.5 um'"), {}, [],
+     r"limit.delta_lim_um = '1.5 um' is not allowed: " + NUM),
+    ("limit_key", S("limit", "delta_lim = 1.5"), {}, [], r"unknown key limit.delta_lim"),
+    ("response_kind", S("response", "kind = 'rms'"), {}, [],
+     r"response.kind = 'rms' is not allowed: must be one of \['peak', 'at_speed'\]"),
+    ("response_no_speed", S("response", "kind = 'at_speed'"), {}, [],
+     r"response.speed_rpm = None is not allowed"),
+    ("response_speed_str", S("response", "kind = 'at_speed'\nspeed_rpm = 'fast'"), {}, [],
+     r"response.speed_rpm = 'fast' is not allowed: " + NUM),
+    ("response_speed_range", S("response", "kind = 'at_speed'\nspeed_rpm = 90000.0"), {}, [],
+     r"response.speed_rpm = 90000.0 is not allowed: must lie in the spindle's speed range"),
+    ("response_peak_speed", S("response", "speed_rpm = 20000.0"), {}, [],
+     r"response.speed_rpm = 20000.0 is not allowed with kind = 'peak'"),
+    # ------------------------------------------------------------------ [surrogate]
+    ("structure_unknown", S("surrogate", "structure = 'neural'"), {}, [],
+     r"surrogate.structure = 'neural' is not allowed: must be one of \['fe', 'global'"),
+    ("structure_int", S("surrogate", "structure = 1"), {}, [],
+     r"surrogate.structure = 1 is not allowed: must be one of"),
+    ("n_doe_small", _sub(STUDY, "n_doe = 20", "n_doe = 3"), {}, [],
+     r"surrogate.n_doe = 3 is not allowed: must be an integer >= 7"),
+    ("n_doe_float", _sub(STUDY, "n_doe = 20", "n_doe = 20.0"), {}, [],
+     r"surrogate.n_doe = 20.0 is not allowed: " + INT),
+    ("n_doe_huge", _sub(STUDY, "n_doe = 20", "n_doe = 10000000"), {}, [],
+     r"surrogate.n_doe = 10000000 is not allowed: .* GB of memory"),
+    ("transform_bad", S("surrogate", "transform = 'sqrt'"), {}, [],
+     r"surrogate.transform = 'sqrt' is not allowed: must be one of \['log', 'none'\]"),
+    ("surrogate_name_bad", S("surrogate", "surrogate = 'nn'"), {}, [],
+     r"surrogate.surrogate = 'nn' is not allowed: must be one of"),
+    ("theta_bounds_order", S("surrogate", "theta_box = 'bounds'\ntheta_bounds = [1.5, 0.5]"),
+     {}, [], r"surrogate.theta_bounds = \(1.5, 0.5\) is not allowed"),
+    ("theta_bounds_str", S("surrogate", "theta_bounds = '0.5-1.5'"), {}, [],
+     r"surrogate.theta_bounds = '0.5-1.5' is not allowed: " + ARR),
+    ("al_str", S("surrogate", "active_learning = 'yes'"), {}, [],
+     r"surrogate.active_learning = 'yes' is not allowed: " + BOOL),
+    ("al_frac", S("surrogate", "al_uncertain_frac = 2.0"), {}, [],
+     r"surrogate.al_uncertain_frac = 2.0 is not allowed: must lie in \[0.0, 1.0\]"),
+    ("backend_bad", S("surrogate", "backend = 'mpi'"), {}, [],
+     r"surrogate.backend = 'mpi' is not allowed: must be one of"),
+    ("n_jobs_zero", _sub(STUDY, "n_doe = 20\nn_jobs = 1", "n_doe = 20\nn_jobs = 0"), {}, [],
+     r"surrogate.n_jobs = 0 is not allowed"),
+    ("surrogate_key_typo", S("surrogate", "n_dooe = 20"), {}, [],
+     r"unknown key surrogate.n_dooe; allowed: \[.*'n_doe'"),
+    ("fe_with_n_doe", S("surrogate", "structure = 'fe'"), {}, [],
+     r"unknown key surrogate.n_doe; allowed: \['fe_method'\]"),
+    ("res_with_transform", S("surrogate", "structure = 'resonance'\ntransform = 'none'"), {}, [],
+     r"unknown key surrogate.transform"),
+    ("res_at_speed", S("surrogate", "structure = 'resonance'") + "[response]\nkind = "
+     "'at_speed'\nspeed_rpm = 24000.0\n", {}, [],
+     r"surrogate.structure = 'resonance' is not allowed with response.kind = 'at_speed'"),
+    ("res_bg_only", S("surrogate", "structure = 'resonance'\nres_bg_only_r = 0.99"), {}, [],
+     r"surrogate.res_bg_only_r = 0.99 is not allowed: must be <= res_bg_r_max"),
+    ("sub_speeds", S("surrogate", "structure = 'substructure'\nsub_n_speeds = 1"), {}, [],
+     r"surrogate.sub_n_speeds = 1 is not allowed"),
+    # ------------------------------------------------------------------ [design_model]
+    ("dm_small", _sub(STUDY, "n_train = 10", "n_train = 2"), {}, [],
+     r"design_model.n_train = 2 is not allowed: must be an integer >= 8"),
+    ("dm_str", _sub(STUDY, "n_train = 10", "n_train = 'ten'"), {}, [],
+     r"design_model.n_train = 'ten' is not allowed: " + INT),
+    ("dm_key", S("design_model", "n_test = 3"), {}, [], r"unknown key design_model.n_test"),
+    # ------------------------------------------------------------------ [deterministic]
+    ("stress_str", S("deterministic", "stress = 'no'"), {}, [],
+     r"deterministic.stress = 'no' is not allowed: " + BOOL),
+    ("stress_int", S("deterministic", "stress = 0"), {}, [],
+     r"deterministic.stress = 0 is not allowed: " + BOOL),
+    ("yield_neg", S("deterministic", "yield_strength_pa = -1.0"), {}, [],
+     r"deterministic.yield_strength_pa = -1.0 is not allowed"),
+    ("resonance_bad", _sub(STUDY, 'resonance = "none"', 'resonance = "campbell"'), {}, [],
+     r"deterministic.resonance = 'campbell' is not allowed: must be one of"),
+    ("resonance_separation", _sub(STUDY, 'resonance = "none"', 'resonance = "separation"\n'
+                                  "operating_speeds_rpm = [20000.0]"), {}, [],
+     r"deterministic.resonance = 'separation' is not allowed in a study"),
+    ("speeds_str", S("deterministic", "operating_speeds_rpm = 'fast'"), {}, [],
+     r"deterministic.operating_speeds_rpm = 'fast' is not allowed: " + ARR),
+    ("speeds_neg", S("deterministic", "operating_speeds_rpm = [-5.0]"), {}, [],
+     r"deterministic.operating_speeds_rpm\[0\] = -5.0 is not allowed"),
+    ("omega_zero", S("deterministic", "omega_max_rpm = 0.0"), {}, [],
+     r"deterministic.omega_max_rpm = 0.0 is not allowed"),
+    ("factor_neg", S("deterministic", "factor = -1.2"), {}, [],
+     r"deterministic.factor = -1.2 is not allowed"),
+    ("det_key", S("deterministic", "stres = true"), {}, [], r"unknown key deterministic.stres"),
+    # ------------------------------------------------------------------ [optimization]
+    ("p_targets_scalar", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = 0.05"), {}, [],
+     r"optimization.p_targets = 0.05 is not allowed: " + ARR),
+    ("p_targets_empty", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = []"), {}, [],
+     r"optimization.p_targets = \[\] is not allowed: give at least one"),
+    ("p_targets_range", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 1.5]"), {},
+     [], r"optimization.p_targets\[1\] = 1.5 is not allowed: must lie in \(0.0, 1.0\)"),
+    ("p_targets_dup", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 0.1]"), {},
+     [], r"optimization.p_targets = \[0.1, 0.1\] is not allowed: contains duplicates"),
+    ("p_targets_pct", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = ['5%']"), {}, [],
+     r"optimization.p_targets\[0\] = '5%' is not allowed: " + NUM),
+    ("weights_str", S("optimization", "weights = '0.5,0.5'"), {}, [],
+     r"optimization.weights = '0.5,0.5' is not allowed: " + ARR),
+    ("weights_one", S("optimization", "weights = [1.0]"), {}, [],
+     r"optimization.weights = \[1.0\] is not allowed: need two weights"),
+    ("weights_zero", S("optimization", "weights = [0.5, 0.0]"), {}, [],
+     r"optimization.weights\[1\] = 0.0 is not allowed"),
+    ("strategies_str", S("optimization", "strategies = 'rdo'"), {}, [],
+     r"optimization.strategies = 'rdo' is not allowed: " + ARR),
+    ("strategies_bad", S("optimization", "strategies = ['rdo', 'robust']"), {}, [],
+     r"optimization.strategies\[1\] = 'robust' is not allowed: must be one of"),
+    ("strategies_dup", S("optimization", "strategies = ['rdo', 'rdo']"), {}, [],
+     r"optimization.strategies = \['rdo', 'rdo'\] is not allowed: contains duplicates"),
+    ("estimator_bad", S("optimization", "estimator = 'mcmc'"), {}, [],
+     r"optimization.estimator = 'mcmc' is not allowed: must be one of"),
+    ("optimizer_bad", S("optimization", "optimizer = 'cmaes'"), {}, [],
+     r"optimization.optimizer = 'cmaes' is not allowed: must be one of \['nsga2', 'optuna'"),
+    ("optimizer_options_key", S("optimization", "optimizer_options = {crossover = 0.9}"), {},
+     [], r"optimization.optimizer_options has unknown key\(s\) \['crossover'\] for optimizer "
+         r"'nsga2'; allowed"),
+    ("optimizer_options_value", S("optimization", "optimizer_options = {crossover_prob = 2.0}"),
+     {}, [], r"optimization.optimizer_options.crossover_prob = 2.0 is not allowed"),
+    ("optimizer_options_clash", S("optimization", "optimizer_options = {pop_size = 4}"), {},
+     [], r"optimization.optimizer_options.pop_size is not allowed: set it in \[optimization\]"),
+    ("n_gen_zero", _sub(STUDY, "n_gen = 3", "n_gen = 0"), {}, [],
+     r"optimization.n_gen = 0 is not allowed"),
+    ("pop_float", _sub(STUDY, "pop_size = 8", "pop_size = 8.5"), {}, [],
+     r"optimization.pop_size = 8.5 is not allowed: " + INT),
+    ("n_theta_huge", _sub(STUDY, "n_theta = 40", "n_theta = 100000000000"), {}, [],
+     r"optimization.n_theta = 100000000000 is not allowed: .* GB of memory"),
+    ("eliminate_str", S("optimization", "eliminate_duplicates = 'true'"), {}, [],
+     r"optimization.eliminate_duplicates = 'true' is not allowed: " + BOOL),
+    ("opt_key", S("optimization", "generations = 3"), {}, [],
+     r"unknown key optimization.generations"),
+    # ------------------------------------------------------------------ [verification]
+    ("ver_n_theta_float", _sub(STUDY, "n_theta = 6", "n_theta = 1e11"), {}, [],
+     r"verification.n_theta = 100000000000.0 is not allowed: " + INT),
+    ("ver_n_theta_huge", _sub(STUDY, "n_theta = 6", "n_theta = 100000000000"), {}, [],
+     r"verification.n_theta = 100000000000 is not allowed: .* GB of memory"),
+    ("pf_method_bad", S("verification", "pf_method = 'form'"), {}, [],
+     r"verification.pf_method = 'form' is not allowed: must be one of \['mc', 'is'\]"),
+    ("chunk_zero", S("verification", "chunk = 0"), {}, [],
+     r"verification.chunk = 0 is not allowed"),
+    ("ver_key", S("verification", "n_thetas = 3"), {}, [],
+     r"unknown key verification.n_thetas; allowed"),
+    # ------------------------------------------------------------------ [report] (study)
+    ("study_baseline_outside", S("report", "baseline = [2000.0, 900.0, 65.0]"), {}, [],
+     r"report.baseline: design span_mm = 900.0 is not allowed"),
+    ("study_baseline_str", S("report", "baseline = 'default'"), {}, [],
+     r"report.baseline = 'default' is not allowed: " + ARR),
+    ("study_n_speeds_huge", _sub(STUDY, "n_speeds = 20", "n_speeds = 1000000000000"), {}, [],
+     r"report.n_speeds = 1000000000000 is not allowed: .* GB of memory"),
+    # ------------------------------------------------------------------ [refine]
+    ("refine_neg", S("refine", "rounds = -1"), {}, [], r"refine.rounds = -1 is not allowed"),
+    ("refine_theta", S("refine", "rounds = 1\ntheta = 1"), {}, [],
+     r"refine.theta = 1 is not allowed"),
+    ("refine_hyper", S("refine", "hyper = 'fixed'"), {}, [],
+     r"refine.hyper = 'fixed' is not allowed"),
+    ("refine_key", S("refine", "round = 1"), {}, [], r"unknown key refine.round"),
+    ("refine_substructure", S("surrogate", "structure = 'substructure'") + "[refine]\nrounds = "
+     "1\n", {}, [], r"refine.rounds = 1 is not allowed with surrogate.structure = "
+                    r"'substructure'"),
+    # ------------------------------------------------------------------ surrogate_validation
+    ("val_n_test", _sub(VALIDATION, "n_test = 10", "n_test = 1"), {}, [],
+     r"validation.n_test = 1 is not allowed"),
+    ("val_rel_tol", V("validation", "rel_tol = 0.0"), {}, [],
+     r"validation.rel_tol = 0.0 is not allowed"),
+    ("val_designs_empty", _sub(VALIDATION, "a = [2000.0, 330.0, 75.0]\n", ""), {}, [],
+     r"validation.designs = \{\} is not allowed|validation: designs = \{\} is not allowed"),
+    ("val_design_outside", _sub(VALIDATION, "a = [2000.0, 330.0, 75.0]",
+                                "a = [2000.0, 30.0, 75.0]"), {}, [],
+     r"validation.designs.a: design span_mm = 30.0 is not allowed"),
+    ("val_variants_str", V("validation", "variants = 'all'"), {}, [],
+     r"validation.variants = 'all' is not allowed: must be a (valid dictionary|table)"),
+    ("val_variant_main", VALIDATION + "[validation.variants.main]\nn_doe = 20\n", {}, [],
+     r"variants.main is not allowed"),
+    ("val_variant_fe", VALIDATION + "[validation.variants.x]\nstructure = 'fe'\n", {}, [],
+     r"validation.variants.x.structure = 'fe' is not allowed here"),
+    ("val_main_fe", _sub(VALIDATION, "n_doe = 14\nn_jobs = 1", "structure = 'fe'"), {}, [],
+     r"surrogate.structure = 'fe' is not allowed here"),
+    ("val_variant_bad", VALIDATION + "[validation.variants.x]\nal_n_start = 0\n", {}, [],
+     r"validation.variants.x.al_n_start = 0 is not allowed"),
+    ("val_variant_key", VALIDATION + "[validation.variants.x]\nn_doee = 3\n", {}, [],
+     r"unknown key validation.variants.x.n_doee"),
+    ("val_key", V("validation", "n_tests = 3"), {}, [], r"unknown key validation.n_tests"),
+    ("val_n_theta_huge", _sub(VALIDATION, "n_theta = 20", "n_theta = 100000000000"), {}, [],
+     r"validation.n_theta = 100000000000 is not allowed: .* GB of memory"),
+    # ------------------------------------------------------------------ the command line
+    ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
+    ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),
+    ("cli_run_id_escape", SPINDLE, {}, ["--run-id", "../../etc"],
+     r"--run-id = '../../etc' is not allowed"),
+    ("cli_run_id_abs", SPINDLE, {}, ["--run-id", "/tmp/x"], r"--run-id = '/tmp/x' is not"),
+    ("cli_resume_no_id", SPINDLE, {}, ["--resume"], r"--resume is not allowed without"),
+    ("cli_resume_missing", SPINDLE, {}, ["--resume", "--run-id", "none"],
+     r"--resume: there is no run folder"),
+]
