@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from surrogate_rbrdo.reporting.plots_spindle import _plt, _save
+from surrogate_rbrdo.reporting.figures import pyplot as _plt
+from surrogate_rbrdo.reporting.figures import save_figure as _save
 
 
 def plot_convergence(results: Mapping[str, object], truth: np.ndarray, path: str | Path, *,
