@@ -127,7 +127,7 @@ class ValidationOptions:
     power: float = 0.8
     n_boot: int = 9999
     calibration_u: float | None = None
-    band_samples: int = 200
+    band_samples: int = 100
     campbell_speeds: int = 25
 
     def __post_init__(self) -> None:
