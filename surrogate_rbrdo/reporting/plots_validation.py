@@ -56,7 +56,7 @@ def plot_response_bands(result: ValidationResult, path: str | Path) -> Path:
 def plot_campbell_validation(result: ValidationResult, path: str | Path) -> Path:
     """Fig. 7's analogue: the model's Campbell diagram of each design (nominal θ; forward
     solid, backward dashed; o = its critical speeds) and the critical speeds measured on the
-    rig (filled markers; the bar spans run-down to run-up peak)."""
+    rig (squares, the bar spanning run-down to run-up peak; hollow: seen in one ramp only)."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4.8))
     top = result.options.speed_range_rpm[1]
@@ -78,10 +78,13 @@ def plot_campbell_validation(result: ValidationResult, path: str | Path) -> Path
             hi = np.nanmax([cm.rundown_rpm, cm.runup_rpm])
             ax.errorbar(cm.speed_rpm, cm.speed_rpm / 60.0,
                         xerr=[[cm.speed_rpm - lo], [hi - cm.speed_rpm]], fmt="s", color=col,
-                        ms=5, capsize=3, label=f"{d.name} (rig run-up/down)")
-    ax.plot([0, top], [0, top / 60.0], "k:", lw=1, label="1x")
+                        mfc=col if cm.both_ramps else "none", ms=6, capsize=3,
+                        label=f"{d.name} (rig run-up/down)" if cm.both_ramps
+                        else f"{d.name} (rig, one ramp only)")
+    right = max([top * 1.05] + [c.speeds_rpm[-1] for c in result.model_campbell.values()])
+    ax.plot([0, right], [0, right / 60.0], "k:", lw=1, label="1x")
     ax.axvline(top, color="grey", lw=0.8)
-    ax.set_xlim(0, top * 1.05)
+    ax.set_xlim(0, right)
     ax.set_ylim(0, f_top)
     ax.set_xlabel("speed (rpm)")
     ax.set_ylabel("damped natural frequency (Hz)")

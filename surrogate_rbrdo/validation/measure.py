@@ -24,7 +24,7 @@ Every quantity is what a test engineer gets from the probes, never the truth's o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,7 +32,12 @@ from surrogate_rbrdo.rig.demod import critical_speeds_from_ramp, demodulate, tra
 from surrogate_rbrdo.rig.integrate import SpeedProfile
 from surrogate_rbrdo.rig.phasors import sample_phasors
 from surrogate_rbrdo.rig.sensors import Installation
-from surrogate_rbrdo.rig.simulate import ProbeLayout, runup_record, steady_records
+from surrogate_rbrdo.rig.simulate import (
+    RAMP_OPTIONS,
+    ProbeLayout,
+    runup_record,
+    steady_records,
+)
 from surrogate_rbrdo.rig.truth import TruthState
 from surrogate_rbrdo.spindle.harmonic import orbit_amplitude, peak_search
 from surrogate_rbrdo.validation.options import ValidationOptions
@@ -59,6 +64,12 @@ class CriticalSpeedMeasurement:
     runup_rpm: float
     rundown_rpm: float
     amplification_factor: float
+
+    @property
+    def both_ramps(self) -> bool:
+        """Seen in the run-up and the run-down (a peak seen in one ramp only is usually a
+        resonance at a ramp's end, not developed: less reliable)."""
+        return bool(np.isfinite(self.runup_rpm) and np.isfinite(self.rundown_rpm))
 
 
 class _Meter:
@@ -121,11 +132,12 @@ def measure_criticals(state: TruthState, replica: int, options: ValidationOption
     """Critical speeds of one replication from a run-up and a run-down (``options.ramp_*``)."""
     model = state.model()
     a, b = options.ramp_rpm
+    integ = replace(RAMP_OPTIONS, segment_s=options.ramp_segment_s)
     found = []
     for k, (s0, s1) in enumerate(((a, b), (b, a))):
         rec = runup_record(model, state.theta, SpeedProfile.ramp(s0, s1, options.ramp_s),
                            options.sensors, inst, rng.spawn(1)[0], rid=f"ramp{k}",
-                           provenance={})
+                           provenance={}, options=integ)
         found.append(critical_speeds_from_ramp(track_1x(rec), options.ramp_channel))
     return pair_ramp_peaks(found[0], found[1], replica)
 

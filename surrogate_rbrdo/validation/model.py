@@ -22,6 +22,7 @@ True
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -151,6 +152,7 @@ class ModelPrediction:
     band_std: Mapping[str, np.ndarray] = field(default_factory=dict)
     campbell: Mapping[str, Campbell] = field(default_factory=dict)
     n_calls: int = 0
+    timings: Mapping[str, float] = field(default_factory=dict)
 
 
 def predict_model(spec: ModelSpec, designs: Mapping[str, Sequence[float]], *,
@@ -160,6 +162,7 @@ def predict_model(spec: ModelSpec, designs: Mapping[str, Sequence[float]], *,
     """Monte Carlo μ, σ, P_f of every design (common θ sample), and — where the spec has them
     and speeds are given — the ±2σ band of its curves and the nominal Campbell diagram."""
     rng = require_rng(rng)
+    t0 = time.perf_counter()
     names = list(designs)
     X = np.array([np.asarray(designs[k], float) for k in names])
     u = spec.inputs.standard_sample(spec.n_samples, rng=rng)
@@ -174,6 +177,7 @@ def predict_model(spec: ModelSpec, designs: Mapping[str, Sequence[float]], *,
         for j, k in enumerate(names):
             moments[k][q] = spec.known[k][q] if j not in todo else Moments.from_estimate(
                 est, todo.index(j), spec.n_samples, confidence)
+    t1 = time.perf_counter()
     bm, bs = {}, {}
     if spec.curves is not None and speeds_rpm is not None:
         th = spec.inputs.from_standard(u[:band_samples])
@@ -182,8 +186,11 @@ def predict_model(spec: ModelSpec, designs: Mapping[str, Sequence[float]], *,
             A = spec.curves(X[j], th, sp)
             bm[k], bs[k] = A.mean(axis=0), A.std(axis=0, ddof=1)
             calls += A.size
+    t2 = time.perf_counter()
     camp = {}
     if spec.spindle_model is not None and campbell_speeds_rpm is not None:
         camp = {k: campbell(spec.spindle_model(X[j]), np.asarray(campbell_speeds_rpm, float))
                 for j, k in enumerate(names)}
-    return ModelPrediction(moments, bm, bs, camp, calls)
+    t3 = time.perf_counter()
+    return ModelPrediction(moments, bm, bs, camp, calls,
+                           {"moments_s": t1 - t0, "band_s": t2 - t1, "campbell_s": t3 - t2})

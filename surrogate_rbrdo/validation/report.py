@@ -60,9 +60,12 @@ def _criticals(result: ValidationResult) -> list[str]:
     out = ["| design | replication | rig (run-down / run-up) rpm | model rpm | model − rig |",
            "|---|---|---|---|---|"]
     for r in rows:
+        one = "" if r["both_ramps"] else ", one ramp only"
+        diff = r["relative_difference"]
         out.append(f"| {r['design']} | {r['replica']} | {r['speed_rpm']:.0f} "
-                   f"({_g(r['rundown_rpm'], 5)} / {_g(r['runup_rpm'], 5)}) | "
-                   f"{_g(r['model_rpm'], 5)} | {_g(100 * r['relative_difference'])} % |")
+                   f"({_g(r['rundown_rpm'], 5)} / {_g(r['runup_rpm'], 5)}{one}) | "
+                   f"{_g(r['model_rpm'], 5)} | "
+                   f"{_g(100 * diff) + ' %' if np.isfinite(diff) else '–'} |")
     for d in result.designs:
         if not d.criticals and result.options.ramps:
             cs = result.model_campbell.get(d.name)

@@ -108,6 +108,7 @@ def critical_table(result: ValidationResult) -> list[dict[str, Any]]:
                 if model_cs.size else float("nan")
             rows.append({"design": d.name, "replica": c.replica, "speed_rpm": c.speed_rpm,
                          "runup_rpm": c.runup_rpm, "rundown_rpm": c.rundown_rpm,
+                         "both_ramps": c.both_ramps,
                          "amplification_factor": c.amplification_factor,
                          "model_rpm": near, "relative_difference": near / c.speed_rpm - 1.0})
     return rows
