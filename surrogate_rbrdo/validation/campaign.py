@@ -35,7 +35,7 @@ from surrogate_rbrdo.validation.measure import (
 )
 from surrogate_rbrdo.validation.model import ModelPrediction, ModelSpec, Moments, predict_model
 from surrogate_rbrdo.validation.options import ValidationOptions
-from surrogate_rbrdo.validation.replicas import TruthFamily, _child, replica_states
+from surrogate_rbrdo.validation.replicas import TruthFamily, child_seed, replica_states
 from surrogate_rbrdo.validation.table7 import Comparison, compare_designs
 
 Progress = Callable[[int, int, str], None]
@@ -122,9 +122,11 @@ def _measure_design(i: int, name: str, x, states, o: ValidationOptions, inst, ss
                  np.unique(np.r_[np.linspace(lo, hi, 12), o.rated_speed_rpm, o.ramp_rpm]))
     reps, crit = [], []
     for r, st in enumerate(states):
-        reps.append(measure_replica(st, o, inst, np.random.default_rng(_child(ss, 2, i, r))))
+        rng = np.random.default_rng(child_seed(ss, 2, i, r))
+        reps.append(measure_replica(st, o, inst, rng))
         if r < o.ramps:
-            crit += measure_criticals(st, r, o, inst, np.random.default_rng(_child(ss, 3, i, r)))
+            rng = np.random.default_rng(child_seed(ss, 3, i, r))
+            crit += measure_criticals(st, r, o, inst, rng)
         count[0] += 1
         if progress:
             progress(count[0], total, f"{name} replication {r + 1}/{len(states)}")
@@ -167,14 +169,14 @@ def validate_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]],
     ordered = {k: designs[k] for k in names}
     t0 = time.perf_counter()
     ss = rng.bit_generator.seed_seq
-    inst = o.sensors.install(np.random.default_rng(_child(ss, 9)))
-    states = replica_states(truth, ordered, o.n_replications, seed=_child(ss, 1),
+    inst = o.sensors.install(np.random.default_rng(child_seed(ss, 9)))
+    states = replica_states(truth, ordered, o.n_replications, seed=child_seed(ss, 1),
                             shared=o.shared, replicate=o.replicate)
     count, total = [0], len(names) * o.n_replications
     results = tuple(_measure_design(i, k, ordered[k], states[k], o, inst, ss, progress, count,
                                     total) for i, k in enumerate(names))
     t1 = time.perf_counter()
-    stat_rng = np.random.default_rng(_child(ss, 5))
+    stat_rng = np.random.default_rng(child_seed(ss, 5))
     comps = tuple(
         compare_designs(results[0].values(q), d.values(q), quantity=q, names=(base, d.name),
                         delta_lim_m=o.delta_lim_m, rng=stat_rng, confidence=o.confidence,
@@ -184,7 +186,8 @@ def validate_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]],
     pred, verdicts = None, ()
     if model is not None:
         pred = predict_model(model, ordered, delta_lim_m=o.delta_lim_m, confidence=o.confidence,
-                             rng=np.random.default_rng(_child(ss, 6)), speeds_rpm=o.speeds_rpm,
+                             rng=np.random.default_rng(child_seed(ss, 6)),
+                             speeds_rpm=o.speeds_rpm,
                              band_samples=o.band_samples,
                              campbell_speeds_rpm=np.linspace(
                                  0.0, CAMPBELL_OVERSPEED * o.speed_range_rpm[1],

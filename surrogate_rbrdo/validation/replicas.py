@@ -102,7 +102,7 @@ def check_groups(name: str, groups: Sequence[str], allowed: Sequence[str]) -> tu
     return groups
 
 
-def _child(ss: np.random.SeedSequence, *key: int) -> np.random.SeedSequence:
+def child_seed(ss: np.random.SeedSequence, *key: int) -> np.random.SeedSequence:
     """A child seed sequence addressed by ``key`` (random access: any replica alone)."""
     return np.random.SeedSequence(ss.entropy, spawn_key=tuple(ss.spawn_key) + tuple(key))
 
@@ -126,8 +126,8 @@ def replica_draws(truth: Truth, design_index: int, r: int, *, seed: np.random.Se
     shared_keys = {k for g in shared for k in SHARE_GROUPS[g][1]}
     out = {}
     for j, level in enumerate(LEVELS):
-        common = _draw(truth, level, _child(seed, 0, j, *keys[level]))
-        own = _draw(truth, level, _child(seed, 1, design_index, j, *keys[level]))
+        common = _draw(truth, level, child_seed(seed, 0, j, *keys[level]))
+        own = _draw(truth, level, child_seed(seed, 1, design_index, j, *keys[level]))
         out[level] = {k: (common[k] if k in shared_keys else own[k]) for k in own}
     return out
 

@@ -48,9 +48,12 @@ def test_result_shapes_and_order(result):
 
 
 def test_same_seed_same_measurement_and_other_seed_differs(result):
+    seen = []
     again = validate_designs(reference_family(), DESIGNS, options=replace(FAST, ramps=0),
-                             rng=np.random.default_rng(3))
+                             rng=np.random.default_rng(3),
+                             progress=lambda k, n, label: seen.append((k, n)))
     np.testing.assert_array_equal(again.design("base").peak, result.design("base").peak)
+    assert seen[0] == (1, 12) and seen[-1] == (12, 12)
     other = validate_designs(reference_family(), DESIGNS, options=replace(FAST, ramps=0),
                              rng=np.random.default_rng(4))
     assert not np.allclose(other.design("base").peak, result.design("base").peak)
