@@ -160,10 +160,10 @@ class ValidationOptions:
         object.__setattr__(self, "ramp_rpm", (float(a), float(b)))
         check_positive("ramp_s", self.ramp_s)
         check_positive("ramp_segment_s", self.ramp_segment_s)
-        check_choice("ramp_channel", self.ramp_channel, self.sensors.probe_channels)
         if "tool_x" not in self.sensors.probe_channels:
             raise ValueError(f"sensors.targets = {list(self.sensors.targets)} is not allowed: "
                              "validation measures the tool tip, so 'tool' must be a target")
+        check_choice("ramp_channel", self.ramp_channel, self.sensors.probe_channels)
         for name in ("confidence", "alpha", "power"):
             check_range(name, getattr(self, name), 0.0, 1.0, inclusive=False)
         check_int("n_boot", self.n_boot, minimum=100)

@@ -8,6 +8,7 @@ import pytest
 
 from surrogate_rbrdo.reporting.plots_validation import write_validation_report
 from surrogate_rbrdo.rig.campaign import read_phasors
+from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.spindle.harmonic import PeakOptions
 from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.uncertainty import MultivariateNormal
@@ -102,6 +103,7 @@ def test_bad_input():
     ({"ramp_channel": "spindle_x"}, "ramp_channel"),
     ({"speed_range_rpm": (5000.0, 1000.0)}, "speed_range_rpm"),
     ({"confidence": 1.5}, "confidence"),
+    ({"sensors": SensorSet(targets=("front", "rear"))}, "'tool' must be a target"),
 ])
 def test_options_bad_values(kw, match):
     with pytest.raises(ValueError, match=match):
