@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from surrogate_rbrdo.reporting.plots_spindle import _plt, _save
+from surrogate_rbrdo.reporting.figures import pyplot as _plt
+from surrogate_rbrdo.reporting.figures import save_figure as _save
 from surrogate_rbrdo.validation.campaign import ValidationResult
 from surrogate_rbrdo.validation.report import markdown_section
 from surrogate_rbrdo.validation.tables import write_tables
