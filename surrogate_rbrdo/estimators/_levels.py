@@ -5,7 +5,7 @@ Kept apart from ``_common`` because it needs :func:`~.mc.mc_with_outside` (``mc`
 ``_common``).
 
 >>> guard = StallGuard()
->>> [guard(g, k) for k, g in enumerate([4.0, 2.0, 2.0, 2.0, 2.0], start=1)]
+>>> [guard(g, k, np.array([0.0, 8.0])) for k, g in enumerate([4.0, 2.0, 2.0, 2.0, 2.0], start=1)]
 [False, False, False, False, True]
 """
 
@@ -22,16 +22,23 @@ from surrogate_rbrdo.estimators.mc import mc_with_outside
 
 
 class StallGuard:
-    """True once the thresholds γ_k stopped decreasing (by ``rel`` × |γ_1|) ``n`` times in a
-    row: no failure in reach."""
+    """True once the thresholds γ_k stopped decreasing (by ``rel`` × the spread of ``G`` in
+    the first level) ``n`` times in a row: no failure in reach.
+
+    The spread (standard deviation of the level-1 values), not ``|γ_1|``: a response far from
+    its threshold (``G`` ≈ 300 ± 0.2 µm) decreases by a fraction of a spread per level, a
+    vanishing fraction of ``|γ_1|``; a bounded one stops decreasing at all.
+    """
 
     def __init__(self, n: int = 3, rel: float = 1e-3) -> None:
         self.n, self.rel = n, rel
         self.prev, self.stalled, self.scale = np.inf, 0, 1.0
 
-    def __call__(self, gamma: float, level: int) -> bool:
+    def __call__(self, gamma: float, level: int, g: np.ndarray | None = None) -> bool:
         if level == 1:
-            self.scale = abs(gamma)
+            finite = g[np.isfinite(g)] if g is not None else np.empty(0)
+            spread = float(finite.std()) if finite.size > 1 else 0.0
+            self.scale = spread if spread > 0 else abs(gamma)
         self.stalled = self.stalled + 1 if self.prev - gamma < self.rel * self.scale else 0
         self.prev = min(self.prev, gamma)
         return self.stalled >= self.n

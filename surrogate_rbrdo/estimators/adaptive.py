@@ -121,7 +121,7 @@ class CrossEntropyIS:
             elite = g <= gamma if gamma > 0 else g < 0
             if elite.sum() < 2:
                 elite = g <= gamma
-            if gamma > 0 and (stall(gamma, level) or level == self.max_levels):
+            if gamma > 0 and (stall(gamma, level, g) or level == self.max_levels):
                 # not reached: IS estimate of P(G <= γ) from this level, an upper bound of P_f
                 pf, se, ess = is_weights_estimate(g <= gamma, logw)
                 return LevelResult(pf, se, ess, level, False, y0)

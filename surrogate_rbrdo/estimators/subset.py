@@ -129,7 +129,7 @@ class SubsetSimulation:
                 order = np.argsort(g, kind="stable")
                 gam = 0.5 * (g[order[nc - 1]] + g[order[nc]])
                 p_k = nc / g.size
-                if stall(gam, level):  # thresholds stopped decreasing: no failure in reach
+                if stall(gam, level, g):  # thresholds stopped decreasing: no failure in reach
                     return LevelResult(pf, pf * np.sqrt(delta2), delta_sum, level, False, y0)
             # chain correlation of the indicator of this level's event (Au & Beck 2001, Eq. 27)
             corr = 0.0
