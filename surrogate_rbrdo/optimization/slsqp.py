@@ -62,7 +62,7 @@ class SLSQPOptions:
 
     n_starts: int = 1
     maxiter: int = 100
-    ftol: float = 1e-10
+    ftol: float = 1e-8
     fd_step: float = 1e-5
     fd_scheme: str = "central"
     feasibility_tol: float = 1e-6
