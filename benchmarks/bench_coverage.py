@@ -19,17 +19,7 @@ import time
 from threadpoolctl import threadpool_limits
 
 from surrogate_rbrdo.estimators.coverage import coverage
-from surrogate_rbrdo.estimators.problems import (
-    OSCILLATOR_PF_SE,
-    correlated_normal,
-    linear_standard,
-    lognormal_nataf,
-    nonlinear_oscillator,
-    paraboloid,
-    series_four_branch,
-    two_design_points,
-    uniform_sum,
-)
+from surrogate_rbrdo.estimators.problems import OSCILLATOR_PF_SE, benchmark_problems
 
 #: (registry name, options): the same options on every problem (no per-problem tuning)
 CONFIGS = [
@@ -38,27 +28,6 @@ CONFIGS = [
     ("ais", {}),
     ("subset", {}),
 ]
-
-
-def problems():
-    """The benchmark problems, each with its source (see ``problems.py``)."""
-    cn = correlated_normal()
-    cn = type(cn)(**{**cn.__dict__, "x": cn.x[:1], "pf_exact": cn.pf_exact[:1],
-                     "name": "correlated_normal_3d"})
-    return [
-        linear_standard(beta=3.0, dim=2),
-        linear_standard(beta=5.0, dim=10),
-        linear_standard(beta=3.5, dim=100),
-        cn,
-        lognormal_nataf(),
-        uniform_sum(),
-        paraboloid(beta=3.0, kappa=0.3, dim=5),
-        series_four_branch(6.0),
-        series_four_branch(7.0),
-        two_design_points(),
-        nonlinear_oscillator(),
-        linear_standard(beta=-1.0, dim=2),
-    ]
 
 
 def main() -> None:
@@ -71,7 +40,7 @@ def main() -> None:
           "| model calls | CoV empirical | CoV reported | s/run |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     with threadpool_limits(1):
-        for prob in problems():
+        for prob in benchmark_problems():
             if args.problems and prob.name not in args.problems:
                 continue
             ref_se = OSCILLATOR_PF_SE if prob.name == "nonlinear_oscillator" else 0.0

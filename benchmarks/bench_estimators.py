@@ -23,14 +23,7 @@ from threadpoolctl import threadpool_limits
 
 from surrogate_rbrdo.core import LimitState
 from surrogate_rbrdo.estimators import EstimatorWarning, get_estimator, mc_from_values
-from surrogate_rbrdo.estimators.problems import (
-    correlated_normal,
-    linear_standard,
-    lognormal_nataf,
-    paraboloid,
-    series_four_branch,
-    uniform_sum,
-)
+from surrogate_rbrdo.estimators.problems import benchmark_problems, linear_standard
 
 DETERMINISTIC = {"form", "sorm", "fosm"}
 CONFIGS = [
@@ -45,20 +38,8 @@ CONFIGS = [
 
 
 def problems():
-    cn = correlated_normal()
-    cn = type(cn)(**{**cn.__dict__, "x": cn.x[:1], "pf_exact": cn.pf_exact[:1],
-                     "name": "correlated_normal_3d"})
-    return [
-        linear_standard(beta=5.0, dim=10),
-        linear_standard(beta=4.753424, dim=5),
-        cn,
-        lognormal_nataf(),
-        uniform_sum(),
-        paraboloid(beta=3.0, kappa=0.3, dim=5),
-        series_four_branch(6.0),
-        series_four_branch(7.0),
-        linear_standard(beta=-1.0, dim=2),
-    ]
+    """The coverage problems (``problems.benchmark_problems``) plus P_f = 1e-6 in 5-D."""
+    return [*benchmark_problems(), linear_standard(beta=4.753424, dim=5)]
 
 
 def run_pair(prob, name, opts, reps):

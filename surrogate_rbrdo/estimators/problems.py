@@ -206,3 +206,23 @@ def nonlinear_oscillator() -> Problem:
     return Problem("nonlinear_oscillator", resp, MultivariateNormal(mean, std=std),
                    LimitState(0.0), np.zeros((1, 0)), np.array([OSCILLATOR_PF]),
                    source="Echard et al. (2011); reference by crude MC, 2e8 samples")
+
+
+def benchmark_problems() -> list[Problem]:
+    """The published reliability problems of ``benchmarks/bench_coverage.py`` (first design of
+    each): linear in 2-D, 10-D (P_f = 2.9e-7) and 100-D, correlated normal, Nataf lognormals, the
+    sum of two uniforms, Breitung's paraboloid, the four-branch series system (k = 6, 7), the
+    two-design-point parabola, the non-linear oscillator and a failing mean point (β = −1).
+
+    >>> [p.name for p in benchmark_problems()][:3]
+    ['linear_2d_beta3', 'linear_10d_beta5', 'linear_100d_beta3.5']
+    """
+    cn = correlated_normal()
+    cn = Problem(**{**cn.__dict__, "x": cn.x[:1], "pf_exact": cn.pf_exact[:1],
+                    "name": "correlated_normal_3d"})
+    return [
+        linear_standard(beta=3.0, dim=2), linear_standard(beta=5.0, dim=10),
+        linear_standard(beta=3.5, dim=100), cn, lognormal_nataf(), uniform_sum(),
+        paraboloid(beta=3.0, kappa=0.3, dim=5), series_four_branch(6.0), series_four_branch(7.0),
+        two_design_points(), nonlinear_oscillator(), linear_standard(beta=-1.0, dim=2),
+    ]

@@ -6,14 +6,12 @@ Default suite: 10 seeds on the cheapest published problems (at most one silent m
 ≥ 95 % covered-or-warned per cell and ≥ 95 % covered where the method does not warn.
 """
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
 from surrogate_rbrdo.estimators.coverage import coverage
 from surrogate_rbrdo.estimators.problems import (
     OSCILLATOR_PF_SE,
+    benchmark_problems,
     linear_standard,
     paraboloid,
     series_four_branch,
@@ -36,21 +34,13 @@ def test_three_se_interval_covers_or_the_method_says_so(name, opts, prob):
         assert row.warned >= 8, row          # several design points: IS reports them
 
 
-def _bench():
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_coverage.py"
-    spec = importlib.util.spec_from_file_location("bench_coverage", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 @pytest.mark.slow
 def test_full_coverage_table():
-    bench = _bench()
     bad = []
-    for prob in bench.problems():
+    for prob in benchmark_problems():
         ref_se = OSCILLATOR_PF_SE if prob.name == "nonlinear_oscillator" else 0.0
-        for name, opts in bench.CONFIGS:
+        for name, opts in [("mc", {"n_samples": 100_000}), ("is", {}), ("ais", {}),
+                           ("subset", {})]:
             row = coverage(prob, name, opts, n_seeds=40, ref_se=ref_se)
             if row.share_covered_or_warned < 0.95:
                 bad.append((prob.name, name, row.covered, row.warned, row.silent_misses))
