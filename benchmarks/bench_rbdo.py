@@ -81,11 +81,12 @@ def main() -> None:
     print("| benchmark | published (kind) | solver | design | cost | vs reference | "
           "MC re-check max P_f/P_t | θ points | s |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for bench in (youn_choi(0.3, 3.0), youn_choi(0.6, 2.0), short_column(), cantilever()):
+    for bench in (youn_choi(0.3, 3.0), youn_choi(0.6, 2.0), short_column(),
+                  short_column("normal", 3.0), cantilever()):
         pub = np.array(bench.published_x)
         ref = reference(bench)
         pub_s = (f"({', '.join(f'{v:g}' for v in pub)}), {bench.published_cost:g} "
-                 f"({bench.published_kind})")
+                 f"({bench.published_kind})" if pub.size else bench.published_kind)
         runs = {
             "FORM (RIA) + SLSQP": solve(bench, n_theta=100, estimator="form",
                                         reliability_measure="beta", estimator_options={
@@ -94,7 +95,7 @@ def main() -> None:
                 bench, n_theta=args.n_theta, reliability_measure="quantile", pf_bound="upper"),
         }
         for label, (x, calls, dt) in runs.items():
-            against = pub if label.startswith("FORM") else ref
+            against = (pub if pub.size else None) if label.startswith("FORM") else ref
             vs = ("-" if against is None else
                   f"{100 * np.max(np.abs(x / against - 1)):.2f} % "
                   f"({'published' if label.startswith('FORM') else 'exact'})")
