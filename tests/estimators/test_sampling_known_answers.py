@@ -50,12 +50,14 @@ def test_is_and_ais_within_4_se(name, prob):
 
 
 def test_is_target_10d_3e7():
-    """Issue target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 3000 calls incl. FORM."""
+    """Issue 13 target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 1 500 calls incl. FORM
+    (OpenTURNS' post-FORM IS needs ~2 300, benchmarks/bench_is_small_pf.py), over 20 seeds."""
     prob = linear_standard(beta=5.0, dim=10)
-    est = run("is", prob, seed=2, n_samples=2900)
-    assert within(est, prob)
-    assert est.pf_cov[0] <= 0.05
-    assert est.n_calls <= 3000
+    runs = [run("is", prob, seed=s, n_samples=1478) for s in range(20)]
+    pf = np.array([r.pf[0] for r in runs])
+    assert all(r.n_calls <= 1500 for r in runs)
+    assert pf.std(ddof=1) / prob.pf_exact[0] <= 0.05
+    assert all(r.pf_cov[0] <= 0.05 and within(r, prob, k=3.0) for r in runs)
 
 
 @pytest.mark.parametrize("prob", [series_four_branch(6.0), two_design_points()],
