@@ -1,7 +1,7 @@
 """Shared protocols, result types, registries, validation helpers and errors."""
 
 from surrogate_rbrdo.core.counting import CallCounter, CountingResponse
-from surrogate_rbrdo.core.errors import ModelError, SingularSystemError
+from surrogate_rbrdo.core.errors import ModelError, OutsideDomainError, SingularSystemError
 from surrogate_rbrdo.core.protocols import (
     Estimate,
     Estimator,
@@ -19,6 +19,7 @@ __all__ = [
     "Estimator",
     "LimitState",
     "ModelError",
+    "OutsideDomainError",
     "Prediction",
     "Registry",
     "Response",

@@ -25,8 +25,12 @@ from surrogate_rbrdo.estimators.importance import ImportanceSampling
 from surrogate_rbrdo.estimators.adaptive import CrossEntropyIS
 from surrogate_rbrdo.estimators.sorm import SORM
 from surrogate_rbrdo.estimators.subset import SubsetSimulation
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
+from surrogate_rbrdo.estimators._common import clopper_pearson, evaluate_in_domain
+from surrogate_rbrdo.estimators.mc import mc_with_outside
 
 __all__ = [
-    "ESTIMATORS", "FORM", "FOSM", "SORM", "CrossEntropyIS", "ImportanceSampling", "MonteCarlo",
-    "SubsetSimulation", "get_estimator", "mc_from_values",
+    "ESTIMATORS", "FORM", "FOSM", "SORM", "CrossEntropyIS", "EstimatorWarning",
+    "ImportanceSampling", "MonteCarlo", "SubsetSimulation", "clopper_pearson",
+    "evaluate_in_domain", "get_estimator", "mc_from_values", "mc_with_outside",
 ]

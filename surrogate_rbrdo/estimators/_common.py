@@ -1,4 +1,14 @@
-"""Helpers shared by the estimators: argument checks, checked model evaluation, intervals."""
+"""Helpers shared by the estimators: argument checks, checked model evaluation, intervals.
+
+**Physical domain.** A model raises :class:`~surrogate_rbrdo.core.errors.OutsideDomainError`
+for inputs outside its physical domain (e.g. a bearing stiffness factor θ ≤ 0, which a normal
+θ reaches with a tiny probability and a FORM search can step into). :func:`evaluate_in_domain`
+isolates those points (by the rows the error names, else by bisection of the batch) and
+evaluates the others; the estimators count a point outside the domain as a **failure**. The
+reported P_f is then that of "failure or outside the domain", an upper bound of the physical
+P_f that exceeds it by at most P(θ outside the domain) (``n_outside_domain`` in the
+diagnostics says when it happened).
+"""
 
 from __future__ import annotations
 
@@ -9,7 +19,7 @@ from typing import Any
 import numpy as np
 from scipy import special
 
-from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.errors import ModelError, OutsideDomainError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.rng import require_rng
 
@@ -61,22 +71,72 @@ def evaluate(response: Callable, x: np.ndarray, theta: np.ndarray) -> np.ndarray
     return y
 
 
+def evaluate_in_domain(response: Callable, x: np.ndarray, theta: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, int]:
+    """``response(x, theta)`` with the θ rows outside the model's domain left out.
+
+    Returns ``y`` of shape ``(P, N)`` (NaN in the columns outside the domain), the boolean mask
+    ``inside`` of shape ``(N,)`` and the number of model points evaluated (what
+    :class:`~surrogate_rbrdo.core.CountingResponse` counts: only calls that returned). Rows
+    named by :class:`OutsideDomainError` are dropped and the rest evaluated again; an error
+    without rows splits the batch in halves. Any other error propagates.
+
+    >>> from surrogate_rbrdo.core.errors import OutsideDomainError
+    >>> def resp(x, t):
+    ...     if np.any(t[:, 0] <= 0):
+    ...         raise OutsideDomainError("theta <= 0", rows=np.flatnonzero(t[:, 0] <= 0))
+    ...     return np.log(t[:, 0])[None, :]
+    >>> y, inside, calls = evaluate_in_domain(resp, np.zeros((1, 0)), np.array([[1.0], [-1.0]]))
+    >>> inside.tolist(), calls, np.isnan(y).tolist()
+    ([True, False], 1, [[False, True]])
+    """
+    n = theta.shape[0]
+    y = np.full((x.shape[0], n), np.nan)
+    inside = np.ones(n, dtype=bool)
+    todo, calls = [np.arange(n)], 0
+    while todo:
+        idx = todo.pop()
+        try:
+            y[:, idx] = evaluate(response, x, theta[idx])
+            calls += x.shape[0] * idx.size
+        except OutsideDomainError as exc:
+            rows = np.asarray(exc.rows if exc.rows is not None else (), dtype=int)
+            if rows.size and rows.min() >= 0 and rows.max() < idx.size:
+                bad = np.zeros(idx.size, dtype=bool)
+                bad[rows] = True
+                inside[idx[bad]] = False
+                if (~bad).any():
+                    todo.append(idx[~bad])
+            elif idx.size == 1:
+                inside[idx] = False
+            else:                       # the model did not say which rows: bisect the batch
+                todo += [idx[: idx.size // 2], idx[idx.size // 2:]]
+    return y, inside, calls
+
+
 class LimitStateU:
-    """``G(u) = limit.g(response(x_p, T(u)))`` for one design, counting model calls."""
+    """``G(u) = limit.g(response(x_p, T(u)))`` for one design, counting model calls.
+
+    A point outside the model's physical domain gets ``G = −inf`` (a failure, see the module
+    docstring); ``n_outside`` counts them and ``last_y`` is NaN there.
+    """
 
     def __init__(self, response: Callable, inputs: Any, limit: LimitState,
                  x_row: np.ndarray) -> None:
         self.response, self.inputs, self.limit = response, inputs, limit
         self.x_row = x_row.reshape(1, -1)
         self.calls = 0
+        self.n_outside = 0
         self.last_y = np.empty(0)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = np.atleast_2d(u)
-        y = evaluate(self.response, self.x_row, self.inputs.from_standard(u))[0]
-        self.calls += u.shape[0]
-        self.last_y = y
-        return self.limit.g(y)
+        y, inside, calls = evaluate_in_domain(self.response, self.x_row,
+                                              self.inputs.from_standard(u))
+        self.calls += calls
+        self.n_outside += int(np.count_nonzero(~inside))
+        self.last_y = y[0]
+        return np.where(inside, self.limit.g(np.where(inside, y[0], 0.0)), -np.inf)
 
 
 def log_std_normal(v: np.ndarray) -> np.ndarray:

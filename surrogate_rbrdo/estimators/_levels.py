@@ -1,11 +1,11 @@
 """What the multi-level estimators (``ais``, ``subset``) share: the stall test of their
 intermediate thresholds and the loop over designs.
 
-Kept apart from ``_common`` because it needs :func:`~.mc.mc_from_values` (``mc`` imports
+Kept apart from ``_common`` because it needs :func:`~.mc.mc_with_outside` (``mc`` imports
 ``_common``).
 
 >>> guard = StallGuard()
->>> [guard(g, k) for k, g in enumerate([4.0, 2.0, 2.0, 2.0, 2.0], start=1)]
+>>> [guard(g, k, np.array([0.0, 8.0])) for k, g in enumerate([4.0, 2.0, 2.0, 2.0, 2.0], start=1)]
 [False, False, False, False, True]
 """
 
@@ -17,21 +17,28 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.estimators._common import LimitStateU, check_args, nan_p
-from surrogate_rbrdo.estimators.mc import mc_from_values
+from surrogate_rbrdo.estimators._common import LimitStateU, check_args, nan_p, normal_ci
+from surrogate_rbrdo.estimators.mc import mc_with_outside
 
 
 class StallGuard:
-    """True once the thresholds γ_k stopped decreasing (by ``rel`` × |γ_1|) ``n`` times in a
-    row: no failure in reach."""
+    """True once the thresholds γ_k stopped decreasing (by ``rel`` × the spread of ``G`` in
+    the first level) ``n`` times in a row: no failure in reach.
+
+    The spread (standard deviation of the level-1 values), not ``|γ_1|``: a response far from
+    its threshold (``G`` ≈ 300 ± 0.2 µm) decreases by a fraction of a spread per level, a
+    vanishing fraction of ``|γ_1|``; a bounded one stops decreasing at all.
+    """
 
     def __init__(self, n: int = 3, rel: float = 1e-3) -> None:
         self.n, self.rel = n, rel
         self.prev, self.stalled, self.scale = np.inf, 0, 1.0
 
-    def __call__(self, gamma: float, level: int) -> bool:
+    def __call__(self, gamma: float, level: int, g: np.ndarray | None = None) -> bool:
         if level == 1:
-            self.scale = abs(gamma)
+            finite = g[np.isfinite(g)] if g is not None else np.empty(0)
+            spread = float(finite.std()) if finite.size > 1 else 0.0
+            self.scale = spread if spread > 0 else abs(gamma)
         self.stalled = self.stalled + 1 if self.prev - gamma < self.rel * self.scale else 0
         self.prev = min(self.prev, gamma)
         return self.stalled >= self.n
@@ -44,36 +51,76 @@ class PerDesign(NamedTuple):
     se: np.ndarray
     extra: np.ndarray
     levels: np.ndarray
-    converged: np.ndarray
+    status: np.ndarray      # "converged", "not_reached" (pf is an upper bound) or "failed"
     calls: int
-    moments: Any   # mc_from_values of the level-1 responses (μ_y, σ_y and their SEs)
+    n_outside: np.ndarray
+    moments: Any   # mc_with_outside of the level-1 responses (μ_y, σ_y and their SEs)
+
+
+class LevelResult(NamedTuple):
+    """What a multi-level estimator's ``_one`` returns for one design.
+
+    ``reached``: the failure domain was reached. If not, ``pf`` and ``se`` estimate
+    ``P(G ≤ γ_last)`` for the last intermediate threshold ``γ_last > 0``, an upper bound of
+    ``P_f`` (the failure domain ``{G < 0}`` lies inside ``{G ≤ γ_last}``).
+    """
+
+    pf: float
+    se: float
+    extra: float
+    level: int
+    reached: bool
+    y0: np.ndarray
+
+
+ON_FAILURE = ("bound", "raise", "nan")
 
 
 def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: np.ndarray,
                    rng: np.random.Generator, u: np.ndarray | None, *, what: str, why: str,
                    advice: str) -> PerDesign:
-    """Check the arguments, run ``est._one(G, m, u, rng)`` for every design and collect.
+    """Check the arguments, run ``est._one(G, m, u, rng) -> LevelResult`` for every design.
 
-    ``_one`` returns ``(pf, se, extra, level, converged, y_level1)``. A design that does not
-    converge raises :class:`ModelError` when ``est.on_failure == "raise"``:
+    A design whose failure domain is not reached within ``max_levels`` (or whose thresholds
+    stopped decreasing) follows ``est.on_failure``: ``"bound"`` reports the upper bound
+    ``P(G ≤ γ_last)`` with ``status = "not_reached"``; ``"nan"`` gives NaN (``"failed"``);
+    ``"raise"`` raises :class:`ModelError`:
     ``"{what} did not reach the failure domain for design i after k levels
     (max_levels=…; {why}); {advice}"``.
     """
     x, u = check_args(inputs, limit, x, rng, u)
     p, m = x.shape[0], inputs.dim
     pf, se, extra, levels = nan_p(p), nan_p(p), nan_p(p), np.zeros(p, int)
-    conv = np.zeros(p, bool)
+    status = np.full(p, "converged", dtype=object)
+    nout = np.zeros(p, int)
     y0s, calls = [], 0
     for i in range(p):
         G = LimitStateU(response, inputs, limit, x[i])
-        pf[i], se[i], extra[i], levels[i], conv[i], y0 = est._one(G, m, u, rng)
+        r = est._one(G, m, u, rng)
         calls += G.calls
-        y0s.append(y0)
-        if not conv[i] and est.on_failure == "raise":
+        nout[i] = G.n_outside
+        y0s.append(r.y0)
+        pf[i], se[i], extra[i], levels[i] = r.pf, r.se, r.extra, r.level
+        if r.reached:
+            continue
+        if est.on_failure == "raise":
             raise ModelError(
-                f"{what} did not reach the failure domain for design {i} after {levels[i]} "
+                f"{what} did not reach the failure domain for design {i} after {r.level} "
                 f"levels (max_levels={est.max_levels}; {why}); {advice}")
-    return PerDesign(pf, se, extra, levels, conv, calls, mc_from_values(np.vstack(y0s), limit))
+        status[i] = "not_reached" if est.on_failure == "bound" else "failed"
+        if est.on_failure == "nan":
+            pf[i] = se[i] = extra[i] = np.nan
+    return PerDesign(pf, se, extra, levels, status.astype(str), calls, nout,
+                     mc_with_outside(np.vstack(y0s), limit))
 
 
-__all__ = ["PerDesign", "StallGuard", "run_per_design"]
+def interval(pf: np.ndarray, se: np.ndarray, status: np.ndarray, level: float) -> np.ndarray:
+    """``pf_ci``: ``pf ± z·se`` clipped to ``[0, 1]``; ``[0, pf + z·se]`` where ``pf`` is an upper
+    bound (``status == "not_reached"``)."""
+    ci = normal_ci(pf, se, level)
+    nr = status == "not_reached"
+    ci[nr, 0] = 0.0
+    return ci
+
+
+__all__ = ["LevelResult", "ON_FAILURE", "PerDesign", "StallGuard", "interval", "run_per_design"]

@@ -13,12 +13,20 @@ for any failure domain (``q`` has full support); starting from ``φ`` the mixtur
 branches of a series system instead of locking onto one design point, and when the mean point
 fails (``P_f > 0.5``) adaptation stops at once.
 
+``pf_se`` is the standard error of the final, independent sample (the adaptation levels only
+choose the density, so the estimate and its error are those of one plain IS run). Its weights'
+tail is checked: a Pareto ``k̂ > 0.7`` (:mod:`._tail`; e.g. Gaussian cross-entropy in 100
+dimensions, where the weights degenerate) raises an :class:`~._tail.EstimatorWarning`.
+Designs that never fail: see ``on_failure``. Points outside the model's physical domain count
+as failures (:mod:`._common`).
+
 ``mean``/``std`` of ``y`` come from the level-1 sample (plain Monte Carlo, ``n_per_level``
 points, or the fixed ``u``); the levels after it use ``rng``.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,15 +34,17 @@ import numpy as np
 
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
-from surrogate_rbrdo.estimators._common import (
-    LimitStateU,
-    log_std_normal,
-    make_estimate,
-    normal_ci,
-)
+from surrogate_rbrdo.estimators._common import LimitStateU, log_std_normal, make_estimate
 from surrogate_rbrdo.estimators._gmm import GaussianMixture, fit_mixture
-from surrogate_rbrdo.estimators._levels import StallGuard, run_per_design
-from surrogate_rbrdo.estimators.importance import is_weights_estimate
+from surrogate_rbrdo.estimators._levels import (
+    ON_FAILURE,
+    LevelResult,
+    StallGuard,
+    interval,
+    run_per_design,
+)
+from surrogate_rbrdo.estimators._tail import EstimatorWarning, pareto_khat
+from surrogate_rbrdo.estimators.importance import KHAT_LIMIT, is_weights_estimate
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
 
@@ -57,8 +67,10 @@ class CrossEntropyIS:
         Weight ``a`` of the widened standard normal in the final mixture, in [0, 0.999];
         0 switches it off.
     max_levels : int
-    on_failure : {"raise", "nan"}
-        What to do when ``max_levels`` is reached before ``γ = 0``.
+    on_failure : {"bound", "raise", "nan"}
+        When ``max_levels`` is reached (or the thresholds stall) before ``γ = 0``: report the
+        IS estimate of ``P(G ≤ γ_last)`` of the last level as an upper bound
+        (``status = "not_reached"``), raise ``ModelError``, or give NaN.
     ci_level : float
 
     Examples
@@ -77,7 +89,7 @@ class CrossEntropyIS:
     n_components: int = 4
     defensive: float = 0.1
     max_levels: int = 30
-    on_failure: str = "raise"
+    on_failure: str = "bound"
     ci_level: float = 0.95
 
     def __post_init__(self) -> None:
@@ -88,11 +100,11 @@ class CrossEntropyIS:
         check_int("n_components", self.n_components, minimum=1)
         check_range("defensive", self.defensive, 0.0, 0.999)
         check_int("max_levels", self.max_levels, minimum=1)
-        check_choice("on_failure", self.on_failure, ("raise", "nan"))
+        check_choice("on_failure", self.on_failure, ON_FAILURE)
         check_range("ci_level", self.ci_level, 0.0, 1.0, inclusive=False)
 
     def _one(self, G: LimitStateU, m: int, u0: np.ndarray | None, rng: np.random.Generator
-             ) -> tuple[float, float, float, int, bool, np.ndarray]:
+             ) -> LevelResult:
         h = GaussianMixture(np.ones(1), np.zeros((1, m)), np.eye(m)[None])
         v = u0 if u0 is not None else rng.standard_normal((self.n_per_level, m))
         y0 = None
@@ -104,17 +116,18 @@ class CrossEntropyIS:
             if y0 is None:
                 y0 = G.last_y.copy()
             logw = log_std_normal(v) - h.logpdf(v)
-            gamma = max(float(np.quantile(g, self.rho)), 0.0)
+            # "lower": no interpolation between -inf values (points outside the domain)
+            gamma = max(float(np.quantile(g, self.rho, method="lower")), 0.0)
             elite = g <= gamma if gamma > 0 else g < 0
             if elite.sum() < 2:
                 elite = g <= gamma
+            if gamma > 0 and (stall(gamma, level, g) or level == self.max_levels):
+                # not reached: IS estimate of P(G <= γ) from this level, an upper bound of P_f
+                pf, se, ess = is_weights_estimate(g <= gamma, logw)
+                return LevelResult(pf, se, ess, level, False, y0)
             h = fit_mixture(v[elite], logw[elite], self.n_components, rng)
             if gamma == 0.0:
                 break
-            if stall(gamma, level):  # thresholds stopped decreasing: no failure in reach
-                return np.nan, np.nan, np.nan, level, False, y0
-        else:
-            return np.nan, np.nan, np.nan, level, False, y0
         n, a = self.n_final, self.defensive
         # defensive component N(0, c I), c = mean square radius of h per dimension (>= 1)
         second = h.weights @ (np.sum(h.means**2, axis=1)
@@ -127,8 +140,10 @@ class CrossEntropyIS:
             ld = log_std_normal(v / np.sqrt(c)) - 0.5 * m * np.log(c)
             lq = np.logaddexp(np.log1p(-a) + lq, np.log(a) + ld)
         fail = G(v) < 0
-        pf, se, ess = is_weights_estimate(fail, log_std_normal(v) - lq)
-        return pf, se, ess, level, True, y0
+        logw = log_std_normal(v) - lq
+        pf, se, _ = is_weights_estimate(fail, logw)
+        khat = pareto_khat(np.where(fail, np.exp(np.where(fail, logw, 0.0)), 0.0))
+        return LevelResult(pf, se, khat, level, True, y0)
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
@@ -136,11 +151,23 @@ class CrossEntropyIS:
         r = run_per_design(
             self, response, inputs, limit, x, rng, u, what="cross-entropy IS",
             why="the thresholds stop decreasing when the response never fails",
-            advice="increase max_levels or n_per_level, or pass on_failure='nan'")
+            advice="increase max_levels or n_per_level, or pass on_failure='bound' for an "
+                   "upper bound")
         mc = r.moments
+        khat = np.where(r.status == "converged", r.extra, np.nan)
+        heavy = np.flatnonzero(np.nan_to_num(khat, nan=-np.inf) > KHAT_LIMIT)
+        if heavy.size:
+            warnings.warn(
+                f"cross-entropy IS: heavy-tailed final weights for design(s) "
+                f"{heavy[:10].tolist()} (Pareto k = {np.round(khat[heavy[:10]], 2).tolist()} > "
+                f"{KHAT_LIMIT}): the fitted density misses part of the failure domain (e.g. in "
+                "high dimension), pf_se is unreliable; use 'subset'",
+                EstimatorWarning, stacklevel=2)
         return make_estimate(
             "ais", r.calls, r.pf.size, mean=mc.mean, std=mc.std, mean_se=mc.mean_se,
-            std_se=mc.std_se, pf=r.pf, pf_se=r.se, pf_ci=normal_ci(r.pf, r.se, self.ci_level),
-            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "ess": r.extra,
-                         "levels": r.levels, "converged": r.converged},
+            std_se=mc.std_se, pf=r.pf, pf_se=r.se,
+            pf_ci=interval(r.pf, r.se, r.status, self.ci_level),
+            diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "pareto_k": khat,
+                         "levels": r.levels, "converged": r.status == "converged",
+                         "status": r.status, "n_outside_domain": r.n_outside},
         )

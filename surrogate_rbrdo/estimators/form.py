@@ -26,10 +26,18 @@ from surrogate_rbrdo.core.validate import check_choice, check_int, check_positiv
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
+#: outcome of a design-point search
+STATUSES = ("converged", "not_reached", "failed")
+
 
 @dataclass(frozen=True)
 class DesignPoint:
-    """Result of one design-point search (standard space)."""
+    """Result of one design-point search (standard space).
+
+    ``status`` is ``"converged"``, ``"not_reached"`` (the limit state ``G = 0`` was not met
+    before the model's physical domain ended or before ``‖u‖ = beta_max``: ``beta`` is the
+    distance reached, a first-order bound) or ``"failed"`` (no convergence, see ``message``).
+    """
 
     beta: float
     u_star: np.ndarray
@@ -40,64 +48,147 @@ class DesignPoint:
     n_iter: int
     calls: int
     message: str
+    status: str = "converged"
 
 
 def fd_gradient(G: LimitStateU, u: np.ndarray, g_u: float, step: float,
                 scheme: str) -> np.ndarray:
-    """Finite-difference gradient of ``G`` at ``u`` (one batched model call)."""
+    """Finite-difference gradient of ``G`` at ``u`` (one batched model call).
+
+    A difference point outside the model's domain (``G = −inf``) is replaced by the one-sided
+    difference on the other side (one more call); both sides outside gives a non-finite entry.
+    """
     m = u.size
     eye = np.eye(m) * step
     if scheme == "forward":
         gp = G(u[None, :] + eye)
-        return (gp - g_u) / step
+        grad = (gp - g_u) / step
+        out = ~np.isfinite(gp)
+        if out.any():
+            grad[out] = (g_u - G(u[None, :] - eye[out])) / step
+        return grad
     gv = G(np.vstack([u[None, :] + eye, u[None, :] - eye]))
-    return (gv[:m] - gv[m:]) / (2.0 * step)
+    gp, gm = gv[:m], gv[m:]
+    with np.errstate(invalid="ignore"):
+        grad = (gp - gm) / (2.0 * step)
+        grad = np.where(np.isfinite(gp), grad, (g_u - gm) / step)
+        return np.where(np.isfinite(gm) | ~np.isfinite(gp), grad, (gp - g_u) / step)
+
+
+def _alignment(u: np.ndarray, alpha: np.ndarray) -> float:
+    """Angle-like distance of ``u`` from the line through ``α`` (relative to ``max(1, ‖u‖)``)."""
+    return float(np.linalg.norm(u - (alpha @ u) * alpha)) / max(1.0, float(np.linalg.norm(u)))
+
+
+def _boundary(G: LimitStateU, u: np.ndarray, g: float, d: np.ndarray, lam_in: float,
+              lam_out: float, n_bisect: int = 8) -> tuple[np.ndarray, float, bool]:
+    """Bisect ``[lam_in, lam_out]`` along ``u + λd`` for the edge of the physical domain
+    (``G`` finite at ``lam_in``, ``−inf`` at ``lam_out``). Returns the last point inside, its
+    ``G`` and whether ``G`` changed sign on the way (the limit state lies inside after all)."""
+    g_in = float(G((u + lam_in * d)[None, :])[0]) if lam_in > 0 else g
+    crossed = np.sign(g_in) != np.sign(g)
+    for _ in range(n_bisect):
+        if crossed:
+            break
+        lam = 0.5 * (lam_in + lam_out)
+        gl = float(G((u + lam * d)[None, :])[0])
+        if np.isfinite(gl):
+            lam_in, g_in = lam, gl
+            crossed = np.sign(gl) != np.sign(g)
+        else:
+            lam_out = lam
+    return u + lam_in * d, g_in, bool(crossed)
+
+
+def _line_search(G: LimitStateU, u: np.ndarray, g: float, grad: np.ndarray, d: np.ndarray,
+                 c: float) -> tuple[np.ndarray, float, bool, float, float]:
+    """Armijo backtracking on the merit ``½‖u‖² + c|G|`` (12 halvings at most).
+
+    Returns the last trial inside the domain (``u`` itself if none), its ``G``, whether Armijo
+    accepted it, and the largest ``λ`` tried inside / smallest outside the domain (``nan`` /
+    ``inf`` when there was none)."""
+    merit = 0.5 * u @ u + c * abs(g)
+    slope = (u + c * np.sign(g) * grad) @ d
+    lam, lam_in, lam_out = 1.0, np.nan, np.inf
+    best = (u, g)
+    for _ in range(12):
+        un = u + lam * d
+        gn = float(G(un[None, :])[0])
+        if not np.isfinite(gn):      # outside the physical domain: shorten the step
+            lam_out = lam
+        else:
+            lam_in = lam if np.isnan(lam_in) else lam_in
+            best = (un, gn)
+            if 0.5 * un @ un + c * abs(gn) <= merit + 1e-4 * lam * min(slope, 0.0):
+                return un, gn, True, lam_in, lam_out
+        lam *= 0.5
+    return best[0], best[1], False, lam_in, lam_out
 
 
 def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
-          fd_step: float, fd_scheme: str) -> DesignPoint:
-    """Run iHL-RF on ``G`` from the origin; never raises on non-convergence (see ``converged``)."""
+          fd_step: float, fd_scheme: str, beta_max: float = np.inf) -> DesignPoint:
+    """Run iHL-RF on ``G`` from the origin; never raises on non-convergence (see ``status``).
+
+    Convergence: ``|G(u)| / |G(0)| <= tol_g`` and the relative distance of ``u`` from the line
+    through ``α``, ``‖u − (α·u)α‖ / max(1, ‖u‖) <= tol_u``. When the line search cannot
+    improve at a point with ``|G|`` converged and that distance below ``√tol_u`` (the accuracy a
+    finite-difference gradient allows; the error of ``β`` is second order in it), the search
+    has converged too. The limit state is *not reached* when an iterate still on the side of
+    ``G(0)`` lies beyond ``beta_max``, or when the step towards the linearised design point
+    leaves the physical domain twice in a row and ``G`` keeps its sign up to the domain's edge.
+    """
     u = np.zeros(m)
     g = float(G(u[None, :])[0])
-    g0 = g
-    scale = abs(g0) if g0 != 0 else 1.0
-    sign0 = 1.0 if g0 >= 0 else -1.0
+    if not np.isfinite(g):
+        raise ModelError("FORM: the mean point (u = 0) lies outside the model's physical domain")
+    scale = abs(g) if g != 0 else 1.0
+    sign0 = 1.0 if g >= 0 else -1.0
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)
-    msg = "maximum number of iterations reached"
-    converged = False
-    it = 0
+    msg, status, it, blocked = "maximum number of iterations reached", "failed", 0, 0
     while it < max_iter:
         it += 1
+        if sign0 * g > 0 and float(np.linalg.norm(u)) >= beta_max:
+            status = "not_reached"
+            msg = (f"limit state not reached within beta_max = {beta_max:g} "
+                   f"(|beta| >= {np.linalg.norm(u):.4g})")
+            break
         ng = float(np.linalg.norm(grad))
         if not np.isfinite(ng) or ng == 0.0:
             msg = f"zero or non-finite gradient of the limit state at u={u.tolist()}"
             break
         alpha = -grad / ng
-        e1 = abs(g) / scale
-        e2 = float(np.linalg.norm(u - (alpha @ u) * alpha))
-        if e1 <= tol_g and e2 <= tol_u:
-            converged, msg = True, "converged"
+        if abs(g) / scale <= tol_g and _alignment(u, alpha) <= tol_u:
+            status, msg = "converged", "converged"
             break
         d = ((grad @ u - g) / ng**2) * grad - u
         c = 2.0 * float(np.linalg.norm(u)) / ng + 10.0
-        merit = 0.5 * u @ u + c * abs(g)
-        slope = (u + c * np.sign(g) * grad) @ d
-        lam, accepted = 1.0, False
-        for _ in range(12):
-            un = u + lam * d
-            gn = float(G(un[None, :])[0])
-            if 0.5 * un @ un + c * abs(gn) <= merit + 1e-4 * lam * min(slope, 0.0):
-                accepted = True
+        un, gn, accepted, lam_in, lam_out = _line_search(G, u, g, grad, d, c)
+        blocked = blocked + 1 if np.isfinite(lam_out) else 0
+        if blocked >= 2 and sign0 * gn > 0:
+            ub, gb, crossed = _boundary(G, u, g, d, 0.0 if np.isnan(lam_in) else lam_in,
+                                        lam_out)
+            if not crossed:
+                u, g, status = ub, gb, "not_reached"
+                msg = ("limit state not reached inside the model's physical domain "
+                       f"(|beta| >= {np.linalg.norm(ub):.4g} along the search direction)")
                 break
-            lam *= 0.5
-        u, g = un, gn  # the last trial is taken even if Armijo failed (as FERUM does)
+            blocked, un, gn = 0, ub, gb
+        u, g = un, gn  # the last trial inside is taken even if Armijo failed (as FERUM does)
         grad = fd_gradient(G, u, g, fd_step, fd_scheme)
         if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
+            ng = float(np.linalg.norm(grad))
+            if (np.isfinite(ng) and ng > 0 and abs(g) / scale <= tol_g
+                    and _alignment(u, -grad / ng) <= np.sqrt(tol_u)):
+                status = "converged"
+                msg = ("converged (the line search cannot improve further: the alignment is "
+                       "limited by the finite-difference gradient)")
+                break
     ng = float(np.linalg.norm(grad))
-    alpha = -grad / ng if ng > 0 else np.full(m, np.nan)
-    beta = sign0 * float(np.linalg.norm(u))
-    return DesignPoint(beta, u, alpha, grad, g, converged, it, G.calls, msg)
+    alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
+    beta = sign0 * min(float(np.linalg.norm(u)),
+                       beta_max if status == "not_reached" else np.inf)
+    return DesignPoint(beta, u, alpha, grad, g, status == "converged", it, G.calls, msg, status)
 
 
 @ESTIMATORS.register("form")
@@ -108,7 +199,18 @@ class FORM:
     Gives ``pf = Φ(−β)``; ``mean``, ``std`` and all standard errors are NaN (use ``"fosm"`` or
     ``"mc"`` for moments). Diagnostics: ``beta``, ``u_star`` and ``theta_star`` ``(P, m)``,
     ``alpha`` (unit vector towards failure), ``importance_factors`` ``α²``, ``converged``,
-    ``n_iter``, ``calls`` (model calls per design), ``message``.
+    ``status`` (``"converged"``, ``"not_reached"``, ``"failed"``), ``pf_bound``
+    (``"upper"``/``"lower"`` where ``pf`` is a bound, else ``""``), ``n_iter``, ``calls``
+    (model calls per design), ``message``.
+
+    **Limit state not reached.** When the search meets the edge of the model's physical
+    domain (the model raises ``OutsideDomainError``, e.g. a stiffness factor θ ≤ 0) or passes
+    ``‖u‖ = beta_max`` with ``G`` still of the sign of ``G(0)``, the design never fails
+    (never survives) as far as the search can see: ``pf = Φ(−|β_b|)`` with ``β_b`` the distance
+    reached is reported as an **upper bound** (a lower bound ``1 − Φ(−|β_b|)`` when the mean
+    point fails), ``pf_ci = [0, pf]`` (``[pf, 1]``), ``status = "not_reached"``. The bound is
+    first-order: FORM only explores along its search path. Not an error, whatever
+    ``on_failure`` says.
 
     Parameters
     ----------
@@ -116,12 +218,16 @@ class FORM:
     tol_g : float
         Convergence on ``|G(u)| / |G(0)|``.
     tol_u : float
-        Convergence on the distance of ``u`` from the line through ``α`` (alignment).
+        Convergence on the distance of ``u`` from the line through ``α``, relative to
+        ``max(1, ‖u‖)`` (an angle for ``‖u‖ > 1``).
     fd_step : float
         Finite-difference step in standard space (raise it for noisy models, e.g. FE solves).
     fd_scheme : {"forward", "central"}
     on_failure : {"raise", "nan"}
         Non-convergence raises ``ModelError`` or returns NaN for that design.
+    beta_max : float
+        Distance beyond which an unreached limit state is reported as a bound
+        (``Φ(−10) = 7.6e-24``).
 
     Examples
     --------
@@ -133,6 +239,14 @@ class FORM:
     ...                       rng=np.random.default_rng(0))
     >>> round(float(est.diagnostics["beta"][0]), 8), bool(est.diagnostics["converged"][0])
     (3.0, True)
+
+    A response that never reaches the threshold (``y = tanh(u₁) < 2``):
+
+    >>> est = FORM().estimate(lambda x, t: np.tanh(t[:, :1].T), inputs, LimitState(2.0),
+    ...                       np.zeros((1, 0)), rng=np.random.default_rng(0))
+    >>> d = est.diagnostics
+    >>> str(d["status"][0]), str(d["pf_bound"][0]), float(d["beta"][0]), bool(est.pf[0] < 1e-20)
+    ('not_reached', 'upper', 10.0, True)
     """
 
     max_iter: int = 100
@@ -141,6 +255,7 @@ class FORM:
     fd_step: float = 1e-6
     fd_scheme: str = "forward"
     on_failure: str = "raise"
+    beta_max: float = 10.0
 
     def __post_init__(self) -> None:
         check_int("max_iter", self.max_iter, minimum=1)
@@ -149,17 +264,19 @@ class FORM:
         check_positive("fd_step", self.fd_step)
         check_choice("fd_scheme", self.fd_scheme, ("forward", "central"))
         check_choice("on_failure", self.on_failure, ("raise", "nan"))
+        check_positive("beta_max", self.beta_max)
 
     def search(self, response: Any, inputs: Any, limit: LimitState,
                x_row: np.ndarray) -> DesignPoint:
         """Design-point search for one design ``x_row`` (shape ``(d,)``)."""
         G = LimitStateU(response, inputs, limit, np.asarray(x_row, dtype=float))
         return ihlrf(G, inputs.dim, max_iter=self.max_iter, tol_g=self.tol_g,
-                     tol_u=self.tol_u, fd_step=self.fd_step, fd_scheme=self.fd_scheme)
+                     tol_u=self.tol_u, fd_step=self.fd_step, fd_scheme=self.fd_scheme,
+                     beta_max=self.beta_max)
 
     def check(self, dp: DesignPoint, p: int) -> None:
-        """Raise ``ModelError`` for a non-converged search when ``on_failure == "raise"``."""
-        if not dp.converged and self.on_failure == "raise":
+        """Raise ``ModelError`` for a failed search when ``on_failure == "raise"``."""
+        if dp.status == "failed" and self.on_failure == "raise":
             raise ModelError(
                 f"FORM did not converge for design {p}: {dp.message} after {dp.n_iter} "
                 f"iterations (beta={dp.beta:.6g}, G(u)={dp.g_star:.3g}); increase max_iter, "
@@ -171,25 +288,43 @@ class FORM:
         """Design-point search for every design of ``x`` (``rng`` and ``u`` are unused)."""
         x, _ = check_args(inputs, limit, x, rng, u)
         p, m = x.shape[0], inputs.dim
-        beta, conv, nit = np.full(p, np.nan), np.zeros(p, bool), np.zeros(p, int)
+        beta, nit = np.full(p, np.nan), np.zeros(p, int)
         ustar, alpha = np.full((p, m), np.nan), np.full((p, m), np.nan)
-        calls, msgs, per = 0, [], np.zeros(p, int)
+        calls, msgs, per, status = 0, [], np.zeros(p, int), []
         for i in range(p):
             dp = self.search(response, inputs, limit, x[i])
             self.check(dp, i)
             calls += dp.calls
-            per[i] = dp.calls
-            conv[i], nit[i] = dp.converged, dp.n_iter
+            per[i], nit[i] = dp.calls, dp.n_iter
             msgs.append(dp.message)
-            if dp.converged:
+            status.append(dp.status)
+            if dp.status != "failed":
                 beta[i], ustar[i], alpha[i] = dp.beta, dp.u_star, dp.alpha
+        status = np.array(status)
+        ok = status != "failed"
         theta = np.full((p, m), np.nan)
-        ok = conv
         if ok.any():
             theta[ok] = inputs.from_standard(ustar[ok])
+        pf = special.ndtr(-beta)
+        bound, ci = bound_interval(pf, beta, status)
         return make_estimate(
-            "form", calls, p, pf=special.ndtr(-beta),
+            "form", calls, p, pf=pf, pf_ci=ci,
             diagnostics={"beta": beta, "u_star": ustar, "theta_star": theta, "alpha": alpha,
-                         "importance_factors": alpha**2, "converged": conv, "n_iter": nit,
-                         "calls": per, "message": msgs},
+                         "importance_factors": alpha**2, "converged": status == "converged",
+                         "status": status, "pf_bound": bound, "n_iter": nit, "calls": per,
+                         "message": msgs},
         )
+
+
+def bound_interval(pf: np.ndarray, beta: np.ndarray, status: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """``pf_bound`` labels and the ``pf_ci`` of a FORM-type result: ``[0, pf]`` where ``pf``
+    is an upper bound (limit state not reached from a safe mean), ``[pf, 1]`` where it is a
+    lower bound (not reached from a failing mean), NaN elsewhere."""
+    nr = status == "not_reached"
+    bound = np.where(nr, np.where(beta >= 0, "upper", "lower"), "")
+    ci = np.full((pf.size, 2), np.nan)
+    up, lo = nr & (beta >= 0), nr & (beta < 0)
+    ci[up] = np.column_stack([np.zeros(up.sum()), pf[up]])
+    ci[lo] = np.column_stack([pf[lo], np.ones(lo.sum())])
+    return bound, ci

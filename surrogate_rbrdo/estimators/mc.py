@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -13,9 +14,10 @@ from surrogate_rbrdo.estimators._common import (
     check_args,
     check_finite_y,
     clopper_pearson,
-    evaluate,
+    evaluate_in_domain,
     make_estimate,
 )
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
 
@@ -83,13 +85,57 @@ def mc_from_values(
     )
 
 
+def mc_with_outside(y: np.ndarray, limit: LimitState, *, ci_level: float = 0.95,
+                    method: str = "mc") -> Estimate:
+    """:func:`mc_from_values` where NaN marks a point outside the model's physical domain.
+
+    Such points count as failures (the estimate is that of "failure or outside the domain",
+    see :mod:`._common`); μ_y, σ_y and their errors use the points inside only, row by row.
+    ``diagnostics["n_outside_domain"]`` counts them per design. Without NaN this is
+    :func:`mc_from_values`.
+
+    >>> from surrogate_rbrdo.core import LimitState
+    >>> est = mc_with_outside(np.array([[1.0, 2.0, np.nan, 4.0]]), LimitState(3.5))
+    >>> est.pf.tolist(), est.mean.round(6).tolist(), est.diagnostics["n_outside_domain"].tolist()
+    ([0.5], [2.333333], [1])
+    """
+    y = np.asarray(y, dtype=float)
+    out = np.isnan(y)
+    if not out.any():
+        return mc_from_values(y, limit, ci_level=ci_level, method=method)
+    p, n = y.shape
+    rows = [mc_from_values(r[np.isfinite(r)][None, :], limit, ci_level=ci_level, method=method)
+            if np.isfinite(r).any() else None for r in y]
+    nout = out.sum(axis=1)
+    nfail = nout + np.array([0 if e is None else e.diagnostics["n_failures"][0] for e in rows])
+    pf = nfail / n
+
+    def col(name: str) -> np.ndarray:
+        return np.array([np.nan if e is None else float(getattr(e, name)[0]) for e in rows])
+
+    return make_estimate(
+        method, int(np.count_nonzero(~out)), p, mean=col("mean"), std=col("std"),
+        mean_se=col("mean_se"), std_se=col("std_se"), pf=pf, pf_se=np.sqrt(pf * (1 - pf) / n),
+        pf_ci=clopper_pearson(nfail, n, ci_level),
+        diagnostics={"ci_level": ci_level, "ci_method": "clopper-pearson", "n_samples": n,
+                     "n_failures": nfail, "n_outside_domain": nout})
+
+
+#: below this many failures the normal interval pf ± 3·SE of crude MC is unreliable (Poisson
+#: skew); the Clopper-Pearson ``pf_ci`` stays exact
+MC_MIN_FAILURES = 10
+
+
 @ESTIMATORS.register("mc")
 @dataclass(frozen=True)
 class MonteCarlo:
     """Crude Monte Carlo over ``n_samples`` θ samples, vectorised over designs.
 
     With ``u`` given, its rows are the (common) standard-normal sample and ``n_samples`` is
-    ignored.
+    ignored. Points outside the model's physical domain count as failures
+    (:func:`mc_with_outside`). Fewer than ``MC_MIN_FAILURES`` failures for a design raise an
+    :class:`~._tail.EstimatorWarning` (the normal interval is then unreliable; ``pf_ci`` is
+    exact).
 
     >>> from surrogate_rbrdo.core import LimitState
     >>> from surrogate_rbrdo.uncertainty import MultivariateNormal
@@ -114,5 +160,13 @@ class MonteCarlo:
         x, u = check_args(inputs, limit, x, rng, u)
         if u is None:
             u = inputs.standard_sample(self.n_samples, rng=rng)
-        y = evaluate(response, x, inputs.from_standard(u))
-        return mc_from_values(y, limit, ci_level=self.ci_level, method="mc")
+        y, _, _ = evaluate_in_domain(response, x, inputs.from_standard(u))
+        est = mc_with_outside(y, limit, ci_level=self.ci_level, method="mc")
+        few = np.flatnonzero(np.asarray(est.diagnostics["n_failures"]) < MC_MIN_FAILURES)
+        if few.size:
+            warnings.warn(
+                f"crude Monte Carlo: fewer than {MC_MIN_FAILURES} failures in {y.shape[1]} "
+                f"samples for design(s) {few[:10].tolist()}: pf ± z·pf_se is unreliable (0 "
+                "failures give pf_se = 0); use pf_ci (Clopper-Pearson) or more samples",
+                EstimatorWarning, stacklevel=2)
+        return est

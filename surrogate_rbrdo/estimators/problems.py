@@ -157,3 +157,72 @@ def uniform_sum(threshold: float = 1.8) -> Problem:
                    np.zeros((1, 0)), np.array([(2.0 - threshold) ** 2 / 2.0]),
                    mean_exact=np.array([1.0]), std_exact=np.array([np.sqrt(1 / 6)]),
                    source="closed form (triangle area)")
+
+
+def two_design_points(b: float = 5.0, kappa: float = 0.5, e: float = 0.1) -> Problem:
+    """Parabolic limit state with two design points (Der Kiureghian & Dakessian 1998, *Struct.
+    Safety* 20, 37–49): ``g = b − u₂ − κ(u₁ − e)²``, failure ``y = −g > 0``.
+
+    Exact: ``P_f = ∫ φ(u₁) Φ(−b + κ(u₁ − e)²) du₁`` by 1-D quadrature: 3.0163e-3 for the paper's
+    ``b = 5, κ = 0.5, e = 0.1`` (its two design points at ``β ≈ 2.74`` and ``2.86``).
+    The failure domain wraps around the origin side of each FORM hyperplane.
+    """
+    def resp(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+        g = b - t[:, 1] - kappa * (t[:, 0] - e) ** 2
+        return -g[None, :] + 0 * _shift(x)
+
+    pf, _ = integrate.quad(lambda s: stats.norm.pdf(s) * special.ndtr(-b + kappa * (s - e) ** 2),
+                           -np.inf, np.inf, epsabs=1e-15, epsrel=1e-12, limit=200)
+    return Problem("two_design_points", resp, MultivariateNormal(np.zeros(2), cov=np.eye(2)),
+                   LimitState(0.0), np.zeros((1, 0)), np.array([pf]),
+                   source="Der Kiureghian & Dakessian (1998); exact by 1-D quadrature")
+
+
+#: crude Monte Carlo reference of the oscillator's P_f: 5 717 336 failures in 2·10⁸ samples,
+#: standard error 1.18e-5 (0.04 %); ``python benchmarks/reference_oscillator.py`` reruns it
+OSCILLATOR_PF = 2.858668e-2
+OSCILLATOR_PF_SE = 1.18e-5
+
+
+def nonlinear_oscillator() -> Problem:
+    """Non-linear undamped single-degree-of-freedom oscillator under a rectangular pulse
+    (Rajashekhar & Ellingwood 1993; Gayton, Bourinet & Lemaire 2003; Echard et al. 2011):
+    ``g = 3r − |2F₁/(mω₀²) sin(ω₀t₁/2)|``, ``ω₀ = √((c₁ + c₂)/m)``, six independent normals
+    ``m ~ N(1, 0.05)``, ``c₁ ~ N(1, 0.1)``, ``c₂ ~ N(0.1, 0.01)``, ``r ~ N(0.5, 0.05)``,
+    ``F₁ ~ N(1, 0.2)``, ``t₁ ~ N(1, 0.2)``; failure ``y = −g > 0``.
+
+    No closed form: the reference is our crude Monte Carlo with 2·10⁸ samples (see
+    :data:`OSCILLATOR_PF`); Echard et al. (2011) report 2.834e-2 from 7·10⁴ samples.
+    """
+    mean = np.array([1.0, 1.0, 0.1, 0.5, 1.0, 1.0])
+    std = np.array([0.05, 0.1, 0.01, 0.05, 0.2, 0.2])
+
+    def resp(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+        m, c1, c2, r, f1, t1 = t.T
+        w0 = np.sqrt((c1 + c2) / m)
+        g = 3 * r - np.abs(2 * f1 / (m * w0**2) * np.sin(w0 * t1 / 2))
+        return -g[None, :] + 0 * _shift(x)
+
+    return Problem("nonlinear_oscillator", resp, MultivariateNormal(mean, std=std),
+                   LimitState(0.0), np.zeros((1, 0)), np.array([OSCILLATOR_PF]),
+                   source="Echard et al. (2011); reference by crude MC, 2e8 samples")
+
+
+def benchmark_problems() -> list[Problem]:
+    """The published reliability problems of ``benchmarks/bench_coverage.py`` (first design of
+    each): linear in 2-D, 10-D (P_f = 2.9e-7) and 100-D, correlated normal, Nataf lognormals, the
+    sum of two uniforms, Breitung's paraboloid, the four-branch series system (k = 6, 7), the
+    two-design-point parabola, the non-linear oscillator and a failing mean point (β = −1).
+
+    >>> [p.name for p in benchmark_problems()][:3]
+    ['linear_2d_beta3', 'linear_10d_beta5', 'linear_100d_beta3.5']
+    """
+    cn = correlated_normal()
+    cn = Problem(**{**cn.__dict__, "x": cn.x[:1], "pf_exact": cn.pf_exact[:1],
+                    "name": "correlated_normal_3d"})
+    return [
+        linear_standard(beta=3.0, dim=2), linear_standard(beta=5.0, dim=10),
+        linear_standard(beta=3.5, dim=100), cn, lognormal_nataf(), uniform_sum(),
+        paraboloid(beta=3.0, kappa=0.3, dim=5), series_four_branch(6.0), series_four_branch(7.0),
+        two_design_points(), nonlinear_oscillator(), linear_standard(beta=-1.0, dim=2),
+    ]

@@ -11,7 +11,8 @@ limit state bends away from the origin) and
 
 For ``β < 0`` the formula is applied to the safe set: ``P_f = 1 − Φ(β) Π (1 + β κ_i)^{−1/2}``
 (``κ`` and ``β`` both change sign). A factor ``1 + ψκ ≤ 0`` (a very concave limit state) makes the
-asymptotic formula meaningless: ``ModelError`` or NaN, as FORM's ``on_failure`` says.
+asymptotic formula meaningless: ``ModelError`` or NaN, as FORM's ``on_failure`` says. When FORM
+finds the limit state not reached, its bound is reported (``status``, ``pf_bound`` as FORM).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate, nan_p
-from surrogate_rbrdo.estimators.form import FORM
+from surrogate_rbrdo.estimators.form import FORM, bound_interval
 from surrogate_rbrdo.estimators.importance import check_form
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
@@ -121,11 +122,17 @@ class SORM:
         p = x.shape[0]
         pf, beta, pf_form = nan_p(p), nan_p(p), nan_p(p)
         conv, calls = np.zeros(p, bool), 0
+        status = np.full(p, "failed", dtype=object)
         kappas = np.full((p, max(inputs.dim - 1, 0)), np.nan)
         for i in range(p):
             dp = self.form.search(response, inputs, limit, x[i])
             self.form.check(dp, i)
             calls += dp.calls
+            status[i] = dp.status
+            if dp.status == "not_reached":   # FORM's bound; no curvature to correct
+                beta[i] = dp.beta
+                pf[i] = pf_form[i] = special.ndtr(-dp.beta)
+                continue
             if not dp.converged:
                 continue
             G = LimitStateU(response, inputs, limit, x[i])
@@ -136,12 +143,16 @@ class SORM:
             beta[i], pf_form[i] = dp.beta, special.ndtr(-dp.beta)
             pf[i] = sorm_pf(dp.beta, kap, self.formula)
             conv[i] = np.isfinite(pf[i])
-            if not conv[i] and self.form.on_failure == "raise":
-                raise ModelError(
-                    f"SORM is not applicable for design {i}: a curvature factor 1 + psi*kappa "
-                    f"<= 0 (beta={dp.beta:.4g}, curvatures={np.round(kap, 4).tolist()})")
+            if not conv[i]:
+                status[i] = "failed"
+                if self.form.on_failure == "raise":
+                    raise ModelError(
+                        f"SORM is not applicable for design {i}: a curvature factor 1 + psi*kappa"
+                        f" <= 0 (beta={dp.beta:.4g}, curvatures={np.round(kap, 4).tolist()})")
         with np.errstate(divide="ignore"):
             beta_sorm = -special.ndtri(pf)
-        return make_estimate("sorm", calls, p, pf=pf, diagnostics={
+        status = status.astype(str)
+        bound, ci = bound_interval(pf, beta, status)
+        return make_estimate("sorm", calls, p, pf=pf, pf_ci=ci, diagnostics={
             "beta": beta, "beta_sorm": beta_sorm, "curvatures": kappas, "pf_form": pf_form,
-            "converged": conv, "formula": self.formula})
+            "converged": conv, "status": status, "pf_bound": bound, "formula": self.formula})

@@ -16,6 +16,7 @@ from surrogate_rbrdo.formulations.base import (
     ReliabilityConstraint,
     make_formulation,
 )
+from surrogate_rbrdo.formulations.constraints import DesignConstraint
 from surrogate_rbrdo.formulations.deterministic import (
     RESONANCE_GUARDS,
     DeterministicConstraints,
@@ -23,6 +24,7 @@ from surrogate_rbrdo.formulations.deterministic import (
     DeterministicOptions,
 )
 from surrogate_rbrdo.formulations.options import FormulationOptions
+from surrogate_rbrdo.formulations.reliability import PF_BOUNDS, RELIABILITY_MEASURES
 from surrogate_rbrdo.formulations.strategies import (
     DeterministicFormulation,
     RBDOFormulation,
@@ -32,7 +34,10 @@ from surrogate_rbrdo.formulations.strategies import (
 
 __all__ = [
     "FORMULATIONS",
+    "PF_BOUNDS",
+    "RELIABILITY_MEASURES",
     "RESONANCE_GUARDS",
+    "DesignConstraint",
     "DeterministicConstraints",
     "DeterministicFormulation",
     "DeterministicModel",

@@ -8,9 +8,14 @@ identical θ.
 
 Constraint columns, all feasible where ``<= 0``, in this order:
 
-1. reliability (``rbdo``, ``rbrdo``): ``P_f / P_target − 1`` for the primary limit state, then one
-   column per extra :class:`ReliabilityConstraint` (same ``P_target``);
-2. deterministic: ``g_det`` from :class:`~.deterministic.DeterministicConstraints`.
+1. reliability (``rbdo``, ``rbrdo``): ``P_f ≤ P_target`` for the primary limit state, then one
+   column per extra :class:`ReliabilityConstraint` (same ``P_target``), written as
+   ``options.reliability_measure`` says (:mod:`~.reliability`: ``P_f/P_target − 1`` by default);
+2. deterministic: ``g_det`` from :class:`~.deterministic.DeterministicConstraints`;
+3. generic design constraints ``g(x) <= 0`` (:class:`~.constraints.DesignConstraint`).
+
+Points outside the model's physical domain (``OutsideDomainError``) count as failures in the
+common-sample estimate (:func:`~surrogate_rbrdo.estimators.mc_with_outside`).
 """
 
 from __future__ import annotations
@@ -25,8 +30,11 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState, Response
 from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.estimators import evaluate_in_domain, get_estimator, mc_with_outside
+from surrogate_rbrdo.formulations.constraints import DesignConstraint, constraint_matrix
 from surrogate_rbrdo.formulations.deterministic import DeterministicConstraints
 from surrogate_rbrdo.formulations.options import FormulationOptions
+from surrogate_rbrdo.formulations.reliability import reliability_column
 
 FORMULATIONS = Registry("formulation")
 _NO_FAILURE = LimitState(0.0)  # placeholder when no limit is given; its P_f is discarded
@@ -66,12 +74,6 @@ class Evaluation:
     n_model_calls: int
 
 
-def _values_to_estimate() -> Callable[..., Estimate]:
-    from surrogate_rbrdo.estimators import mc_from_values
-
-    return mc_from_values
-
-
 @dataclass(frozen=True, eq=False)
 class Formulation:
     """Base class; concrete strategies are registered in :data:`FORMULATIONS`.
@@ -89,6 +91,7 @@ class Formulation:
     extra_reliability: tuple[ReliabilityConstraint, ...] = ()
     estimator: Any = None
     estimator_seed: int = 0
+    design_constraints: tuple[DesignConstraint, ...] = ()
     _theta: np.ndarray = field(init=False, repr=False)
     _theta_nominal: np.ndarray = field(init=False, repr=False)
 
@@ -127,7 +130,7 @@ class Formulation:
             names += tuple(f"pf_{c.name}" for c in self.extra_reliability)
         if self.constraints_det is not None:
             names += self.constraints_det.names
-        return names
+        return names + tuple(c.name for c in self.design_constraints)
 
     @property
     def n_obj(self) -> int:
@@ -141,13 +144,19 @@ class Formulation:
     def estimate(self, x: np.ndarray, response: Response | None = None,
                  limit: LimitState | None = None) -> Estimate:
         """μ_y, σ_y, P_f of ``response`` (default: the primary one) on the fixed sample."""
+        return self._estimate_values(x, response, limit)[0]
+
+    def _estimate_values(self, x: np.ndarray, response: Response | None = None,
+                         limit: LimitState | None = None) -> tuple[Estimate, np.ndarray | None]:
+        """The estimate and, on the fast path, the responses ``(P, N)`` on the fixed sample."""
         response = self.response if response is None else response
         limit = self.limit if limit is None else limit
         no_limit = limit is None
         limit = _NO_FAILURE if no_limit else limit
-        if self.estimator is None:  # fast path: values on the CRN sample
-            y = np.asarray(response(x, self.theta), dtype=float)
-            est = _values_to_estimate()(y, limit, ci_level=self.options.ci_level)
+        values = None
+        if self.estimator is None or no_limit:  # values on the CRN sample (no P_f needed)
+            values, _, _ = evaluate_in_domain(response, x, self.theta)
+            est = mc_with_outside(values, limit, ci_level=self.options.ci_level)
         else:
             est = self.estimator.estimate(
                 response, self.inputs, limit, x,
@@ -156,7 +165,7 @@ class Formulation:
         if no_limit:  # no failure definition: P_f is not defined
             nan = np.full(np.shape(est.mean), np.nan)
             est = replace(est, pf=nan, pf_se=nan, pf_ci=np.full((nan.size, 2), np.nan))
-        return est
+        return est, values
 
     def _nominal(self, x: np.ndarray) -> Estimate:
         y = np.asarray(self.response(x, self.theta_nominal), dtype=float)[:, 0]
@@ -172,31 +181,31 @@ class Formulation:
     def evaluate(self, x: np.ndarray) -> Evaluation:
         """Evaluate a population ``x`` of shape ``(P, d)``."""
         x = _as_2d(x)
-        est = self._nominal(x) if self.nominal_only else self.estimate(x)
+        est, values = (self._nominal(x), None) if self.nominal_only else self._estimate_values(x)
         n_sur = int(est.n_calls)
         if not self.nominal_only and self.estimator is not None and (
                 not np.all(np.isfinite(est.mean)) or not np.all(np.isfinite(est.std))):
             # reliability-only estimators (FORM, SORM, IS) give no moments: take μ_y, σ_y from
             # the CRN sample and keep the estimator's P_f
-            mc = _values_to_estimate()(np.asarray(self.response(x, self.theta), dtype=float),
-                                       _NO_FAILURE, ci_level=self.options.ci_level)
+            y, _, _ = evaluate_in_domain(self.response, x, self.theta)
+            mc = mc_with_outside(y, _NO_FAILURE, ci_level=self.options.ci_level)
             n_sur += int(mc.n_calls)
             est = replace(est, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,
                           diagnostics={**est.diagnostics, "moments_from": "mc"})
         cols = []
         if self.reliability:
-            pt = self.options.p_target
             if self.limit is not None:
-                cols.append(np.asarray(est.pf, dtype=float) / pt - 1.0)
+                cols.append(self._reliability(est, values, self.limit))
             for c in self.extra_reliability:
-                e = self.estimate(x, c.response, c.limit)
+                e, v = self._estimate_values(x, c.response, c.limit)
                 n_sur += int(e.n_calls)
-                cols.append(np.asarray(e.pf, dtype=float) / pt - 1.0)
+                cols.append(self._reliability(e, v, c.limit))
         n_model = 0
         if self.constraints_det is not None and self.constraints_det.names:
             gd = self.constraints_det(x)
             n_model = x.shape[0]
             cols.extend(gd.T)
+        cols.extend(constraint_matrix(self.design_constraints, x).T)
         G = np.column_stack(cols) if cols else np.empty((x.shape[0], 0))
         F = self._objectives(est)
         bad = ~(np.all(np.isfinite(F), axis=1) & np.all(np.isfinite(G), axis=1))
@@ -206,6 +215,12 @@ class Formulation:
                              f"F={F[i].tolist()}, G={G[i].tolist()} at x={x[i].tolist()}")
         return Evaluation(F=F, G=G, estimate=est, n_surrogate_calls=n_sur,
                           n_model_calls=n_model)
+
+    def _reliability(self, est: Estimate, values: np.ndarray | None,
+                     limit: LimitState) -> np.ndarray:
+        o = self.options
+        return reliability_column(o.reliability_measure, o.pf_bound, est, values, limit,
+                                  o.p_target, o.ci_level)
 
     def _objectives(self, est: Estimate) -> np.ndarray:
         """The columns named by ``objective_names`` ("nominal"/"mean": μ_y, "std": σ_y)."""
@@ -217,7 +232,11 @@ class Formulation:
         return {"formulation": self.name, "objectives": list(self.objective_names),
                 "constraints": list(self.constraint_names),
                 "p_target": self.options.p_target if self.reliability else None,
-                "n_theta": int(self.u.shape[0]), "estimator": self.options.estimator}
+                "n_theta": int(self.u.shape[0]), "estimator": self.options.estimator,
+                "reliability_measure": self.options.reliability_measure,
+                "pf_bound": self.options.pf_bound,
+                "design_constraints": {c.name: c.expression or "python callable"
+                                       for c in self.design_constraints}}
 
 
 def _as_2d(x: np.ndarray) -> np.ndarray:
@@ -237,6 +256,7 @@ def make_formulation(
     options: FormulationOptions | None = None,
     deterministic: Callable[[np.ndarray], Mapping[str, np.ndarray]] | None = None,
     extra_reliability: tuple[ReliabilityConstraint, ...] = (),
+    constraints: tuple[DesignConstraint, ...] = (),
 ) -> Formulation:
     """Build a registered formulation and draw its common-random-number sample.
 
@@ -263,6 +283,9 @@ def make_formulation(
         ``options.deterministic`` imposes any constraint.
     extra_reliability : tuple of ReliabilityConstraint
         Further chance constraints (same ``P_target``).
+    constraints : tuple of DesignConstraint
+        Generic deterministic design constraints ``g(x) <= 0`` (Python callables or parsed
+        expressions, :mod:`~.constraints`), appended after ``g_det``.
     """
     cls = FORMULATIONS.get(name)
     options = FormulationOptions() if options is None else options
@@ -276,13 +299,15 @@ def make_formulation(
     for c in extra_reliability:
         if not isinstance(c, ReliabilityConstraint):
             raise ValueError(f"extra_reliability entry {c!r} is not a ReliabilityConstraint")
+    for c in constraints:
+        if not isinstance(c, DesignConstraint):
+            raise ValueError(f"constraints entry {c!r} is not a DesignConstraint")
+    names = [c.name for c in constraints]
+    if len(set(names)) != len(names):
+        raise ValueError(f"constraints: names {names} are not allowed: each name once")
     estimator = None
     if options.estimator != "mc":
-        from surrogate_rbrdo.estimators import get_estimator
-
         estimator = get_estimator(options.estimator, **options.estimator_options)
-    else:
-        _values_to_estimate()  # fail now, not in generation 1, if estimators are missing
     det = DeterministicConstraints(options.deterministic, deterministic)
     rng = require_rng(rng)
     u = np.asarray(inputs.standard_sample(options.n_theta, rng=rng), dtype=float)
@@ -291,4 +316,4 @@ def make_formulation(
     seed = int(rng.integers(0, 2**63 - 1))
     return cls(response=response, inputs=inputs, limit=limit, u=u, options=options,
                constraints_det=det, extra_reliability=tuple(extra_reliability),
-               estimator=estimator, estimator_seed=seed)
+               estimator=estimator, estimator_seed=seed, design_constraints=tuple(constraints))

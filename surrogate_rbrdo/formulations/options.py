@@ -17,8 +17,12 @@ from typing import Any
 
 from scipy.stats import norm
 
-from surrogate_rbrdo.core.validate import check_int, check_range
+from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
 from surrogate_rbrdo.formulations.deterministic import DeterministicOptions
+from surrogate_rbrdo.formulations.reliability import PF_BOUNDS, RELIABILITY_MEASURES
+
+#: estimators whose P_f carries no sampling error (an upper confidence bound is undefined)
+NO_SAMPLING_ERROR = ("form", "sorm", "fosm")
 
 
 @dataclass(frozen=True)
@@ -41,6 +45,14 @@ class FormulationOptions:
         Confidence level of the P_f interval, in (0, 1).
     deterministic : DeterministicOptions
         The g_det constraints (stress ratio and resonance guard).
+    reliability_measure : {"probability", "beta", "quantile"}
+        How each reliability column is written (:mod:`~.reliability`): ``P_f/P_target − 1``,
+        ``β_t − β`` (RIA; smooth with FORM) or the ``P_target``-quantile of the limit state on
+        the common sample (PMA; same feasible set as the sample ``P̂_f``, continuous in ``x``;
+        ``estimator = "mc"`` only).
+    pf_bound : {"estimate", "upper"}
+        Constrain the estimate, or (conservative) the upper end of its ``ci_level`` interval
+        (sampling estimators only).
     """
 
     p_target: float = 0.05
@@ -49,6 +61,8 @@ class FormulationOptions:
     estimator_options: Mapping[str, Any] = field(default_factory=dict)
     ci_level: float = 0.95
     deterministic: DeterministicOptions = field(default_factory=DeterministicOptions)
+    reliability_measure: str = "probability"
+    pf_bound: str = "estimate"
 
     def __post_init__(self) -> None:
         check_range("p_target", self.p_target, 0.0, 1.0, inclusive=False)
@@ -61,6 +75,15 @@ class FormulationOptions:
                              "a DeterministicOptions")
         object.__setattr__(self, "estimator_options",
                            MappingProxyType(dict(self.estimator_options)))
+        check_choice("reliability_measure", self.reliability_measure, RELIABILITY_MEASURES)
+        check_choice("pf_bound", self.pf_bound, PF_BOUNDS)
+        if self.reliability_measure == "quantile" and self.estimator != "mc":
+            raise ValueError(f"reliability_measure = 'quantile' is not allowed with estimator = "
+                             f"{self.estimator!r}: the quantile of the common sample needs 'mc'")
+        if self.pf_bound == "upper" and self.estimator in NO_SAMPLING_ERROR:
+            raise ValueError(f"pf_bound = 'upper' is not allowed with estimator = "
+                             f"{self.estimator!r}: it has no sampling error to bound (use a "
+                             "sampling estimator: mc, is, ais, subset)")
 
     @property
     def beta_target(self) -> float:

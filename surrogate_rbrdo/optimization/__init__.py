@@ -22,6 +22,7 @@ from surrogate_rbrdo.optimization.postprocess import (
     write_csv,
 )
 from surrogate_rbrdo.optimization.result import Archive, OptimizationResult
+from surrogate_rbrdo.optimization.slsqp import SLSQPOptions, run_slsqp
 
 __all__ = [
     "OPTIMIZERS",
@@ -37,6 +38,7 @@ __all__ = [
     "NSGA2Options",
     "OptimizationResult",
     "OptunaOptions",
+    "SLSQPOptions",
     "asf_compromise",
     "check_bounds",
     "feasible_mask",
@@ -44,4 +46,5 @@ __all__ = [
     "nondominated",
     "run_nsga2",
     "run_optuna",
+    "run_slsqp",
 ]

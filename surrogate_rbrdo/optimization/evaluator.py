@@ -61,11 +61,25 @@ class RecordingEvaluator:
             self._bar.update(1)
         return F, G
 
-    def close(self) -> Archive:
-        """Close the progress bar and return the frozen archive."""
+    def close_progress(self) -> None:
+        """Close the progress bar (safe to call in a ``finally``: never raises)."""
         if self._bar is not None:
             self._bar.close()
+            self._bar = None
+
+    def freeze(self) -> Archive:
+        """The frozen archive; ``ValueError`` if no design was evaluated."""
         return self.recorder.freeze()
+
+    def close(self) -> Archive:
+        """Close the progress bar and return the frozen archive.
+
+        Optimisers call :meth:`close_progress` in their ``finally`` and :meth:`freeze` after a
+        successful run, so that an error raised while evaluating (e.g. in generation 0) is not
+        replaced by the empty-archive error of :meth:`freeze`.
+        """
+        self.close_progress()
+        return self.freeze()
 
     def result(self, archive: Archive, X: np.ndarray, F: np.ndarray, G: np.ndarray,
                wall_time_s: float, optimizer: dict) -> OptimizationResult:

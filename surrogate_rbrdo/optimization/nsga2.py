@@ -158,7 +158,8 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
         res = minimize(_Problem(), algorithm, ("n_gen", options.n_gen), seed=seed,
                        verbose=False, save_history=False, copy_algorithm=False)
     finally:
-        archive = evaluator.close()
+        evaluator.close_progress()
+    archive = evaluator.freeze()
     wall = time.perf_counter() - t0
     pop = res.pop
     X = np.asarray(pop.get("X"), dtype=float)
@@ -181,7 +182,8 @@ def _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var
             mutation_prob=prob, mutation_prob_var=prob_var, mutation_eta=options.mutation_eta,
             eliminate_duplicates=options.eliminate_duplicates, seed=seed)
     finally:
-        archive = evaluator.close()
+        evaluator.close_progress()
+    archive = evaluator.freeze()
     wall = time.perf_counter() - t0
     F = F.reshape(X.shape[0], n_obj)
     G = G.reshape(X.shape[0], n_con) if n_con else np.empty((X.shape[0], 0))

@@ -103,7 +103,8 @@ def run_optuna(formulation, lower, upper, *, rng: np.random.Generator,
                     study.tell(t, f.tolist() if n_obj > 1 else float(f[0]))
     finally:
         optuna.logging.set_verbosity(old_verbosity)
-        archive = evaluator.close()
+        evaluator.close_progress()
+    archive = evaluator.freeze()
     wall = time.perf_counter() - t0
     last = archive.generation == archive.generation.max()
     X, F, G = archive.X[last], archive.F[last], archive.G[last]

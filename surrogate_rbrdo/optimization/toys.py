@@ -2,10 +2,8 @@
 
 * :class:`LinearMixToy`: ``y(x, θ) = x θ₁ + (1 − x) θ₂`` with independent normal θ, so μ_y, σ_y
   and P_f are closed form and so are the RDO Pareto set and the RBRDO constraint boundary.
-* :func:`youn_choi_problem`: the 2-variable, 3-constraint RBDO benchmark (Youn & Choi 2004;
-  Lee & Jung 2008): minimise ``d₁ + d₂`` with ``X_i ~ N(d_i, 0.3²)``, chance constraints
-  ``P(G_j(X) < 0) <= Φ(−β_t)``, ``0 <= d_i <= 10``; published FORM/PMA optimum for ``β_t = 3``:
-  ``d* ≈ (3.44, 3.29)``, cost ``≈ 6.73``.
+* the published RBDO benchmarks (Youn & Choi, short column, cantilever) are in
+  :mod:`~.rbdo_benchmarks`.
 
 >>> toy = LinearMixToy()
 >>> round(toy.x_min_std, 3), round(float(toy.std(np.array([toy.x_min_std]))[0]), 4)
@@ -21,7 +19,6 @@ from scipy.optimize import brentq
 from scipy.stats import norm
 
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.formulations.base import ReliabilityConstraint
 
 
 @dataclass(frozen=True)
@@ -83,42 +80,3 @@ class LinearMixToy:
         xa = self.x_min_std if hv[0] <= 0 else brentq(h, self.x_min_std, xs[i])
         xb = 1.0 if hv[-1] <= 0 else brentq(h, xs[i], 1.0)
         return xa, xb
-
-
-YOUN_CHOI_SIGMA = 0.3
-YOUN_CHOI_OPTIMUM_BETA3 = (3.44, 3.29)
-
-
-def _yc_response(j: int):
-    def g(x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        x1 = x[:, :1] + theta[:, 0][None, :]
-        x2 = x[:, 1:2] + theta[:, 1][None, :]
-        if j == 0:
-            return x1 + x2
-        if j == 1:
-            return x1**2 * x2 / 20.0 - 1.0
-        if j == 2:
-            return (x1 + x2 - 5.0) ** 2 / 30.0 + (x1 - x2 - 12.0) ** 2 / 120.0 - 1.0
-        return 80.0 / (x1**2 + 8.0 * x2 + 5.0) - 1.0
-
-    return g
-
-
-def youn_choi_problem():
-    """Pieces of the Youn & Choi (2004) RBDO benchmark for :func:`make_formulation`.
-
-    Returns a dict with ``response`` (cost ``X₁ + X₂``: its mean is ``d₁ + d₂`` up to the fixed
-    sample's mean offset), ``inputs`` (θ = X − d ~ N(0, 0.3² I)), ``extra_reliability`` (the three
-    ``G_j < 0`` chance constraints), ``lower``, ``upper``.
-    """
-    from surrogate_rbrdo.uncertainty import MultivariateNormal
-
-    below = LimitState(0.0, failure_if="below")
-    extra = tuple(ReliabilityConstraint(_yc_response(j), below, name=f"G{j}") for j in (1, 2, 3))
-    return {
-        "response": _yc_response(0),
-        "inputs": MultivariateNormal(np.zeros(2), std=np.full(2, YOUN_CHOI_SIGMA)),
-        "extra_reliability": extra,
-        "lower": np.zeros(2),
-        "upper": np.full(2, 10.0),
-    }

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import OutsideDomainError
 from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, Joint, Support
 from surrogate_rbrdo.spindle.element import BeamSection, element_matrices
 from surrogate_rbrdo.spindle.geometry import ConstantLaw, PreloadLaw, SpindleGeometry
@@ -199,8 +200,10 @@ def _joint_matrix(j: Joint) -> np.ndarray:
 
 def check_theta(theta_bearings: Sequence[str], theta: np.ndarray | None,
                 batch: int | None = None) -> np.ndarray:
-    """θ as ``(N, m)`` for the ``m`` bearings ``theta_bearings``: finite factors > 0, else a
-    ``ValueError`` naming the value; ``None`` means nominal (``batch`` rows of ones).
+    """θ as ``(N, m)`` for the ``m`` bearings ``theta_bearings``: finite factors > 0, else
+    :class:`~surrogate_rbrdo.core.errors.OutsideDomainError` (a ``ModelError`` and a
+    ``ValueError``) naming the value and listing the rows; ``None`` means nominal (``batch``
+    rows of ones). A wrong shape is a ``ValueError``.
 
     >>> check_theta(("front", "rear"), [1.0, 0.9]).tolist()
     [[1.0, 0.9]]
@@ -217,9 +220,9 @@ def check_theta(theta_bearings: Sequence[str], theta: np.ndarray | None,
             f"factors of bearings {list(theta_bearings)}"
         )
     bad = ~np.all(np.isfinite(th) & (th > 0), axis=1)
-    if bad.any():
-        raise ValueError(f"theta = {th[bad][0].tolist()} is not allowed: stiffness factors "
-                         "must be finite and > 0")
+    if bad.any():  # outside the physical domain: a ModelError (and a ValueError), with the rows
+        raise OutsideDomainError(f"theta = {th[bad][0].tolist()} is not allowed: stiffness "
+                                 "factors must be finite and > 0", rows=np.flatnonzero(bad))
     return th
 
 

@@ -13,11 +13,13 @@ True
 """
 
 from surrogate_rbrdo.uncertainty.base import RandomVector, standard_normal_sample
+from surrogate_rbrdo.uncertainty.factors import FACTOR_DISTRIBUTIONS, stiffness_factors
 from surrogate_rbrdo.uncertainty.marginals import LogNormal, Normal, Uniform
 from surrogate_rbrdo.uncertainty.mvn import MultivariateNormal
 from surrogate_rbrdo.uncertainty.nataf import Independent, Nataf, fictitious_correlation
 
 __all__ = [
+    "FACTOR_DISTRIBUTIONS",
     "Independent",
     "LogNormal",
     "MultivariateNormal",
@@ -27,4 +29,5 @@ __all__ = [
     "Uniform",
     "fictitious_correlation",
     "standard_normal_sample",
+    "stiffness_factors",
 ]

@@ -66,18 +66,27 @@ def test_form_misses_branches_of_series_system():
     assert est.pf[0] < 0.5 * prob.pf_exact[0]
 
 
-def test_form_non_convergence_raises_or_returns_nan():
-    # y = -(u1^2 + u2^2): failure y > 1 never happens, and grad G(0) = 0
+def test_form_limit_state_never_reached_gives_a_bound_not_an_error():
+    # y = -(u1^2 + u2^2): failure y > 1 never happens (G = 1 + |u|^2 >= 1)
     inputs = MultivariateNormal(np.zeros(2), cov=np.eye(2))
 
     def resp(x, t):
         return -np.sum(t**2, axis=1)[None, :]
 
-    with pytest.raises(ModelError, match="FORM did not converge for design 0"):
-        FORM().estimate(resp, inputs, LimitState(1.0), np.zeros((1, 0)), rng=RNG)
-    est = FORM(on_failure="nan").estimate(resp, inputs, LimitState(1.0), np.zeros((1, 0)),
-                                          rng=RNG)
+    est = FORM().estimate(resp, inputs, LimitState(1.0), np.zeros((1, 0)), rng=RNG)
+    d = est.diagnostics
+    assert d["status"][0] == "not_reached" and d["pf_bound"][0] == "upper"
+    assert not d["converged"][0] and "not reached" in d["message"][0]
+    assert est.pf[0] == pytest.approx(special.ndtr(-FORM().beta_max))
+    np.testing.assert_array_equal(est.pf_ci[0], [0.0, est.pf[0]])
+
+
+def test_form_non_convergence_raises_or_returns_nan():
+    prob = paraboloid(beta=3.0, kappa=0.3, dim=3)
+    est = FORM(max_iter=1, on_failure="nan").estimate(prob.response, prob.inputs, prob.limit,
+                                                      prob.x, rng=RNG)
     assert np.isnan(est.pf[0]) and not est.diagnostics["converged"][0]
+    assert est.diagnostics["status"][0] == "failed"
     assert est.diagnostics["message"][0] != "converged"
 
 

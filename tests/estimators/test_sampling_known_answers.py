@@ -8,13 +8,14 @@ parabolic limit state (Breitung 1984) and the four-branch series system (Waarts 
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.estimators import get_estimator
+from surrogate_rbrdo.estimators import EstimatorWarning, get_estimator
 from surrogate_rbrdo.estimators.problems import (
     correlated_normal,
     linear_standard,
     lognormal_nataf,
     paraboloid,
     series_four_branch,
+    two_design_points,
     uniform_sum,
 )
 
@@ -49,19 +50,26 @@ def test_is_and_ais_within_4_se(name, prob):
 
 
 def test_is_target_10d_3e7():
-    """Issue target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 3000 calls incl. FORM."""
+    """Issue 13 target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 1 500 calls incl. FORM
+    (OpenTURNS' post-FORM IS needs ~2 300, benchmarks/bench_is_small_pf.py), over 20 seeds."""
     prob = linear_standard(beta=5.0, dim=10)
-    est = run("is", prob, seed=2, n_samples=2900)
-    assert within(est, prob)
-    assert est.pf_cov[0] <= 0.05
-    assert est.n_calls <= 3000
+    runs = [run("is", prob, seed=s, n_samples=1478) for s in range(20)]
+    pf = np.array([r.pf[0] for r in runs])
+    assert all(r.n_calls <= 1500 for r in runs)
+    assert pf.std(ddof=1) / prob.pf_exact[0] <= 0.05
+    assert all(r.pf_cov[0] <= 0.05 and within(r, prob, k=3.0) for r in runs)
 
 
-def test_is_unreliable_on_branches_but_ais_is_not():
-    prob = series_four_branch(6.0)
-    # IS at one design point of four: its standard error is not trustworthy on some seeds
-    assert not all(within(run("is", prob, seed=s), prob) for s in range(5))
+@pytest.mark.parametrize("prob", [series_four_branch(6.0), two_design_points()],
+                         ids=lambda p: p.name)
+def test_is_says_so_on_several_design_points_and_ais_copes(prob):
+    """IS at one design point of several: its shell samples find the other regions, it warns,
+    and its (wider) error still covers; ais needs no warning."""
     for seed in range(3):
+        with pytest.warns(EstimatorWarning, match="other regions"):
+            est = run("is", prob, seed=seed)
+        assert within(est, prob, k=3.0)
+        assert est.diagnostics["other_share"][0] > 0.2
         assert within(run("ais", prob, seed=seed), prob)
 
 
@@ -107,9 +115,12 @@ def test_subset_unbiased_at_1e6():
     res = [run("subset", PF_1E6, seed=s) for s in range(25)]
     pf = np.array([r.pf[0] for r in res])
     assert abs(pf.mean() - PF_1E6.pf_exact[0]) <= 4 * pf.std(ddof=1) / 5
-    assert 0.1 < np.mean([r.pf_cov[0] for r in res]) < 0.8
+    cov = np.array([r.diagnostics["pf_cov_au_beck"][0] for r in res])
+    assert 0.1 < cov.mean() < 0.8
     # the fully-correlated bound is an upper bound of the uncorrelated CoV by construction
-    assert all(r.diagnostics["pf_cov_upper"][0] >= r.pf_cov[0] for r in res)
+    assert all(r.diagnostics["pf_cov_upper"][0] >= c for r, c in zip(res, cov, strict=True))
+    # the reported error is the log-normal one, wider than P̂δ (right-skewed estimate)
+    assert all(r.pf_cov[0] > c for r, c in zip(res, cov, strict=True))
 
 
 def test_ais_and_subset_moments_from_first_level():
@@ -139,7 +150,9 @@ def test_diagnostics_are_read_only():
 
 
 @pytest.mark.parametrize("name", ["ais", "subset"])
-def test_adaptive_methods_stop_when_nothing_fails(name):
+def test_adaptive_methods_bound_designs_that_never_fail(name):
+    """A design that never fails gets an upper bound P(G <= γ_last) (status "not_reached"),
+    or a ModelError / NaN on request; the search stops early when the thresholds stall."""
     from surrogate_rbrdo.core import LimitState, ModelError
     from surrogate_rbrdo.uncertainty import MultivariateNormal
 
@@ -148,14 +161,17 @@ def test_adaptive_methods_stop_when_nothing_fails(name):
     def resp(x, t):                       # bounded response that never exceeds the limit
         return np.tanh(t[:, :1].T)
 
-    est = get_estimator(name)
+    def go(**opts):
+        return get_estimator(name, **opts).estimate(
+            resp, inputs, LimitState(2.0), np.zeros((1, 0)), rng=np.random.default_rng(0))
+
+    est = go()
+    assert est.diagnostics["status"][0] == "not_reached"
+    assert 0.0 < est.pf[0] < 0.5 and est.pf_ci[0, 0] == 0.0 and est.pf_ci[0, 1] >= est.pf[0]
+    assert est.n_calls <= 10 * get_estimator(name).n_per_level  # stopped early
     with pytest.raises(ModelError, match="did not reach the failure domain for design 0"):
-        est.estimate(resp, inputs, LimitState(2.0), np.zeros((1, 0)),
-                     rng=np.random.default_rng(0))
-    quiet = get_estimator(name, on_failure="nan").estimate(
-        resp, inputs, LimitState(2.0), np.zeros((1, 0)), rng=np.random.default_rng(0))
-    assert np.isnan(quiet.pf[0])
-    assert quiet.n_calls <= 10 * est.n_per_level      # stopped early, not after max_levels
+        go(on_failure="raise")
+    assert np.isnan(go(on_failure="nan").pf[0])
 
 
 @pytest.mark.parametrize("beta", [-3.0, -4.0])

@@ -1,20 +1,17 @@
-"""Known answers: closed-form RDO/RBRDO fronts of a toy, and a published RBDO optimum."""
+"""Known answers: closed-form RDO/RBRDO fronts of a toy (published RBDO optima:
+test_rbdo_known_answers.py)."""
 
 import numpy as np
 import pytest
-from scipy.stats import norm
 
 from surrogate_rbrdo.formulations import DeterministicOptions, FormulationOptions, make_formulation
 from surrogate_rbrdo.optimization import (
     NSGA2Options,
     archive_front,
     run_nsga2,
-    select_compromise,
 )
 from surrogate_rbrdo.optimization.toys import (
-    YOUN_CHOI_OPTIMUM_BETA3,
     LinearMixToy,
-    youn_choi_problem,
 )
 
 pytestmark = pytest.mark.known_answer
@@ -79,37 +76,3 @@ def test_rdo_and_rbrdo_share_the_sample_and_rbrdo_front_is_a_subset():
     # RBRDO points are not dominated by the RDO front by more than the front's resolution
     assert f_rb[:, 0].min() >= f_rdo[:, 0].min() - 0.01
     assert f_rb[:, 1].min() >= f_rdo[:, 1].min() - 1e-3
-
-
-def yc_run(n_theta, pop, gen, seed):
-    yc = youn_choi_problem()
-    form = make_formulation(
-        "rbdo", response=yc["response"], inputs=yc["inputs"], limit=None,
-        extra_reliability=yc["extra_reliability"],
-        options=FormulationOptions(p_target=float(norm.cdf(-3.0)), n_theta=n_theta,
-                                   deterministic=NO_DET),
-        rng=np.random.default_rng(seed))
-    res = run_nsga2(form, yc["lower"], yc["upper"], rng=np.random.default_rng(seed + 1),
-                    options=NSGA2Options(pop_size=pop, n_gen=gen))
-    return form, select_compromise(res)
-
-
-def test_youn_choi_rbdo_optimum_quick():
-    """Youn & Choi (2004) / Lee & Jung (2008) 2-D example, β_t = 3: d* ≈ (3.44, 3.29), f ≈ 6.73.
-
-    Crude MC with N = 10⁴ (≈ 13 failures at the target) and a small GA: the cost must be within
-    1.5 % of the published 6.73 and each coordinate within 0.15 (GA resolution along the active
-    G1 curve dominates the error; MC moves β by ≲ 0.1 i.e. d by ≲ 0.03).
-    """
-    form, best = yc_run(10_000, 40, 60, seed=0)
-    assert best.x.sum() == pytest.approx(6.73, rel=0.015)
-    np.testing.assert_allclose(best.x, YOUN_CHOI_OPTIMUM_BETA3, atol=0.15)
-    assert np.all(best.G <= 0)
-
-
-@pytest.mark.slow
-def test_youn_choi_rbdo_optimum_paper_settings():
-    """Same benchmark with N = 5·10⁴ and NSGA-II pop 100 × 200 generations: within 0.06."""
-    form, best = yc_run(50_000, 100, 200, seed=1)
-    assert best.x.sum() == pytest.approx(6.73, rel=0.01)
-    np.testing.assert_allclose(best.x, YOUN_CHOI_OPTIMUM_BETA3, atol=0.06)

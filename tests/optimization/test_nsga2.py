@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.formulations import DeterministicOptions, FormulationOptions, make_formulation
 from surrogate_rbrdo.optimization import NSGA2Options, feasible_pareto, run_nsga2
 from surrogate_rbrdo.optimization.toys import LinearMixToy
@@ -110,3 +111,20 @@ def test_progress_bar_optional(capsys):
                     options=NSGA2Options(pop_size=6, n_gen=3), progress=True)
     assert len(res.history) == 3
     assert "NSGA-II rbrdo" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("engine", ["lean", "pymoo"])
+def test_error_in_generation_zero_is_not_replaced_by_empty_archive(engine):
+    """Issue 13 reproduction: a response returning NaN for x > 0.5 under ``rdo``; the run must
+    raise the formulation's ModelError naming the design, not "archive is empty"."""
+    def nan_above_half(x, theta):
+        y = TOY.response(x, theta)
+        return np.where(x[:, :1] > 0.5, np.nan, y)
+
+    form = make_formulation(
+        "rdo", response=nan_above_half, inputs=TOY.inputs(), limit=TOY.limit,
+        options=FormulationOptions(n_theta=50, deterministic=NO_DET),
+        rng=np.random.default_rng(0))
+    with pytest.raises(ModelError, match="must be finite"):
+        run_nsga2(form, [0.0], [1.0], rng=np.random.default_rng(1),
+                  options=NSGA2Options(pop_size=10, n_gen=2, engine=engine))
