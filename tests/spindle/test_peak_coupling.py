@@ -1,0 +1,141 @@
+"""The peak over speed for random multi-plane unbalance by exact coupling, against the FE model.
+
+Known answers: the FE model's own peak search (``harmonic.peak_search`` on the direct
+block-tridiagonal solve, with a finer grid than its default) and the independent dense solve
+of the whole system at fixed speeds (``conftest.dense_response``).
+"""
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.spindle.coupling import theta_grid
+from surrogate_rbrdo.spindle.effects import Anisotropy, HousingFlexibility, SpeedSoftening
+from surrogate_rbrdo.spindle.harmonic import PeakOptions, orbit_amplitude, peak_tool_amplitude
+from surrogate_rbrdo.spindle.peak_coupling import (
+    CoupledPeakOptions,
+    coupled_tables,
+    forward_basis,
+    peak_tool_amplitude_coupled,
+    peak_tool_amplitude_unbalance,
+)
+from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.spindle.substructure import retained_layout
+
+from .conftest import dense_response
+
+SP = reference_spindle()
+#: resonant in range (baseline), near the top of the range, subcritical, long and thin
+DESIGNS = [[2000.0, 500.0, 65.0], [2000.0, 465.8, 65.0], [3000.0, 350.0, 80.0],
+           [1000.0, 750.0, 50.0]]
+FINE = PeakOptions(n_grid=200, n_candidates=4, n_refine=21, n_zoom=3)
+
+
+def _sample(n, seed=0, cov=0.04):
+    rng = np.random.default_rng(seed)
+    th = rng.normal(1.0, cov, size=(n, 2))
+    U = 1.0e-5 * np.sqrt(rng.random((n, 2))) * np.exp(2j * np.pi * rng.random((n, 2)))
+    return th, U
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("x", DESIGNS)
+def test_peak_equals_the_fe_peak_search(x):
+    m = SP.model(np.array(x))
+    th, U = _sample(40, seed=int(x[1]))
+    fast = peak_tool_amplitude_coupled(m, th, U)
+    fe = peak_tool_amplitude_unbalance(m, th[:4], U[:4], options=FINE)
+    np.testing.assert_allclose(fast.amplitude[:4], fe.amplitude, rtol=1e-3)
+    np.testing.assert_allclose(fast.speed_rpm[:4], fe.speed_rpm, rtol=2e-3)
+
+
+@pytest.mark.known_answer
+def test_tables_are_the_dense_solve_at_the_grid_speeds():
+    """At a grid speed, N_j / D is the forward tool response to a unit unbalance in plane j."""
+    m = SP.model(np.array(DESIGNS[0]))
+    nodes = np.array([[1.0, 1.0], [0.9, 1.1]])
+    speeds = np.geomspace(1000.0, 24000.0, 8)
+    T = coupled_tables(m, speeds, nodes)
+    assert T.Nb is None                                     # isotropic: forward block only
+    for j in range(2):
+        unit = np.zeros(2, dtype=complex)
+        unit[j] = 1.0
+        m_j = m.__class__(**{**m.__dict__, "unbalance": unit})
+        for k, th in enumerate(nodes):
+            q = dense_response(m_j, speeds, th)[:, m.tool_node]
+            np.testing.assert_allclose(T.Na[k, :, j] / T.D[k], q[:, 0] + 1j * q[:, 1],
+                                       rtol=1e-9)
+
+
+def test_in_phase_unbalance_reproduces_the_fe_peak_of_the_reference_model():
+    """The reference model's own (in-phase) unbalance: the FE peak of harmonic."""
+    m = SP.model(np.array(DESIGNS[1]))
+    th = np.array([[1.0, 1.0], [0.95, 1.04], [1.05, 0.97]])
+    fast = peak_tool_amplitude_coupled(m, th, m.unbalance)
+    fe = peak_tool_amplitude(m, th, options=FINE)
+    np.testing.assert_allclose(fast.amplitude, fe.amplitude, rtol=1e-3)
+
+
+def test_linear_in_the_unbalance_and_blind_to_a_common_phase():
+    m = SP.model(np.array(DESIGNS[2]))
+    th, U = _sample(30, seed=3)
+    a = peak_tool_amplitude_coupled(m, th, U).amplitude
+    b = peak_tool_amplitude_coupled(m, th, 2.5 * np.exp(0.7j) * U).amplitude
+    np.testing.assert_allclose(b, 2.5 * a, rtol=1e-9)
+
+
+@pytest.mark.known_answer
+def test_anisotropic_bearings_use_the_whole_system():
+    """Anisotropy breaks the forward/backward split: elliptic orbits, both components."""
+    m = SP.model(np.array(DESIGNS[0]), effects=SP.effects + (Anisotropy(s=0.1),))
+    th, U = _sample(20, seed=5)
+    T = coupled_tables(m, np.geomspace(1000.0, 24000.0, 8), theta_grid(th)[0])
+    assert T.Nb is not None
+    opts = CoupledPeakOptions(n_grid=96, stencil=8)
+    fast = peak_tool_amplitude_coupled(m, th[:3], U[:3], options=opts)
+    fe = peak_tool_amplitude_unbalance(m, th[:3], U[:3], options=FINE)
+    np.testing.assert_allclose(fast.amplitude, fe.amplitude, rtol=1e-3)
+
+
+@pytest.mark.known_answer
+def test_housing_stage_on_a_theta_bearing_falls_back_to_rows():
+    """θ is not affine in the bearing impedance with a housing stage: solved row by row."""
+    eff = SP.effects + (HousingFlexibility(bearings=("rear",), k_N_per_m=2e8, m_kg=5.0,
+                                           c_Ns_per_m=2e3),)
+    m = SP.model(np.array(DESIGNS[1]), effects=eff)
+    th, U = _sample(3, seed=9)
+    fast = peak_tool_amplitude_coupled(m, th, U)
+    fe = peak_tool_amplitude_unbalance(m, th, U, options=FINE)
+    np.testing.assert_allclose(fast.amplitude, fe.amplitude, rtol=1e-3)
+
+
+def test_forward_basis_is_orthonormal_and_holds_the_unbalance_force():
+    lay = retained_layout(SP.model(SP.baseline))
+    V = forward_basis(lay)
+    np.testing.assert_allclose(V.conj().T @ V, np.eye(V.shape[1]), atol=1e-15)
+    f = np.zeros(lay.n_dof, dtype=complex)
+    f[4 * lay.unbalance[1]:4 * lay.unbalance[1] + 2] = [1.0, -1.0j]
+    np.testing.assert_allclose(V @ (V.conj().T @ f), f, atol=1e-15)
+
+
+def test_peak_of_a_single_sample_is_the_orbit_amplitude_there():
+    """The reported peak is the FE orbit amplitude at the reported speed (interpolation
+    error in speed only: < 1e-4)."""
+    m = SP.model(np.array(DESIGNS[0]), effects=(SpeedSoftening(a=0.1),))
+    th, U = _sample(1, seed=11)
+    res = peak_tool_amplitude_coupled(m, th, U)
+    q = sum(U[0, j] * dense_response(
+        m.__class__(**{**m.__dict__, "unbalance": np.eye(2)[j].astype(complex)}),
+        res.speed_rpm, th[0])[0, m.tool_node] for j in range(2))
+    assert abs(orbit_amplitude(q[0], q[1]) / res.amplitude[0] - 1) < 1e-4
+
+
+def test_bad_inputs_are_refused():
+    m = SP.model(SP.baseline)
+    with pytest.raises(ValueError, match="unbalance has shape"):
+        peak_tool_amplitude_coupled(m, np.ones((3, 2)), np.ones((3, 3)))
+    with pytest.raises(ValueError, match="speed_range_rpm"):
+        peak_tool_amplitude_coupled(m, None, np.ones(2), speed_range_rpm=(5.0, 1.0))
+    with pytest.raises(ValueError, match="stencil"):
+        CoupledPeakOptions(n_grid=8, stencil=9)
+    with pytest.raises(ValueError, match="geometric grid"):
+        coupled_tables(m, np.array([1000.0, 2000.0, 2500.0]), np.ones((1, 2)))
