@@ -184,12 +184,23 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
     w = sp * RPM
     S = condensed_rotor_chain(model, sp, layout)                        # (G, r, r)
     Z = model.bearing_impedance(np.broadcast_to(w, (th.shape[0], sp.size)), th)
-    Kc = _coupled_matrix(layout, S[None], Z)                            # (K, G, r, r)
     F = _unit_forces(model, layout, w)                                  # (G, r, P)
     V = forward_basis(layout)
-    Kf = V.conj().T @ Kc @ V
-    forward = np.linalg.norm(Kc @ V - V @ Kf) <= 1e-10 * np.linalg.norm(Kc @ V)
-    A, rhs = (Kf, V.conj().T @ F) if forward else (Kc, F)
+    SV = S @ V
+    Sf = V.conj().T @ SV
+    zxx, zxy, zyx, zyy = Z[..., 0, 0], Z[..., 0, 1], Z[..., 1, 0], Z[..., 1, 1]
+    scale = np.abs(Z).max()
+    forward = (np.linalg.norm(SV - V @ Sf) <= 1e-10 * np.linalg.norm(SV)
+               and np.abs(zxx - zyy).max() <= 1e-12 * scale
+               and np.abs(zxy + zyx).max() <= 1e-12 * scale)
+    if forward:
+        # each bearing adds vᴴ Z v = Z_xx − i Z_xy to its node's forward translation
+        A = np.array(np.broadcast_to(Sf, Z.shape[:2] + Sf.shape[1:]))  # (K, G, r/2, r/2)
+        for j, k in enumerate(layout.bearings):
+            A[..., 2 * k, 2 * k] += zxx[..., j] - 1j * zxy[..., j]
+        rhs = V.conj().T @ F
+    else:
+        A, rhs = _coupled_matrix(layout, S[None], Z), F                 # (K, G, r, r)
     try:
         q = np.linalg.solve(A, np.broadcast_to(rhs, A.shape[:2] + rhs.shape[1:]))
     except np.linalg.LinAlgError as exc:
@@ -234,6 +245,7 @@ def _stencil(u: np.ndarray, G: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     return s, u - s
 
 
+@lru_cache(maxsize=8)
 def _sub_matrix(G: int, n_sub: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Grid coordinates of the sub-grid (G−1)·n_sub + 1 points and its interpolation matrix."""
     u = np.linspace(0.0, G - 1.0, (G - 1) * n_sub + 1)
@@ -254,12 +266,7 @@ def _contract(B: np.ndarray | None, T: np.ndarray, U: np.ndarray | None) -> np.n
     ``Σ_k Σ_p B[n, k] U[n, p] T[k, p, f]`` (``T (K, P, F)``); ``B`` None means ``K = N`` rows
     used as they are. One BLAS product per call."""
     if U is None:
-        if B is None:
-            return T
-        flat = np.concatenate([T.real, T.imag], axis=-1)              # (K, 2F)
-        V = B @ flat
-        F = T.shape[-1]
-        return V[:, :F] + 1j * V[:, F:]
+        return T if B is None else B.astype(complex) @ T              # zgemm: fastest here
     if B is None:
         return np.einsum("npf,np->nf", T, U)
     W = (B[:, :, None] * U[:, None, :]).reshape(B.shape[0], -1)        # (N, K·P) complex
@@ -365,26 +372,52 @@ def _refine(u_sub, cand, valid, sampled, grid, opt: CoupledPeakOptions):
 
 
 def _at(V: np.ndarray, rows: np.ndarray, u: np.ndarray, n: int, orders: int = 1):
-    """Local interpolant of ``V[rows]`` (grid values) at grid coordinates ``u`` (same shape
-    as ``rows``): values, or values and two derivatives (``orders = 3``, leading axis)."""
+    """Local interpolant of ``V[rows]`` (grid values ``(N, G)`` or ``(N, G, c)``) at grid
+    coordinates ``u`` (same shape as ``rows``): values ``(..., [c])``, or values and two
+    derivatives stacked on a leading axis (``orders = 3``)."""
     s, x = _stencil(u, V.shape[1], n)
-    vals = V[rows[..., None], s[..., None] + np.arange(n)]              # (..., n)
+    vals = V[rows[..., None], s[..., None] + np.arange(n)]              # (..., n[, c])
     W = _lagrange(x, n, orders)
-    if orders == 1:
-        return np.einsum("...k,...k->...", vals, W)
-    return np.moveaxis(np.einsum("...ok,...k->...o", W, vals), -1, 0)
+    if V.ndim == 2:
+        vals = vals[..., None]
+    out = (np.einsum("...k,...kc->...c", W, vals) if orders == 1
+           else np.moveaxis(np.einsum("...ok,...kc->...oc", W, vals), -2, 0))
+    return out[..., 0] if V.ndim == 2 else out
 
 
-def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 4):
+def _local_polynomials(V: np.ndarray, rows: np.ndarray, u: np.ndarray, n: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Monomial coefficients ``(M, n, c)`` in ``x = u − s`` of the local interpolants of
+    ``V[rows]`` (``(N, G, c)`` grid values) on the stencils ``s`` of ``u``; returns ``(s, c)``."""
+    s, _ = _stencil(u, V.shape[1], n)
+    vals = V[rows[:, None], s[:, None] + np.arange(n)]                  # (M, n, c)
+    return s, np.einsum("pi,mic->mpc", _lagrange_coefficients(n)[:, :n], vals)
+
+
+def _horner(coef: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Value, first and second derivative of the polynomials ``coef (M, n, c)`` at ``x``."""
+    x = x[:, None]
+    p = coef[:, -1]
+    d1 = np.zeros_like(p)
+    d2 = np.zeros_like(p)
+    for k in range(coef.shape[1] - 2, -1, -1):
+        d2 = d2 * x + 2 * d1
+        d1 = d1 * x + p
+        p = p * x + coef[:, k]
+    return p, d1, d2
+
+
+def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 5):
     """Minimise ``g = |D|²/|N|²`` (= 1/(4A²)) on the local interpolants of rows ``rows``,
     from ``u0`` within ``[lo, hi]`` (flat arrays): Newton steps (``g`` is nearly quadratic
-    across a resonance, where ``D`` is nearly linear and ``N`` nearly constant)."""
-    n = opt.stencil
+    across a resonance, where ``D`` is nearly linear and ``N`` nearly constant). Each pair
+    keeps the stencil of its start (its interpolant is the same polynomial throughout)."""
+    s, coef = _local_polynomials(np.stack([Dg, Ng], axis=-1), rows, u0, opt.stencil)
     u = u0.copy()
     half = (hi - lo) / 2
     for _ in range(n_iter):
-        D0, D1, D2 = _at(Dg, rows, u, n, 3)
-        N0, N1, N2 = _at(Ng, rows, u, n, 3)
+        v0, v1, v2 = _horner(coef, u - s)
+        D0, D1, D2, N0, N1, N2 = v0[:, 0], v1[:, 0], v2[:, 0], v0[:, 1], v1[:, 1], v2[:, 1]
         p, p1 = np.abs(D0) ** 2, 2 * (D0.conj() * D1).real
         p2 = 2 * (np.abs(D1) ** 2 + (D0.conj() * D2).real)
         q, q1 = np.abs(N0) ** 2, 2 * (N0.conj() * N1).real
@@ -394,7 +427,8 @@ def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 4):
             g2 = (p2 * q - p * q2) / q**2 - 2 * q1 * (p1 * q - p * q1) / q**3
             step = np.where(g2 > 0, -g1 / g2, -np.sign(g1) * half / 2)
         u = np.clip(u + np.clip(np.nan_to_num(step), -half, half), lo, hi)
-    return u, _amplitude(_at(Dg, rows, u, n), _at(Ng, rows, u, n), None)
+    v0 = _horner(coef, u - s)[0]
+    return u, _amplitude(v0[:, 0], v0[:, 1], None)
 
 
 def _zoom(grid, rows, lo, hi, opt: CoupledPeakOptions):
