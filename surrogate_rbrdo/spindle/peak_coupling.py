@@ -19,8 +19,8 @@ few exact solves per *design*, using three exact structures of the linear model:
    local Lagrange polynomials of degree ``stencil − 1`` to ~1e-9 of their scale; the
    amplitude ``(|Σ U_j N^a_j| + |Σ U_j N^b_j|) / (2 |D|)`` (semi-major axis of the orbit, with
    ``N^a``, ``N^b`` the forward and backward circular components ``X ± iY``) is then searched
-   for its peak per sample: grid, sub-grid candidates, zooms, and the parabola in ``1/A²``
-   of ``harmonic.peak_search``.
+   for its peak per sample: candidates on a sub-grid, refined on the local interpolants
+   (:class:`CoupledPeakOptions`).
 
 Only step 3 approximates, and its error is measured against the FE peak search
 (``tests/spindle/test_peak_coupling.py``, ``benchmarks/bench_peak_coupling.py``).
@@ -70,14 +70,18 @@ class CoupledPeakOptions:
     ``n_grid`` exact speeds, geometric over the range (uniform spacing ``h`` in ``ln Ω``);
     ``stencil`` grid values per local Lagrange interpolant of ``D`` and ``N``; ``n_sub``
     sub-intervals per grid interval on which candidates (local maxima) are looked for; the
-    ``n_candidates`` highest are refined by ``n_zoom`` zooms of ``n_refine`` points and the
-    parabola in ``1/A²`` through the last three. Defaults: 48 speeds over 1 000–24 000 rpm
-    (ratio 1.07), sub-grid spacing 1.7 %, final spacing ~1e-4 of the speed.
+    ``n_candidates`` highest (those sampled above ``prune`` times the row's best) are refined
+    on the local interpolants: ``n_refine`` samples of the bracket and Newton steps on
+    ``1/A²`` (isotropic bearings), or ``n_zoom`` zooms of ``n_refine`` points and the
+    parabola in ``1/A²`` through the last three (anisotropic). Defaults: 48 speeds over
+    1 000–24 000 rpm (ratio 1.07), sub-grid spacing 3.4 %; measured ≤ 2.8e-4 from a fine FE
+    peak search at 3 600 random (design, θ, unbalance) samples over the reference box (40
+    speeds: ≤ 6e-4; 56: ≤ 1.4e-4; 64: ≤ 7.4e-5), and ``benchmarks/bench_peak_coupling.py``.
     """
 
     n_grid: int = 48
     stencil: int = 6
-    n_sub: int = 4
+    n_sub: int = 2
     n_candidates: int = 3
     n_refine: int = 9
     n_zoom: int = 3
@@ -261,16 +265,29 @@ def _amplitude(d: np.ndarray, a: np.ndarray, b: np.ndarray | None) -> np.ndarray
         return num / np.abs(d)
 
 
-def _contract(B: np.ndarray | None, T: np.ndarray, U: np.ndarray | None) -> np.ndarray:
-    """Per row ``n``: ``Σ_k B[n, k] T[k, f]`` (``U`` None, ``T (K, F)``) or
-    ``Σ_k Σ_p B[n, k] U[n, p] T[k, p, f]`` (``T (K, P, F)``); ``B`` None means ``K = N`` rows
-    used as they are. One BLAS product per call."""
-    if U is None:
-        return T if B is None else B.astype(complex) @ T              # zgemm: fastest here
-    if B is None:
-        return np.einsum("npf,np->nf", T, U)
-    W = (B[:, :, None] * U[:, None, :]).reshape(B.shape[0], -1)        # (N, K·P) complex
-    return W @ T.reshape(-1, T.shape[-1])
+def _contract(B: np.ndarray | None, T: np.ndarray, U: np.ndarray):
+    """θ-contract the sub-grid tables ``T (K, F, 1 + c P)`` (``D``, then ``c`` blocks of ``P``
+    plane numerators) and combine the planes with the phasors ``U (N, P)``: returns
+    ``|D|²``, the lists of real and of imaginary parts of the combined numerators, and the
+    real and imaginary part of ``D``, ``(N, F)`` each.
+
+    ``B`` None means one table row per sample (``K = N``). One real BLAS product: the basis is
+    real, so real and imaginary parts are contracted together.
+    """
+    K, F, cols = T.shape
+    T2 = np.concatenate([T.real, T.imag], axis=-1).transpose(0, 2, 1)  # (K, 2 cols, F)
+    V = T2 if B is None else (B @ T2.reshape(K, -1)).reshape((-1,) + T2.shape[1:])
+    re, im = V[:, :cols], V[:, cols:]
+    P = U.shape[1]
+    d2 = re[:, 0] ** 2 + im[:, 0] ** 2
+    nr, ni = [], []
+    for c in range((cols - 1) // P):
+        blk = slice(1 + c * P, 1 + (c + 1) * P)
+        nr.append(np.einsum("npf,np->nf", re[:, blk], U.real)
+                  - np.einsum("npf,np->nf", im[:, blk], U.imag))
+        ni.append(np.einsum("npf,np->nf", im[:, blk], U.real)
+                  + np.einsum("npf,np->nf", re[:, blk], U.imag))
+    return d2, nr, ni, re[:, 0], im[:, 0]
 
 
 def peak_from_tables(tables: CoupledTables, basis: np.ndarray | None, unbalance: np.ndarray,
@@ -293,37 +310,53 @@ def peak_from_tables(tables: CoupledTables, basis: np.ndarray | None, unbalance:
     if B is None and K != N:
         raise ValueError(f"row-by-row tables hold {K} rows, unbalance has {N}")
     u_sub, Msub = _sub_matrix(G, options.n_sub, options.stencil)
-    # every quantity on the sub-grid (local interpolation of the exact grid), θ contracted
-    d = _contract(B, tables.D @ Msub.T, None)
-    na = _contract(B, np.einsum("fg,kgp->kpf", Msub, tables.Na), U)
-    nb = None if tables.Nb is None else _contract(
-        B, np.einsum("fg,kgp->kpf", Msub, tables.Nb), U)
+    # every quantity on the sub-grid (local interpolation of the exact grid)
+    quants = [tables.D[..., None], tables.Na] + ([] if tables.Nb is None else [tables.Nb])
+    Tsub = np.einsum("fg,kgc->kfc", Msub, np.concatenate(quants, axis=-1))
+    amp, speed, bound = np.empty(N), np.empty(N), np.empty(N)
+    for s in range(0, N, _ROWS):                # blocks of rows: their arrays stay in cache
+        rows = slice(s, s + _ROWS)
+        res = (_peak_rows(tables, None, Tsub[rows], U[rows], u_sub, options) if B is None
+               else _peak_rows(tables, B[rows], Tsub, U[rows], u_sub, options))
+        amp[rows], speed[rows], bound[rows] = res
+    return PeakResult(amp, speed), bound
+
+
+#: rows per block in :func:`peak_from_tables`: bounds the memory of large samples (1 024 rows
+#: of the default 95 sub-grid points hold ~5 MB)
+_ROWS = 1024
+
+
+def _peak_rows(tables, B, Tsub, U, u_sub, options):
+    """:func:`peak_from_tables` for one block of rows: basis ``B`` (or None with one table row
+    per sample in ``Tsub``), phasors ``U``; returns amplitudes, speeds and round-off bounds."""
+    N = U.shape[0]
+    d2, nr, ni, dr, di = _contract(B, Tsub, U)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if nb is None:
-            rank = (na.real**2 + na.imag**2) / (d.real**2 + d.imag**2)  # ∝ A², same peaks
-            sampled = lambda r, c: 0.5 * np.sqrt(rank[r, c])            # noqa: E731
+        if tables.Nb is None:
+            rank = (nr[0] ** 2 + ni[0] ** 2) / d2                        # ∝ A², same peaks
         else:
-            rank = (np.abs(na) + np.abs(nb)) / np.abs(d)
-            sampled = lambda r, c: 0.5 * rank[r, c]                     # noqa: E731
+            rank = (np.hypot(nr[0], ni[0]) + np.hypot(nr[1], ni[1])) / np.sqrt(d2)
     cand, valid = _candidates(rank, options.n_candidates)
+    rows = np.arange(N)[:, None]
+    sampled = 0.5 * (np.sqrt(rank[rows, cand]) if tables.Nb is None else rank[rows, cand])
     g = slice(None, None, options.n_sub)                               # the exact grid
-    grid = [d[:, g], na[:, g]] + ([] if nb is None else [nb[:, g]])
-    amp, pos = _refine(u_sub, cand, valid, sampled(np.arange(N)[:, None], cand), grid,
-                       options)
+    grid = [dr[:, g] + 1j * di[:, g]] + [a[:, g] + 1j * b[:, g] for a, b in zip(nr, ni,
+                                                                                 strict=True)]
+    amp, pos = _refine(u_sub, cand, valid, sampled, grid, options)
     h = tables.log_speed[1] - tables.log_speed[0]
     speed = np.exp(tables.log_speed[0] + h * pos)
     if B is None:
-        bound = np.zeros(N)
-    else:
-        lam = float(np.abs(B).sum(axis=1).max())
-        sel = np.round(pos * options.n_sub).astype(int)                # nearest sub-grid point
-        r = np.arange(N)
-        dmax = np.abs(tables.D).max()
-        nmax = np.abs(tables.Na).max(axis=(0, 1)) @ np.abs(U).T
-        with np.errstate(divide="ignore"):
-            bound = np.finfo(float).eps * lam * (dmax / np.abs(d[r, sel])
-                                                 + nmax / np.abs(na[r, sel]))
-    return PeakResult(amp, speed), bound
+        return amp, speed, np.zeros(N)
+    lam = np.abs(B).sum(axis=1)                          # Lebesgue sum of each row's basis
+    sel = np.round(pos * options.n_sub).astype(int)                    # nearest sub-grid point
+    r = np.arange(N)
+    dmax = np.abs(tables.D).max()
+    nmax = np.abs(tables.Na).max(axis=(0, 1)) @ np.abs(U).T
+    with np.errstate(divide="ignore"):
+        bound = np.finfo(float).eps * lam * (dmax / np.sqrt(d2[r, sel])
+                                             + nmax / np.hypot(nr[0][r, sel], ni[0][r, sel]))
+    return amp, speed, bound
 
 
 def _candidates(A: np.ndarray, n_cand: int) -> tuple[np.ndarray, np.ndarray]:
@@ -408,12 +441,22 @@ def _horner(coef: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 
 
 def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 5):
-    """Minimise ``g = |D|²/|N|²`` (= 1/(4A²)) on the local interpolants of rows ``rows``,
-    from ``u0`` within ``[lo, hi]`` (flat arrays): Newton steps (``g`` is nearly quadratic
-    across a resonance, where ``D`` is nearly linear and ``N`` nearly constant). Each pair
-    keeps the stencil of its start (its interpolant is the same polynomial throughout)."""
+    """Minimise ``g = |D|²/|N|²`` (= 1/(4A²)) on the local interpolants of rows ``rows``
+    within ``[lo, hi]`` (flat arrays): ``n_refine`` samples of the bracket, then Newton steps
+    from the best within its neighbours (``g`` is nearly quadratic across a resonance, where
+    ``D`` is nearly linear and ``N`` nearly constant). Each pair keeps the stencil of its
+    start ``u0`` (its interpolant is the same polynomial throughout)."""
     s, coef = _local_polynomials(np.stack([Dg, Ng], axis=-1), rows, u0, opt.stencil)
-    u = u0.copy()
+    # first sample the bracket (two close maxima, e.g. a resonance next to a zero of N, make
+    # g far from quadratic), then Newton from the best sample within its neighbours
+    t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, opt.n_refine)
+    vals = np.einsum("mrp,mpc->mrc", (t - s[:, None])[..., None] ** np.arange(opt.stencil),
+                     coef)
+    j = np.argmax(np.abs(vals[..., 1]) / np.abs(vals[..., 0]), axis=1)
+    pick = np.arange(t.shape[0])
+    u = t[pick, j]
+    lo = t[pick, np.maximum(j - 1, 0)]
+    hi = t[pick, np.minimum(j + 1, opt.n_refine - 1)]
     half = (hi - lo) / 2
     for _ in range(n_iter):
         v0, v1, v2 = _horner(coef, u - s)
