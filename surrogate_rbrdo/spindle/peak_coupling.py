@@ -424,7 +424,17 @@ def _local_polynomials(V: np.ndarray, rows: np.ndarray, u: np.ndarray, n: int
     ``V[rows]`` (``(N, G, c)`` grid values) on the stencils ``s`` of ``u``; returns ``(s, c)``."""
     s, _ = _stencil(u, V.shape[1], n)
     vals = V[rows[:, None], s[:, None] + np.arange(n)]                  # (M, n, c)
-    return s, np.einsum("pi,mic->mpc", _lagrange_coefficients(n)[:, :n], vals)
+    C0 = _lagrange_coefficients(n)[:, :n]
+    return s, (vals.transpose(0, 2, 1) @ C0.T).transpose(0, 2, 1)
+
+
+def _horner_values(coef: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Values ``(M, R, c)`` of the polynomials ``coef (M, n, c)`` at points ``x (M, R)``."""
+    x = x[..., None]
+    p = np.broadcast_to(coef[:, None, -1], x.shape[:2] + coef.shape[-1:])
+    for k in range(coef.shape[1] - 2, -1, -1):
+        p = p * x + coef[:, None, k]
+    return p
 
 
 def _horner(coef: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -450,8 +460,7 @@ def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 5):
     # first sample the bracket (two close maxima, e.g. a resonance next to a zero of N, make
     # g far from quadratic), then Newton from the best sample within its neighbours
     t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, opt.n_refine)
-    vals = np.einsum("mrp,mpc->mrc", (t - s[:, None])[..., None] ** np.arange(opt.stencil),
-                     coef)
+    vals = _horner_values(coef, t - s[:, None])
     j = np.argmax(np.abs(vals[..., 1]) / np.abs(vals[..., 0]), axis=1)
     pick = np.arange(t.shape[0])
     u = t[pick, j]
