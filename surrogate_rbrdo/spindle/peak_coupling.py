@@ -271,23 +271,34 @@ def _contract(B: np.ndarray | None, T: np.ndarray, U: np.ndarray):
     ``|D|²``, the lists of real and of imaginary parts of the combined numerators, and the
     real and imaginary part of ``D``, ``(N, F)`` each.
 
-    ``B`` None means one table row per sample (``K = N``). One real BLAS product: the basis is
-    real, so real and imaginary parts are contracted together.
+    ``B`` None means one table row per sample (``K = N``). Real BLAS products: with
+    ``W = B ⊗ U`` the combined numerator is ``Re = [B⊗Re U, −B⊗Im U] · [Re T; Im T]`` and
+    ``Im = [B⊗Im U, B⊗Re U] · [Re T; Im T]``.
     """
     K, F, cols = T.shape
-    T2 = np.concatenate([T.real, T.imag], axis=-1).transpose(0, 2, 1)  # (K, 2 cols, F)
-    V = T2 if B is None else (B @ T2.reshape(K, -1)).reshape((-1,) + T2.shape[1:])
-    re, im = V[:, :cols], V[:, cols:]
     P = U.shape[1]
-    d2 = re[:, 0] ** 2 + im[:, 0] ** 2
-    nr, ni = [], []
+    if B is None:                                    # one θ row per sample: weights diagonal
+        Dv = T[..., 0]
+        out_r, out_i = [], []
+        for c in range((cols - 1) // P):
+            Tc = T[..., 1 + c * P:1 + (c + 1) * P]                      # (N, F, P)
+            v = np.einsum("nfp,np->nf", Tc, U)
+            out_r.append(v.real)
+            out_i.append(v.imag)
+        return np.abs(Dv) ** 2, out_r, out_i, Dv.real, Dv.imag
+    N = B.shape[0]
+    D2 = np.concatenate([T[..., 0].real, T[..., 0].imag], axis=1)      # (K, 2F)
+    Dv = B @ D2
+    dr, di = Dv[:, :F], Dv[:, F:]
+    Wr = (B[:, :, None] * U.real[:, None, :]).reshape(N, -1)          # (N, K P)
+    Wi = (B[:, :, None] * U.imag[:, None, :]).reshape(N, -1)
+    out_r, out_i = [], []
     for c in range((cols - 1) // P):
-        blk = slice(1 + c * P, 1 + (c + 1) * P)
-        nr.append(np.einsum("npf,np->nf", re[:, blk], U.real)
-                  - np.einsum("npf,np->nf", im[:, blk], U.imag))
-        ni.append(np.einsum("npf,np->nf", im[:, blk], U.real)
-                  + np.einsum("npf,np->nf", re[:, blk], U.imag))
-    return d2, nr, ni, re[:, 0], im[:, 0]
+        Tc = T[..., 1 + c * P:1 + (c + 1) * P].transpose(0, 2, 1).reshape(K * P, F)
+        Tstack = np.concatenate([Tc.real, Tc.imag], axis=0)            # (2 K P, F)
+        out_r.append(np.concatenate([Wr, -Wi], axis=1) @ Tstack)
+        out_i.append(np.concatenate([Wi, Wr], axis=1) @ Tstack)
+    return dr**2 + di**2, out_r, out_i, dr, di
 
 
 def peak_from_tables(tables: CoupledTables, basis: np.ndarray | None, unbalance: np.ndarray,
@@ -450,7 +461,7 @@ def _horner(coef: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return p, d1, d2
 
 
-def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 5):
+def _newton(Dg, Ng, rows, u0, lo, hi, opt: CoupledPeakOptions, n_iter: int = 3):
     """Minimise ``g = |D|²/|N|²`` (= 1/(4A²)) on the local interpolants of rows ``rows``
     within ``[lo, hi]`` (flat arrays): ``n_refine`` samples of the bracket, then Newton steps
     from the best within its neighbours (``g`` is nearly quadratic across a resonance, where
