@@ -83,7 +83,7 @@ class CoupledPeakOptions:
     stencil: int = 6
     n_sub: int = 2
     n_candidates: int = 3
-    n_refine: int = 9
+    n_refine: int = 17
     n_zoom: int = 3
     prune: float = 0.1
 
