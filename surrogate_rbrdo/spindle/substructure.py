@@ -134,8 +134,9 @@ def condensed_rotor_chain(model: SpindleModel, speeds_rpm: np.ndarray,
     retained nodes (and the free ends beyond the first and last) are eliminated one node at a
     time, each step a 4x4 solve batched over the speeds: the cost grows with the number of
     nodes, not with its cube. The result is the same Schur complement (equal to round-off,
-    ``tests/spindle/test_substructure.py``), about 10x faster for the reference spindle's 20
-    nodes (``benchmarks/bench_peak_coupling.py``).
+    ``tests/spindle/test_substructure.py``), 5–14x faster for the reference spindle's 20
+    nodes at 48–64 speeds (measured under load; ``benchmarks/bench_peak_coupling.py`` prints
+    it).
 
     >>> import numpy as np
     >>> from surrogate_rbrdo.spindle.reference import reference_spindle
