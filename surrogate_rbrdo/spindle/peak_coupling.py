@@ -172,6 +172,7 @@ def peak_tool_amplitude_coupled(
     model: SpindleModel, theta: np.ndarray | None, unbalance: np.ndarray, *,
     speed_range_rpm: tuple[float, float] | None = None,
     options: CoupledPeakOptions | None = None, rtol: float = 1e-9,
+    grid: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PeakResult:
     """Peak tool-tip amplitude over the speed range for θ rows and unbalance phasors.
 
@@ -190,6 +191,9 @@ def peak_tool_amplitude_coupled(
         Residual unbalance phasors per plane (kg m), in the order of the geometry's planes.
     options : CoupledPeakOptions, optional
         The search (default ``CoupledPeakOptions()``).
+    grid : (nodes, basis), optional
+        ``coupling.theta_grid(theta)``, when the caller already has it (a θ sample shared by
+        many designs).
     """
     options = CoupledPeakOptions() if options is None else options
     g = model.geometry
@@ -206,7 +210,7 @@ def peak_tool_amplitude_coupled(
     out_a, out_s = np.empty(th.shape[0]), np.empty(th.shape[0])
     redo = np.arange(th.shape[0])
     if theta_affine(model.geometry, model.effects, model.theta_bearings):
-        nodes, basis = theta_grid(th)
+        nodes, basis = theta_grid(th) if grid is None else grid
         res, bound = peak_from_tables(coupled_tables(model, speeds, nodes, layout), basis, U,
                                       options)
         out_a[:], out_s[:] = res.amplitude, res.speed_rpm

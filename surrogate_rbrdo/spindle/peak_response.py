@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
+from surrogate_rbrdo.spindle.coupling import theta_grid
 from surrogate_rbrdo.spindle.geometry import PreloadLaw
 from surrogate_rbrdo.spindle.peak_coupling import (
     CoupledPeakOptions,
@@ -174,6 +175,12 @@ class PeakUnbalanceResponse:
     def unbalance(self, model, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Effective stiffness factors ``(N, m)`` and unbalance phasors ``(N, P)`` (kg m) of
         ``model`` for θ rows."""
+        k, unit = self._split(model, theta)
+        return k, permissible_unbalance(model, self.tolerances) * unit
+
+    def _split(self, model, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Effective stiffness factors and unit phasors ``r e^{iφ}`` (design-free except the
+        preload law's exponent)."""
         spec = self.theta_spec
         k, tau, r, phi = spec.split(theta)
         if tau is not None:
@@ -181,28 +188,36 @@ class PeakUnbalanceResponse:
             e = law.exponent if isinstance(law, PreloadLaw) else 0.0
             k = k.copy()
             k[:, spec.bearings.index(spec.preload_bearing)] *= (1.0 + tau) ** e
-        U = permissible_unbalance(model, self.tolerances) * r * np.exp(1j * phi)
-        return k, U
+        return k, r * np.exp(1j * phi)
 
-    def _peak(self, model, theta: np.ndarray):
-        k, U = self.unbalance(model, theta)
-        if self.method == "direct":
-            return peak_tool_amplitude_unbalance(model, k, U, speed_range_rpm=self.speed_range_rpm)
-        return peak_tool_amplitude_coupled(model, k, U, speed_range_rpm=self.speed_range_rpm,
-                                           options=self.options)
+    def _peaks(self, X: np.ndarray, theta: np.ndarray) -> list:
+        """The peak (amplitudes and speeds) of every design for the θ rows: θ is mapped once
+        and its interpolation grid built once for all designs."""
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        out, k, unit, grid = [], None, None, None
+        for x in X:
+            model = self.spindle.model(x)
+            if k is None:
+                k, unit = self._split(model, theta)
+                grid = theta_grid(k)
+            U = permissible_unbalance(model, self.tolerances) * unit
+            if self.method == "direct":
+                out.append(peak_tool_amplitude_unbalance(
+                    model, k, U, speed_range_rpm=self.speed_range_rpm))
+            else:
+                out.append(peak_tool_amplitude_coupled(
+                    model, k, U, speed_range_rpm=self.speed_range_rpm, options=self.options,
+                    grid=grid))
+        return out
 
     def __call__(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        out = np.empty((x.shape[0], theta.shape[0]))
-        for i, xi in enumerate(x):
-            out[i] = self._peak(self.spindle.model(xi), theta).amplitude
-        return out
+        peaks = self._peaks(x, theta)
+        return np.stack([p.amplitude for p in peaks])
 
     def peak_speeds(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Speed (rpm) of each sample's peak, ``(P, N)``."""
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        return np.stack([self._peak(self.spindle.model(xi), theta).speed_rpm for xi in x])
+        return np.stack([p.speed_rpm for p in self._peaks(x, theta)])
 
     def point(self, z: np.ndarray) -> float:
         """``y`` at one joint point ``z = [x, θ]``."""
