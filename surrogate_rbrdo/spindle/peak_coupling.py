@@ -60,7 +60,7 @@ from surrogate_rbrdo.spindle.peak_interp import (
 )
 from surrogate_rbrdo.spindle.substructure import (
     RetainedLayout,
-    condensed_rotor_chain,
+    condense_chain,
     retained_layout,
 )
 
@@ -121,7 +121,8 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
                          "(np.geomspace)")
     th = model.check_theta(theta_nodes)
     w = sp * RPM
-    S = condensed_rotor_chain(model, sp, layout)                        # (G, r, r)
+    chain = condense_chain(model, sp, layout)
+    S = chain.S                                                         # (G, r, r)
     Z = model.bearing_impedance(np.broadcast_to(w, (th.shape[0], sp.size)), th)
     F = _unit_forces(model, layout, w)                                  # (G, r, P)
     V = forward_basis(layout)
@@ -147,6 +148,10 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
     if forward:
         q = V @ q
     sign, logdet = np.linalg.slogdet(A)
+    # det A_II · det(S + P Z Pᵀ) is the whole system's determinant: S's poles (clamped-
+    # interior resonances, e.g. behind a soft tool interface) cancel, D stays smooth in Ω
+    sign = sign * chain.interior_sign
+    logdet = logdet + chain.interior_logabs
     D = sign * np.exp(logdet - logdet.max())                            # one common scale
     t = 4 * layout.tool
     Na = D[..., None] * (q[..., t, :] + 1j * q[..., t + 1, :])

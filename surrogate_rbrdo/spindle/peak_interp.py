@@ -41,13 +41,14 @@ class CoupledPeakOptions:
     on the local interpolants: ``n_refine`` samples of the bracket and Newton steps on
     ``1/A²`` (isotropic bearings), or ``n_zoom`` zooms of ``n_refine`` points and the
     parabola in ``1/A²`` through the last three (anisotropic). Defaults: 48 speeds over
-    1 000–24 000 rpm (ratio 1.07), sub-grid spacing 3.4 %; measured ≤ 2.8e-4 from a fine FE
-    peak search at 3 600 random (design, θ, unbalance) samples over the reference box (40
-    speeds: ≤ 6e-4; 56: ≤ 1.4e-4; 64: ≤ 7.4e-5), and ``benchmarks/bench_peak_coupling.py``.
+    1 000–24 000 rpm (ratio 1.07), interpolants of degree 7, sub-grid spacing 3.4 %; measured
+    ≤ 2.6e-5 from a fine FE peak search at 3 600 random (design, θ, unbalance) samples over
+    the reference box (40 speeds: ≤ 9.4e-5; degree 5: ≤ 4.6e-4), and
+    ``benchmarks/bench_peak_coupling.py``.
     """
 
     n_grid: int = 48
-    stencil: int = 6
+    stencil: int = 8
     n_sub: int = 2
     n_candidates: int = 3
     n_refine: int = 17
