@@ -162,13 +162,8 @@ def condense_chain(model: SpindleModel, speeds_rpm: np.ndarray,
     nn = model.n_nodes
     Dr = {a: D[:, a].copy() for a in R}              # retained diagonal blocks
     off = {}
-    sign = np.ones(sp.size, dtype=complex)
-    logabs = np.zeros(sp.size)
-
-    def pivot(P):                                    # one eliminated node's pivot block
-        nonlocal sign, logabs
-        sg, la = np.linalg.slogdet(P)
-        sign, logabs = sign * sg, logabs + la
+    pivots = []                                      # each eliminated node's pivot block
+    pivot = pivots.append
 
     try:
         # free end before the first retained node: eliminate 0 .. R[0]-1 towards R[0]
@@ -209,6 +204,11 @@ def condense_chain(model: SpindleModel, speeds_rpm: np.ndarray,
         S[:, pos[b]:pos[b] + 4, pos[a]:pos[a] + 4] = Ct
     if not np.all(np.isfinite(S)):
         raise ModelError(f"condensed_rotor_chain: non-finite stiffness at {sp.tolist()} rpm")
+    if pivots:
+        sg, la = np.linalg.slogdet(np.stack(pivots))                # (n_interior, S)
+        sign, logabs = np.prod(sg, axis=0), la.sum(axis=0)
+    else:
+        sign, logabs = np.ones(sp.size, dtype=complex), np.zeros(sp.size)
     return ChainCondensation(S, sign, logabs)
 
 
