@@ -24,7 +24,18 @@ from surrogate_rbrdo.spindle.modal import (
     first_natural_frequency,
     modal_analysis,
 )
-from surrogate_rbrdo.spindle.reference import ReferenceSpindle, reference_spindle
+from surrogate_rbrdo.spindle.peak_coupling import (
+    peak_tool_amplitude_coupled,
+    peak_tool_amplitude_unbalance,
+)
+from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse, ThetaSpec
+from surrogate_rbrdo.spindle.practice import PracticeConstraints, PracticeSpec
+from surrogate_rbrdo.spindle.reference import (
+    ReferenceSpindle,
+    credible_spindle,
+    reference_spindle,
+)
+from surrogate_rbrdo.spindle.separation import ResonanceGuard, forward_critical_speeds
 from surrogate_rbrdo.spindle.stress import max_von_mises
 
 __all__ = [
@@ -33,17 +44,26 @@ __all__ = [
     "Effect",
     "PeakOptions",
     "PeakResult",
+    "PeakUnbalanceResponse",
+    "PracticeConstraints",
+    "PracticeSpec",
     "ReferenceSpindle",
+    "ResonanceGuard",
     "SpindleGeometry",
     "SpindleModel",
+    "ThetaSpec",
     "build_model",
     "campbell",
+    "credible_spindle",
     "critical_speeds",
     "effect_from_dict",
     "first_natural_frequency",
+    "forward_critical_speeds",
     "max_von_mises",
     "modal_analysis",
     "peak_tool_amplitude",
+    "peak_tool_amplitude_coupled",
+    "peak_tool_amplitude_unbalance",
     "reference_spindle",
     "tool_amplitude",
     "unbalance_response",

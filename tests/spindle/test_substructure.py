@@ -7,14 +7,18 @@ import numpy as np
 import pytest
 
 from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.spindle.assembly import build_model
 from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.spindle.substructure import (
     PointwiseCondensed,
     condensed_from_vector,
     condensed_rotor,
+    condensed_rotor_chain,
     condensed_vector,
     retained_layout,
 )
+
+from .conftest import uniform_beam_geometry
 
 SP = reference_spindle()
 DESIGNS = [[3000.0, 442.5, 65.7], [2000.0, 500.0, 65.0], [1000.0, 750.0, 50.0],
@@ -72,3 +76,33 @@ def test_pointwise_condensed_refuses_another_layout_or_unbalance():
         PointwiseCondensed(SP, (24000.0,), lay.nodes, tuple(2 * m.unbalance))(x)
     v = PointwiseCondensed(SP, (24000.0,), lay.nodes, tuple(m.unbalance))(x)
     assert np.all(np.isfinite(v))
+
+
+@pytest.mark.parametrize("x", DESIGNS)
+def test_chain_condensation_equals_the_dense_schur_complement(x):
+    """Block elimination along the shaft gives the dense Schur complement (independent)."""
+    m = SP.model(np.array(x))
+    sp = np.array([1000.0, 9000.0, 21783.0, 24000.0])
+    S = condensed_rotor(m, sp)
+    np.testing.assert_allclose(condensed_rotor_chain(m, sp), S, rtol=0,
+                               atol=1e-11 * np.abs(S).max())
+
+
+def test_chain_condensation_with_free_ends_on_both_sides():
+    """Retained nodes in the middle of the shaft: the free ends are eliminated too."""
+    g = uniform_beam_geometry(600.0, 60.0, 12, 1e8, tool_tip_mm=150.0,
+                              disks=[{"name": "d", "position_mm": 450.0, "mass_kg": 3.0,
+                                      "polar_inertia_kgm2": 0.01,
+                                      "diametral_inertia_kgm2": 0.006}],
+                              unbalances=[{"position_mm": 450.0, "magnitude_kgm": 1e-5}],
+                              rayleigh_alpha_per_s=2.0, rayleigh_beta_s=1e-6)
+    g = g.__class__.from_dict({**g.to_dict(), "bearings": [
+        {"name": "a", "position_mm": 250.0, "law": {"type": "constant", "k_N_per_m": 1e8}},
+        {"name": "b", "position_mm": 500.0, "law": {"type": "constant", "k_N_per_m": 1e8}}]})
+    m = build_model(g)
+    lay = retained_layout(m)
+    assert lay.nodes[0] > 0 and lay.nodes[-1] < m.n_nodes - 1
+    sp = np.array([3000.0, 30000.0])
+    S = condensed_rotor(m, sp, lay)
+    np.testing.assert_allclose(condensed_rotor_chain(m, sp, lay), S, rtol=0,
+                               atol=1e-11 * np.abs(S).max())

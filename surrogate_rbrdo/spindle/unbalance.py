@@ -1,0 +1,112 @@
+"""Permissible residual unbalance per plane (ISO 21940-11), for any design of a spindle.
+
+ISO 21940-11:2016 (formerly ISO 1940-1), §5 and Table 1: a rotor of mass ``m`` balanced to
+grade ``G`` (mm/s) at its maximum service speed ``Ω_max`` may keep a residual unbalance up to
+``U_per = m e_per = m G / Ω_max``; machine-tool drives are G 2.5 (Table 1). The standard
+bounds the *magnitude* only: the angular position of the residual is whatever the last
+correction left, so the phase of each plane is random per assembly.
+
+Each unbalance plane of the geometry carries the residual of the parts balanced in it:
+:class:`PlaneTolerance` names them by disk (e.g. the tool holder, balanced as a rotor of its
+own), or takes "the rest of the rotor" (the shaft and every disk no other plane claims). Plane
+tolerances therefore follow the design: a longer or thicker shaft is heavier and may keep
+proportionally more unbalance at the same grade.
+
+>>> import numpy as np
+>>> from surrogate_rbrdo.spindle.reference import reference_spindle
+>>> m = reference_spindle().model(np.array([2000.0, 500.0, 65.0]))
+>>> (permissible_unbalance(m, REFERENCE_TOLERANCES) * 1e6).round(2).tolist()   # g mm
+[1.79, 19.0]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_positive
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+
+
+@dataclass(frozen=True)
+class PlaneTolerance:
+    """Balance grade of one unbalance plane and the parts balanced in it.
+
+    ``disks``: names of the geometry's disks whose mass this plane's residual belongs to;
+    ``None``: the rest of the rotor (shaft plus the disks no other plane names).
+    """
+
+    grade_mm_s: float = 2.5
+    disks: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        check_positive("grade_mm_s", self.grade_mm_s)
+        if self.disks is not None:
+            object.__setattr__(self, "disks", tuple(self.disks))
+
+
+@dataclass(frozen=True)
+class UnbalanceTolerances:
+    """One :class:`PlaneTolerance` per unbalance plane of the geometry (in its order), and the
+    service speed the grade refers to (default: the geometry's maximum speed)."""
+
+    planes: tuple[PlaneTolerance, ...]
+    speed_rpm: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "planes", tuple(self.planes))
+        if not self.planes:
+            raise ValueError("planes = () is not allowed: give one PlaneTolerance per plane")
+        if sum(p.disks is None for p in self.planes) > 1:
+            raise ValueError("planes: at most one plane may take 'the rest of the rotor' "
+                             "(disks = None)")
+        if self.speed_rpm is not None:
+            check_positive("speed_rpm", self.speed_rpm)
+
+
+#: the reference spindle: the tool holder (with tool) balanced on its own in the tool plane,
+#: the rest of the rotor (shaft, motor rotor, rear unit) in the motor plane; G 2.5, the
+#: ISO 21940-11 grade of machine-tool drives, at the maximum speed 24 000 rpm
+REFERENCE_TOLERANCES = UnbalanceTolerances(
+    (PlaneTolerance(2.5, ("tool_holder",)), PlaneTolerance(2.5, None)))
+
+
+def plane_masses(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.ndarray:
+    """Mass (kg) balanced in each plane: its named disks, or the rest of the rotor."""
+    g = model.geometry
+    if len(tolerances.planes) != len(g.unbalances):
+        raise ValueError(f"tolerances give {len(tolerances.planes)} planes, the geometry has "
+                         f"{len(g.unbalances)} unbalance planes")
+    disks = {d.name: d.mass_kg for d in g.disks}
+    claimed = 0.0
+    out = np.zeros(len(tolerances.planes))
+    for j, p in enumerate(tolerances.planes):
+        if p.disks is None:
+            continue
+        for name in p.disks:
+            if name not in disks:
+                raise ValueError(f"tolerances.planes[{j}].disks: {name!r} is not a disk; "
+                                 f"disks are {sorted(disks)}")
+            out[j] += disks[name]
+        claimed += out[j]
+    for j, p in enumerate(tolerances.planes):
+        if p.disks is None:
+            out[j] = model.rotor_mass_kg - claimed
+    return out
+
+
+def permissible_unbalance(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.ndarray:
+    """``U_per = m G / Ω_max`` (kg m) of each plane (ISO 21940-11 §5)."""
+    speed = tolerances.speed_rpm or model.geometry.speed_max_rpm
+    grades = np.array([p.grade_mm_s for p in tolerances.planes]) * 1e-3
+    return plane_masses(model, tolerances) * grades / (speed * RPM)
+
+
+__all__ = [
+    "REFERENCE_TOLERANCES",
+    "PlaneTolerance",
+    "UnbalanceTolerances",
+    "permissible_unbalance",
+    "plane_masses",
+]
