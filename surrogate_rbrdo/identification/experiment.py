@@ -26,13 +26,15 @@ from __future__ import annotations
 import csv
 import json
 import time
-from dataclasses import asdict, dataclass, field
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
+from surrogate_rbrdo.core.validate import check_choice, check_int, check_keys, check_positive
 from surrogate_rbrdo.identification.campaign import (
     DEFAULT_MAX_REL_SE,
     FIT_ON,
@@ -121,6 +123,36 @@ class IdentificationOptions:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> IdentificationOptions:
+        """From an ``[identification]`` table (without its ``source``); unknown keys raise a
+        ``ValueError`` naming the table; lists become tuples."""
+        check_keys("identification", d, {f.name for f in fields(cls)})
+        kw = {k: tuple(tuple(x) if isinstance(x, list) else x for x in v)
+              if isinstance(v, list) else v for k, v in d.items()}
+        if "systematic" in kw:
+            sysd = dict(kw["systematic"])
+            check_keys("identification.systematic", sysd,
+                       {f.name for f in fields(SystematicUncertainty)})
+            kw["systematic"] = SystematicUncertainty(**sysd)
+        return cls(**kw)
+
+
+def identification_config(table: Mapping[str, Any]) -> tuple[Path, IdentificationOptions]:
+    """The ``[identification]`` table of an experiment config: the ``source`` folder (a rig
+    campaign run or a measured-data folder) and the options.
+
+    >>> src, o = identification_config({"source": "results/rig/r1", "n_boot": 100,
+    ...                                 "systematic": {"gain_sd": 0.01}})
+    >>> str(src), o.n_boot, o.systematic.gain_sd
+    ('results/rig/r1', 100, 0.01)
+    """
+    d = dict(table)
+    if not isinstance(d.get("source"), str) or not d["source"]:
+        raise ValueError(f"identification.source = {d.get('source')!r} is not allowed: give "
+                         "the rig campaign or measured-data folder to identify from")
+    return Path(d.pop("source")), IdentificationOptions.from_dict(d)
 
 
 @dataclass(frozen=True, eq=False)
@@ -225,5 +257,5 @@ def _cell(v):
     return v
 
 
-__all__ = ["EXCITATIONS", "IdentificationOptions", "IdentificationRun", "identify_records",
-           "run_identification"]
+__all__ = ["EXCITATIONS", "IdentificationOptions", "IdentificationRun", "identification_config",
+           "identify_records", "run_identification"]

@@ -28,7 +28,7 @@ from scipy.interpolate import CubicSpline
 TWO_PI = 2.0 * np.pi
 #: records whose sample positions leave a gap wider than this (in samples) within the sample
 #: interval over their revolutions do not feed the template and have their phase searched
-MAX_GAP = 0.02
+MAX_GAP = 0.1
 #: records whose gap exceeds this (samples per revolution near an integer or a simple
 #: fraction) have their phase searched over ± ``SEARCH_RAD``: the edge interpolation can then be
 #: off by a few degrees, more than Gauss–Newton on a 10° edge recovers from

@@ -262,8 +262,10 @@ def fit_1x(y: np.ndarray, angle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _fit_1x_cs(y: np.ndarray, c: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`fit_1x` from ``cos φ`` and ``sin φ`` (``(C, N)`` each)."""
+    """:func:`fit_1x` from ``cos φ`` and ``sin φ`` (``(C, N)`` each). ``y`` is centred first:
+    the probe gap's DC is ~10⁴ times the signal, and the residual from sums would lose it."""
     s = -s
+    y = y - y.mean(axis=-1, keepdims=True)
     n = np.full(y.shape[0], float(y.shape[1]))
     sc, ss = c.sum(-1), s.sum(-1)
     A = np.stack([np.stack([n, sc, ss], -1),

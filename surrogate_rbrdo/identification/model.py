@@ -34,6 +34,7 @@ import numpy as np
 from scipy import stats
 
 from surrogate_rbrdo.core.validate import check_choice
+from surrogate_rbrdo.identification.jsonio import arrayed, listed
 from surrogate_rbrdo.identification.physical import ScatterFit
 from surrogate_rbrdo.identification.trend import TrendFit
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
@@ -261,7 +262,6 @@ class IdentifiedUncertainty:
                 "mean": [r.mean.tolist() for r in rv], "cov": [r.cov.tolist() for r in rv]}
 
     def to_dict(self) -> dict:
-        arr = lambda a: None if a is None else np.asarray(a).tolist()  # noqa: E731
         s_sum = self.summary_speed_rpm if self.summary_speed_rpm is not None \
             else float(self.scatter_fit.speeds_rpm[-1])
         top = self.random_vector(s_sum, reference="stored" if self.reference is not None
@@ -272,21 +272,21 @@ class IdentifiedUncertainty:
                 "by_speed": self.by_speed(),
                 "coefficients": list(self.coefficients), "weights": self.weights.tolist(),
                 "scatter": self.scatter,
-                "factors": {"mean": self.factor_mean.tolist(), "cov_total": arr(self.total_cov),
+                "factors": {"mean": self.factor_mean.tolist(), "cov_total": listed(self.total_cov),
                             "scatter_fit": self.scatter_fit.to_dict()},
                 "trend": {c: t.to_dict() for c, t in zip(self.coefficients, self.trends,
                                                           strict=True)},
-                "trend_cov": arr(self.trend_cov),
+                "trend_cov": listed(self.trend_cov),
                 "systematic": None if self.systematic is None else {
-                    "speeds_rpm": arr(self.systematic_speeds_rpm),
+                    "speeds_rpm": listed(self.systematic_speeds_rpm),
                     "sources": list(self.systematic_sources),
-                    "relative_change": arr(self.systematic)},
+                    "relative_change": listed(self.systematic)},
                 "reference": None if self.reference is None else {
-                    "speeds_rpm": arr(self.reference_speeds_rpm), "stiffness_N_per_m":
-                        arr(self.reference)},
-                "pooled": {"mean": arr(self.pooled_mean), "cov": arr(self.pooled_cov)},
+                    "speeds_rpm": listed(self.reference_speeds_rpm), "stiffness_N_per_m":
+                        listed(self.reference)},
+                "pooled": {"mean": listed(self.pooled_mean), "cov": listed(self.pooled_cov)},
                 "tests": self.tests, "variance_split": self.variance_split,
-                "n_records": self.n_records, "speeds_rpm": arr(self.speeds_rpm),
+                "n_records": self.n_records, "speeds_rpm": listed(self.speeds_rpm),
                 "provenance": self.provenance}
 
     @classmethod
@@ -295,7 +295,6 @@ class IdentifiedUncertainty:
         if d.get("format") != FORMAT or d.get("version") != VERSION:
             raise ValueError(f"{source}: format = {d.get('format')!r}, version = "
                              f"{d.get('version')!r}: expected {FORMAT!r} version {VERSION}")
-        opt = lambda a: None if a is None else np.asarray(a, float)  # noqa: E731
         try:
             coeffs = tuple(d["coefficients"])
             f, ref, sy = d["factors"], d.get("reference") or {}, d.get("systematic") or {}
@@ -304,18 +303,19 @@ class IdentifiedUncertainty:
                        factor_mean=np.asarray(f["mean"], float),
                        scatter_fit=ScatterFit.from_dict(f["scatter_fit"]),
                        names=tuple(d["names"]), weights=np.asarray(d["weights"], float),
-                       scatter=d["scatter"], trend_cov=opt(d.get("trend_cov")),
-                       total_cov=opt(f.get("cov_total")),
-                       pooled_mean=opt(d["pooled"]["mean"]), pooled_cov=opt(d["pooled"]["cov"]),
-                       reference_speeds_rpm=opt(ref.get("speeds_rpm")),
-                       reference=opt(ref.get("stiffness_N_per_m")),
-                       systematic_speeds_rpm=opt(sy.get("speeds_rpm")),
-                       systematic=opt(sy.get("relative_change")),
+                       scatter=d["scatter"], trend_cov=arrayed(d.get("trend_cov")),
+                       total_cov=arrayed(f.get("cov_total")),
+                       pooled_mean=arrayed(d["pooled"]["mean"]),
+                       pooled_cov=arrayed(d["pooled"]["cov"]),
+                       reference_speeds_rpm=arrayed(ref.get("speeds_rpm")),
+                       reference=arrayed(ref.get("stiffness_N_per_m")),
+                       systematic_speeds_rpm=arrayed(sy.get("speeds_rpm")),
+                       systematic=arrayed(sy.get("relative_change")),
                        systematic_sources=tuple(sy.get("sources", ())),
                        summary_speed_rpm=float(d["speed_rpm"]), tests=d.get("tests", {}),
                        variance_split=d.get("variance_split", {}),
                        n_records=int(d.get("n_records", 0)),
-                       speeds_rpm=opt(d.get("speeds_rpm")), provenance=d.get("provenance", {}))
+                       speeds_rpm=arrayed(d.get("speeds_rpm")), provenance=d.get("provenance", {}))
         except KeyError as exc:
             raise ValueError(f"{source}: missing field {exc.args[0]!r}") from None
 

@@ -41,6 +41,7 @@ from scipy import stats
 
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int
+from surrogate_rbrdo.identification.jsonio import arrayed, listed
 
 #: a coefficient whose per-speed physical variances disagree at this level is speed dependent
 SPEED_DEPENDENCE_ALPHA = 0.01
@@ -114,19 +115,19 @@ class ScatterFit:
         return (1 - t) * self.identification[i - 1] + t * self.identification[i]
 
     def to_dict(self) -> dict:
-        arr = lambda a: None if a is None else np.asarray(a).tolist()  # noqa: E731
-        return {"speeds_rpm": arr(self.speeds_rpm), "n": arr(self.n), "total": arr(self.total),
-                "identification": arr(self.identification), "physical": arr(self.physical),
-                "law": arr(self.law), "homogeneity_p": arr(self.homogeneity_p),
-                "ci_sd": arr(self.ci_sd), "separable": self.separable,
+        return {"speeds_rpm": listed(self.speeds_rpm), "n": listed(self.n),
+                "total": listed(self.total),
+                "identification": listed(self.identification), "physical": listed(self.physical),
+                "law": listed(self.law), "homogeneity_p": listed(self.homogeneity_p),
+                "ci_sd": listed(self.ci_sd), "separable": self.separable,
                 "speed_ref_rpm": self.speed_ref_rpm, "n_boot": self.n_boot}
 
     @classmethod
     def from_dict(cls, d: dict) -> ScatterFit:
-        opt = lambda a: None if a is None else np.asarray(a, float)  # noqa: E731
-        return cls(opt(d["speeds_rpm"]), opt(d["n"]), opt(d["total"]), opt(d["identification"]),
-                   opt(d["physical"]), opt(d.get("law")), opt(d["homogeneity_p"]),
-                   opt(d.get("ci_sd")), bool(d["separable"]), float(d["speed_ref_rpm"]),
+        return cls(arrayed(d["speeds_rpm"]), arrayed(d["n"]), arrayed(d["total"]),
+                   arrayed(d["identification"]),
+                   arrayed(d["physical"]), arrayed(d.get("law")), arrayed(d["homogeneity_p"]),
+                   arrayed(d.get("ci_sd")), bool(d["separable"]), float(d["speed_ref_rpm"]),
                    int(d.get("n_boot", 0)))
 
 
@@ -244,12 +245,14 @@ def physical_scatter(factors, speeds_rpm, *, ident_cov=None, groups=None,
 def _chi2_interval(var: np.ndarray, boot: np.ndarray, G: int | None) -> np.ndarray:
     """95 % interval of each standard deviation from a scaled χ² with the degrees of freedom
     matched to the bootstrap variance of the variance estimate, ``ν = 2 σ̂⁴ / var*(σ̂²)``
-    (``var*`` scaled by ``G/(G−1)`` for ``G`` clusters). For a plain sample variance of ``n``
-    normal values this is the exact interval (ν = n − 1); percentile intervals of a bootstrapped
-    standard deviation undercover with 20 clusters (~0.8 measured)."""
+    (``var*`` scaled by ``G/(G−1)`` for ``G`` clusters, and ``ν ≤ G − 1``). For a plain sample
+    variance of ``n`` normal values this is the exact interval (ν = n − 1); percentile intervals
+    of a bootstrapped standard deviation undercover with 20 clusters (~0.8 measured)."""
     vb = np.var(boot, axis=0, ddof=1) * (1.0 if G is None else G / (G - 1))
     v = np.maximum(var, 1e-300)
-    nu = np.clip(2 * v**2 / np.maximum(vb, 1e-300), 1.0, 1e6)
+    # G independent physical states (runs) carry at most G − 1 degrees of freedom, however
+    # many speeds measured each (the bootstrap alone gave ~2G and undercovered: 0.85–0.90)
+    nu = np.clip(2 * v**2 / np.maximum(vb, 1e-300), 1.0, 1e6 if G is None else G - 1.0)
     lo = np.sqrt(nu * v / stats.chi2.ppf(0.975, nu))
     hi = np.sqrt(nu * v / stats.chi2.ppf(0.025, nu))
     return np.column_stack([np.where(var > 0, lo, 0.0), np.where(var > 0, hi, 0.0)])

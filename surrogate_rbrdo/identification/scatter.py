@@ -98,9 +98,40 @@ def output_variance_share(gradient, identification_cov, total_cov) -> float:
     return float(g @ np.asarray(identification_cov) @ g / (g @ np.asarray(total_cov) @ g))
 
 
+#: runs needed for cluster-robust trend intervals and a cluster bootstrap of the scatter
+MIN_CLUSTERS = 5
+
+
 def fits_trend(trends, speeds_rpm) -> np.ndarray:
     """Values ``(N, d)`` of every trend at the speeds."""
     return np.stack([t.predict(speeds_rpm) for t in trends], axis=1)
+
+
+def _usable_groups(groups, sp) -> tuple[np.ndarray | None, int | None]:
+    """The run labels if there are enough runs for cluster-robust intervals, and their count."""
+    if groups is None:
+        return None, None
+    if np.shape(groups) != sp.shape:
+        raise ValueError(f"groups has shape {np.shape(groups)}: need {sp.shape}, one per record")
+    n = int(np.unique(np.asarray(groups)).size)
+    return (np.asarray(groups) if n >= MIN_CLUSTERS else None), n
+
+
+def _systematic_per_speed(systematic, sources, sp, trends) -> np.ndarray | None:
+    """Per speed, the mean change of the records' coefficients for one SD of each systematic
+    source, relative to the trend ``(S, n_ξ, d)``: the sources are common to every record, so
+    the trend at a speed moves by their mean there."""
+    if systematic is None:
+        return None
+    G = np.asarray(systematic, dtype=float)
+    if G.ndim != 3 or G.shape[0] != sp.size or G.shape[2] != len(trends) \
+            or len(sources) != G.shape[1]:
+        raise ValueError(f"systematic has shape {G.shape}: need ({sp.size}, n, {len(trends)}) "
+                         "with n = len(systematic_sources)")
+    u, inv = np.unique(sp, return_inverse=True)
+    Gm = np.zeros((u.size,) + G.shape[1:])
+    np.add.at(Gm, inv, G)
+    return Gm / np.bincount(inv)[:, None, None] / fits_trend(trends, u)[:, None, :]
 
 
 def _joint_trend_cov(trends, sp, X, groups) -> np.ndarray | None:
@@ -119,11 +150,29 @@ def _joint_trend_cov(trends, sp, X, groups) -> np.ndarray | None:
     return 0.5 * (cov + cov.T)
 
 
-def _tests(e, X, W, coefficients, names, rel_cov, phys) -> dict:
-    """Normality of the detrended factors (all records, and the records whose identification
-    variance is below the physical one: the physical distribution), of the study's θ, and of
-    the pooled raw values (Table 4)."""
+def run_factors(e: np.ndarray, groups, rel_cov=None) -> np.ndarray:
+    """Each run's factors ``(G, d)``: the precision-weighted mean over its records (weights
+    ``1/var_id``; equal without ``rel_cov``) — one physical state per run, measured many times."""
+    _, g = np.unique(np.asarray(groups), return_inverse=True)
+    w = np.ones_like(e) if rel_cov is None else 1.0 / np.maximum(
+        np.diagonal(rel_cov, axis1=1, axis2=2), 1e-300)
+    G = int(g.max()) + 1
+    num, den = np.zeros((G, e.shape[1])), np.zeros((G, e.shape[1]))
+    np.add.at(num, g, w * e)
+    np.add.at(den, g, w)
+    return num / den
+
+
+def _tests(e, X, W, coefficients, names, rel_cov, phys, groups) -> dict:
+    """Normality of the detrended factors (all records; the records whose identification
+    variance is below the physical one; and, with runs, each run's precision-weighted factors:
+    the records of one run share one physical state, so *they* are the independent sample of
+    the physical distribution), of the study's θ, and of the pooled raw values (Table 4)."""
     out = {"detrended": normality_report(e, coefficients).to_dict()}
+    if groups is not None:
+        runs = run_factors(e, groups, rel_cov)
+        out["runs"] = normality_report(runs, coefficients).to_dict()
+        out["study_runs"] = normality_report(runs @ W.T, names).to_dict()
     if rel_cov is not None:
         precise = np.all(np.diagonal(rel_cov, axis1=1, axis2=2) < np.diag(phys), axis=1)
         out["precise_records"] = int(precise.sum())
@@ -189,8 +238,7 @@ def fit_uncertainty(values, speeds_rpm, coefficients: Sequence[str], *, law: str
                          f"{sp.size} speeds and coefficients {list(coefficients)}")
     if not np.all(np.isfinite(X)):
         raise ValueError("values contains a non-finite value: drop flagged records first")
-    if groups is not None and np.shape(groups) != sp.shape:
-        raise ValueError(f"groups has shape {np.shape(groups)}: need {sp.shape}, one per record")
+    groups, n_groups = _usable_groups(groups, sp)
     trends = tuple(fit_trend(sp, X[:, j], law=law, speed_ref_rpm=speed_ref_rpm, clusters=groups)
                    for j in range(X.shape[1]))
     tr = fits_trend(trends, sp)
@@ -203,16 +251,7 @@ def fit_uncertainty(values, speeds_rpm, coefficients: Sequence[str], *, law: str
         scatter = "physical" if fit.separable else "total"
     t_fac = None if truth is None else np.asarray(truth, float) / tr
     names, W = study_weights(coefficients, study)
-    sys_rel = None
-    if systematic is not None:
-        G = np.asarray(systematic, dtype=float)
-        if G.shape[::2] != (sp.size, len(coefficients)) or len(systematic_sources) != G.shape[1]:
-            raise ValueError(f"systematic has shape {G.shape}: need ({sp.size}, n, "
-                             f"{len(coefficients)}) with n = len(systematic_sources)")
-        u, inv = np.unique(sp, return_inverse=True)
-        Gm = np.stack([np.bincount(inv, G[:, k, j]) for k in range(G.shape[1])
-                       for j in range(G.shape[2])], axis=-1).reshape(u.size, *G.shape[1:])
-        sys_rel = Gm / np.bincount(inv)[:, None, None] / fits_trend(trends, u)[:, None, :]
+    sys_rel = _systematic_per_speed(systematic, systematic_sources, sp, trends)
     ref_sp, ref = (None, None) if reference is None else (
         np.asarray(reference[0], float), np.asarray(reference[1], float).reshape(-1, len(names)))
     return IdentifiedUncertainty(
@@ -224,12 +263,15 @@ def fit_uncertainty(values, speeds_rpm, coefficients: Sequence[str], *, law: str
         reference_speeds_rpm=ref_sp, reference=ref,
         systematic_speeds_rpm=None if sys_rel is None else np.unique(sp), systematic=sys_rel,
         systematic_sources=tuple(systematic_sources), summary_speed_rpm=summary_speed_rpm,
-        tests=_tests(e, X, W, coefficients, names, rel_cov, fit.physical)
+        tests=_tests(e, X, W, coefficients, names, rel_cov, fit.physical, groups)
         | {"trend_law": {c: t.law for c, t in zip(coefficients, trends, strict=True)},
            "speed_homogeneity_p": dict(zip(coefficients, fit.homogeneity_p.tolist(),
                                            strict=True))},
         variance_split=variance_split(e, per_record_cov=rel_cov, truth_factors=t_fac),
-        n_records=int(sp.size), speeds_rpm=np.unique(sp), provenance=dict(provenance or {}))
+        n_records=int(sp.size), speeds_rpm=np.unique(sp),
+        provenance={**(provenance or {}), "runs": n_groups,
+                    "trend_covariance": trends[0].covariance})
 
 
-__all__ = ["fit_uncertainty", "output_variance_share", "variance_split"]
+__all__ = ["MIN_CLUSTERS", "fit_uncertainty", "output_variance_share", "run_factors",
+           "variance_split"]
