@@ -34,6 +34,8 @@ from surrogate_rbrdo.rig.truth import Variability
 from surrogate_rbrdo.spindle import reference_spindle
 
 TRIAL = (0.0, 5e-5, 0.0)
+#: the rig's "ideal" keyphasor (tests/rig/conftest.py): slow edges, no phase error to speak of
+SLOW_KP = KeyphasorModel(notch_deg=120.0, edge_deg=60.0)
 K_COLS = [0, 1, 4, 5]
 PAPER_T3 = {"front": (3.183, 3.125, 2.985, 2.856, 2.712), "rear": (2.764, 2.716, 2.638, 2.514,
                                                                      2.382)}
@@ -198,13 +200,13 @@ def report_coverage(out: Path, seeds: int) -> None:
 def report_sources(out: Path) -> None:
     """Each hidden error alone (everything else ideal), 6 speeds × 6 runs: RMS relative error of
     k and c against each record's truth."""
-    ideal = dict(noise=False, daq=DAQModel(bits=31), keyphasor=KeyphasorModel(120.0, 60.0))
+    ideal = dict(noise=False, daq=DAQModel(bits=31), keyphasor=SLOW_KP)
     cases = {
         "none (ideal)": (SensorSet(**ideal), Variability(tool_mass_cov=0.0)),
         "probe noise 50 nm + 16 bit": (SensorSet(probe=ProbeModel(gain_error_sd=0.0,
                                                                   bandwidth_sd=0.0),
                                                  daq=DAQModel(skew_sd_s=0.0),
-                                                 keyphasor=KeyphasorModel(120.0, 60.0)),
+                                                 keyphasor=SLOW_KP),
                                        Variability(tool_mass_cov=0.0)),
         "default keyphasor (10° edges, 10 mV)": (SensorSet(noise=False, daq=DAQModel(bits=31)),
                                                  Variability(tool_mass_cov=0.0)),
@@ -238,8 +240,7 @@ def _gain_alone(out, model, speeds) -> None:
                                DAQModel(bits=31))):
         errs, pred = [], []
         for seed in range(5):
-            sens = SensorSet(probe=probe, daq=daq, keyphasor=KeyphasorModel(120.0, 60.0, 0.0,
-                                                                            0.0))
+            sens = SensorSet(probe=probe, daq=daq, keyphasor=SLOW_KP)
             path, truth = campaign(out / f"gain_{label[:4]}", seed, sensors=sens, repeats=2,
                                    speeds=speeds,
                                    truth=reference_truth(variability=Variability(
@@ -258,7 +259,7 @@ def _gain_alone(out, model, speeds) -> None:
 
 
 def report_noise_free(out: Path) -> None:
-    ideal = SensorSet(noise=False, daq=DAQModel(bits=31), keyphasor=KeyphasorModel(120.0, 60.0))
+    ideal = SensorSet(noise=False, daq=DAQModel(bits=31), keyphasor=SLOW_KP)
     path, truth = campaign(out / "noise_free", 3, sensors=ideal, repeats=2,
                            truth=reference_truth(variability=Variability(tool_mass_cov=0.0)))
     run = run_identification(_model(), path, out / "noise_free" / "run",

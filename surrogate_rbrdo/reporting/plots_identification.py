@@ -18,6 +18,7 @@ from surrogate_rbrdo.identification.condensation import (
 )
 from surrogate_rbrdo.identification.identify import identify
 from surrogate_rbrdo.identification.recursions import MISG, RLS, SG
+from surrogate_rbrdo.identification.scatter import run_factors
 from surrogate_rbrdo.spindle.assembly import SpindleModel
 
 
@@ -165,19 +166,33 @@ def campaign_convergence(model: SpindleModel, run, speed_rpm: float, *,
 
 def write_identification_figures(model: SpindleModel, run, out_dir: str | Path, *,
                                  convergence_speed_rpm: float = 10_000.0) -> dict[str, Path]:
-    """Fig. 1 (convergence at one speed), Fig. 3 (trends ±2σ) and Fig. 4 (Q–Q of the
-    detrended factors) of an :class:`~surrogate_rbrdo.identification.experiment.
-    IdentificationRun` into ``out_dir``."""
+    """Fig. 1 (convergence at one speed), Fig. 3 (trends ±2σ) and Fig. 4 (Q–Q of each run's
+    detrended factors — the independent sample — and of all records') of an
+    :class:`~surrogate_rbrdo.identification.experiment.IdentificationRun` into ``out_dir``."""
     out = Path(out_dir)
     u, camp = run.uncertainty, run.campaign
     cols = [camp.identification.names.index(c) for c in u.coefficients]
     sp = run.responses.speed_rpm[camp.used]
     X = camp.identification.estimate[camp.used][:, cols]
     res, ref = campaign_convergence(model, run, convergence_speed_rpm)
+    e = X / u.trend(sp)
+    runs = run_factors(e, run.responses.groups[camp.used], _rel_cov(camp, cols, u, sp))
     return {"fig1_convergence": plot_convergence(res, ref, out / "identification_convergence.png",
                                                  reference_label="closed form"),
             "fig3_trend": plot_trend(u, sp, X, out / "identification_trend.png"),
-            "fig4_qq": plot_qq(X / u.trend(sp), u.coefficients, out / "identification_qq.png")}
+            "fig4_qq": plot_qq(runs, [f"{c} (per run)" for c in u.coefficients],
+                               out / "identification_qq.png"),
+            "fig4_qq_records": plot_qq(e, u.coefficients,
+                                       out / "identification_qq_records.png")}
+
+
+def _rel_cov(camp, cols, u, sp):
+    """The used records' identification covariance of the factors (for run weighting)."""
+    C = camp.identification.covariance
+    if C is None:
+        return None
+    t = u.trend(sp)
+    return C[camp.used][:, cols][:, :, cols] / (t[:, :, None] * t[:, None, :])
 
 
 __all__ = ["campaign_convergence", "plot_convergence", "plot_qq", "plot_trend",
