@@ -30,6 +30,7 @@ from surrogate_rbrdo.identification.comparison import (
     tune_sg_gain,
 )
 from surrogate_rbrdo.identification.synthetic import SyntheticSetting
+from surrogate_rbrdo.reporting.plots_identification import plot_convergence
 
 PAPER = ("paper (Sect. 3.1): MISG(p=3) 75 vs SG 606 iterations (8.1x), final NRMSE -15 %, "
          "per-iteration cost +18 %")
@@ -66,8 +67,6 @@ def run(seeds: int, noises, excitations, n_samples: int) -> None:
 
 
 def figure(path: str, seeds: int) -> None:
-    from surrogate_rbrdo.reporting.plots_identification import plot_convergence
-
     st = SyntheticSetting(excitation="unbalance", noise_rel=0.001)
     reg, truth, th0, box = synthetic_problem(st, seeds, rng=np.random.default_rng(7))
     res = {label: identify(reg, m, theta0=th0, bounds=box, stride=5) for label, m in

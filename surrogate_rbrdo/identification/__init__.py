@@ -8,9 +8,14 @@
 * :func:`condense_reactions` + :func:`identify_phasors` give the eight bearing coefficients of
   the flexible FE rotor from 1× phasors by exact dynamic condensation;
 * :func:`fit_uncertainty` turns identified vectors into the :class:`IdentifiedUncertainty` the
-  study uses (speed trend, scatter, normality tests, variance split; ``uncertainty.json`` via
-  :func:`save_uncertainty` / :func:`load_uncertainty`); :func:`identify_campaign` does both
-  steps for a campaign's phasors.
+  study uses (speed trend, physical scatter with the identification error taken out,
+  systematic uncertainty, normality tests; ``uncertainty.json`` via :func:`save_uncertainty` /
+  :func:`load_uncertainty`); :func:`identify_campaign` does both steps for a campaign's phasors;
+* from measured records (the virtual rig's or a user's): :func:`measured_phasors` (demodulation,
+  known corrections, keyphasor refinement), :func:`trial_pairs` (trial-weight runs),
+  :func:`identify_records` / :func:`run_identification` (the ``identification`` experiment);
+* :func:`study_uncertainty`: the study's θ at the response's speed(s) from a run folder or
+  ``uncertainty.json`` (what ``[uncertainty] from = …`` calls).
 
 ``docs/identification.md`` has the figures and what they mean.
 """
@@ -24,7 +29,18 @@ from surrogate_rbrdo.identification.condensation import (
     phasor_time_regression,
     trial_weight_difference,
 )
+from surrogate_rbrdo.identification.experiment import (
+    IdentificationOptions,
+    IdentificationRun,
+    identify_records,
+    run_identification,
+)
 from surrogate_rbrdo.identification.identify import IdentificationResult, identify
+from surrogate_rbrdo.identification.measured import (
+    MeasuredPhasors,
+    SensorCorrections,
+    measured_phasors,
+)
 from surrogate_rbrdo.identification.model import (
     IdentifiedUncertainty,
     load_uncertainty,
@@ -36,14 +52,22 @@ from surrogate_rbrdo.identification.normality import NormalityReport, normality_
 from surrogate_rbrdo.identification.phasor import (
     PhasorIdentification,
     catalog_coefficients,
+    effective_coefficients,
     identify_phasors,
 )
+from surrogate_rbrdo.identification.physical import ScatterFit, physical_scatter
 from surrogate_rbrdo.identification.recursions import MISG, RECURSIONS, RLS, SG, BatchLS
 from surrogate_rbrdo.identification.regression import Bounds, Regression
+from surrogate_rbrdo.identification.responses import Responses, known_unbalance, trial_pairs
 from surrogate_rbrdo.identification.scatter import (
     fit_uncertainty,
     output_variance_share,
     variance_split,
+)
+from surrogate_rbrdo.identification.study import StudyUncertainty, study_uncertainty
+from surrogate_rbrdo.identification.systematic import (
+    SystematicUncertainty,
+    systematic_sensitivities,
 )
 from surrogate_rbrdo.identification.trend import TrendFit, fit_trend
 
@@ -56,28 +80,45 @@ __all__ = [
     "Bounds",
     "CampaignResult",
     "CondensedReactions",
+    "IdentificationOptions",
     "IdentificationResult",
+    "IdentificationRun",
     "IdentifiedUncertainty",
+    "MeasuredPhasors",
     "NormalityReport",
     "PhasorIdentification",
     "Regression",
+    "Responses",
+    "ScatterFit",
+    "SensorCorrections",
+    "StudyUncertainty",
+    "SystematicUncertainty",
     "TrendFit",
     "catalog_coefficients",
     "coefficient_names",
     "condense_reactions",
+    "effective_coefficients",
     "fit_trend",
     "fit_uncertainty",
     "identify",
     "identify_campaign",
     "identify_phasors",
+    "identify_records",
+    "known_unbalance",
     "load_uncertainty",
+    "measured_phasors",
     "model_reference",
     "node_at",
     "normality_report",
     "output_variance_share",
     "phasor_time_regression",
+    "physical_scatter",
+    "run_identification",
     "save_uncertainty",
+    "study_uncertainty",
     "study_weights",
+    "systematic_sensitivities",
+    "trial_pairs",
     "trial_weight_difference",
     "variance_split",
 ]

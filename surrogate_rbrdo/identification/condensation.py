@@ -15,6 +15,10 @@ squares sense (exactly when there are as many probe DOFs as bearing DOFs); the r
 bearing is ``r = −f_b``. Everything is linear in the measured phasors ``q_m``:
 ``x_b = L_x q_m + c_x``, ``r_b = L_r q_m + c_r`` (:class:`CondensedReactions`).
 
+Only the lateral DOFs are retained and the load is condensed with the stiffness, which is why
+this does not call :func:`~surrogate_rbrdo.spindle.substructure.condensed_rotor` (it keeps all
+four DOFs of each retained node and no load); both use the same ``rotor_dynamic_stiffness``.
+
 Per bearing and direction (``x`` → ``yy``, ``y`` → ``zz``) the model is
 ``r = (k + iΩc) x`` — at one speed ``k + iΩc = r / x`` (:func:`identify_phasors`), or as a time
 regression ``r(t) = k x(t) + c ẋ(t)`` for SG/MISG (:func:`phasor_time_regression`).
@@ -90,6 +94,9 @@ class CondensedReactions:
         the bearing forces: 1 when the probes sit on the bearings, large when they are far.
     interior_condition : ndarray (S,)
         Condition number of the (equilibrated) ``A_II``: large near a pole of ``S(Ω)``.
+    pole_ratio : ndarray (S,)
+        ``interior_condition`` relative to its static value (``A_II`` at rest): ~1–10 away
+        from a pole, ~100 within a few hundred rpm of one (reference spindle, 22 621 rpm).
     """
 
     speeds_rpm: np.ndarray
@@ -101,6 +108,7 @@ class CondensedReactions:
     cr: np.ndarray
     expansion_condition: np.ndarray
     interior_condition: np.ndarray
+    pole_ratio: np.ndarray
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -150,6 +158,11 @@ def trial_weight_difference(with_trial: np.ndarray, without: np.ndarray) -> np.n
     return a - b
 
 
+def _lateral_dofs(nodes) -> np.ndarray:
+    """Global indices of the ``x, y`` DOFs of ``nodes``."""
+    return np.array([4 * n + d for n in nodes for d in (0, 1)], dtype=int)
+
+
 def _load(model: SpindleModel, omega: np.ndarray, unbalance) -> np.ndarray:
     if unbalance is not None:
         nodes = np.array([int(n) for n, _ in unbalance], dtype=int)
@@ -194,7 +207,7 @@ def condense_reactions(model: SpindleModel, speeds_rpm: np.ndarray, *,
     if len(set(pnodes)) != len(pnodes) or any(not 0 <= n < model.n_nodes for n in pnodes):
         raise ValueError(f"probe_nodes = {pnodes} is not allowed: distinct nodes in "
                          f"[0, {model.n_nodes - 1}]")
-    lat = lambda nodes: np.array([4 * n + d for n in nodes for d in (0, 1)])  # noqa: E731
+    lat = _lateral_dofs
     R = np.unique(np.concatenate([lat(bnodes), lat(pnodes)]))
     pos = {int(d): i for i, d in enumerate(R)}
     m_idx = np.array([pos[d] for d in lat(pnodes)])
@@ -216,15 +229,32 @@ def condense_reactions(model: SpindleModel, speeds_rpm: np.ndarray, *,
                          "pole of the condensed rotor)") from exc
     Sc = A[:, R[:, None], R] - A[:, R[:, None], Ii] @ X[..., :-1]
     ft = f[:, R] - (A[:, R[:, None], Ii] @ X[..., -1:])[..., 0]
-    Pb = np.zeros((R.size, b_idx.size))
+    Lx, cx, Lr, cr, Gm = _journals_and_forces(Sc, ft, m_idx, b_idx, u_idx)
+    if not (np.all(np.isfinite(Lr)) and np.all(np.isfinite(cr))):
+        raise ModelError(f"condense_reactions: non-finite reactions at {sp.tolist()} rpm")
+    inner = _equilibrated_cond(AII)
+    static = _equilibrated_cond(rotor_dynamic_stiffness(model, np.array([1e-6]))[
+        :, Ii[:, None], Ii])
+    return CondensedReactions(
+        speeds_rpm=sp, bearings=tuple(b.name for b in model.geometry.bearings),
+        probe_nodes=tuple(pnodes), Lx=Lx, cx=cx, Lr=Lr, cr=cr,
+        expansion_condition=_equilibrated_cond(Gm), interior_condition=inner,
+        pole_ratio=inner / static)
+
+
+def _journals_and_forces(Sc, ft, m_idx, b_idx, u_idx):
+    """Solve ``S q_R = f̃ + P_b f_b`` for the unmeasured journals and the bearing forces in
+    terms of the measured DOFs: ``x_b = Lx q_m + cx``, ``r_b = −f_b = Lr q_m + cr``; also the
+    (unknowns') system matrix ``Gm`` for its condition number."""
+    S = Sc.shape[0]
+    Pb = np.zeros((Sc.shape[1], b_idx.size))
     Pb[b_idx, np.arange(b_idx.size)] = 1.0
-    Gm = np.concatenate([Sc[:, :, u_idx], np.broadcast_to(-Pb, Sc.shape[:1] + Pb.shape)], -1)
+    Gm = np.concatenate([Sc[:, :, u_idx], np.broadcast_to(-Pb, (S,) + Pb.shape)], -1)
     Gp = np.linalg.pinv(Gm)                                    # (S, nu + nb2, r)
     W = -Gp @ Sc[:, :, m_idx]                                  # w = W q_m + w0
     w0 = (Gp @ ft[..., None])[..., 0]
-    nu = u_idx.size
-    Lx = np.zeros((sp.size, b_idx.size, m_idx.size), complex)
-    cx = np.zeros((sp.size, b_idx.size), complex)
+    Lx = np.zeros((S, b_idx.size, m_idx.size), complex)
+    cx = np.zeros((S, b_idx.size), complex)
     u_pos = {int(j): i for i, j in enumerate(u_idx)}
     m_pos = {int(j): i for i, j in enumerate(m_idx)}
     for i, j in enumerate(b_idx):
@@ -232,12 +262,8 @@ def condense_reactions(model: SpindleModel, speeds_rpm: np.ndarray, *,
             Lx[:, i, m_pos[int(j)]] = 1.0
         else:
             Lx[:, i], cx[:, i] = W[:, u_pos[int(j)]], w0[:, u_pos[int(j)]]
-    if not (np.all(np.isfinite(W)) and np.all(np.isfinite(w0))):
-        raise ModelError(f"condense_reactions: non-finite reactions at {sp.tolist()} rpm")
-    return CondensedReactions(
-        speeds_rpm=sp, bearings=tuple(b.name for b in model.geometry.bearings),
-        probe_nodes=tuple(pnodes), Lx=Lx, cx=cx, Lr=-W[:, nu:], cr=-w0[:, nu:],
-        expansion_condition=_equilibrated_cond(Gm), interior_condition=_equilibrated_cond(AII))
+    nu = u_idx.size
+    return Lx, cx, -W[:, nu:], -w0[:, nu:], Gm
 
 
 def _equilibrated_cond(A: np.ndarray) -> np.ndarray:

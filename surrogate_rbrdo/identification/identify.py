@@ -15,10 +15,19 @@ scale ``s`` (``θ = s ϑ``):
 * ``"initial"``: ``s = θ0`` (parameters in units of their initial values, as the paper's
   bounds are).
 
-Covariance: ``σ̂² (ΦᵀΦ)⁻¹`` with ``σ̂²`` the residual variance at the final estimate (``T − n``
-degrees of freedom): the covariance of the least-squares estimate on the same record under
-white output noise. For SG/MISG it is a lower bound (they are not efficient estimators), and
-noise in the regressors (errors in variables) is not in it.
+Covariance (``covariance_kind``), for white output noise:
+
+* batch LS and RLS with ``λ = 1``: ``σ̂² (ΦᵀΦ)⁻¹``, ``σ̂²`` the residual variance at the final
+  estimate (``T − n`` degrees of freedom);
+* RLS with ``λ < 1`` (exponentially weighted least squares, weights ``w_t = λ^{T−1−t}``): the
+  sandwich ``σ̂² (ΦᵀWΦ)⁻¹ (ΦᵀW²Φ) (ΦᵀWΦ)⁻¹`` with the weighted residual variance — the
+  effective window is ``~(1+λ)/(1−λ)`` samples, not the record;
+* SG and MISG: none (NaN): they are not least-squares estimators and their error depends on
+  the step history; a least-squares formula understated their scatter 4–17× (review item 2);
+* ``covariance=`` given: that (e.g. the phasor covariance when the regression is built from
+  phasors, whose residual is zero: the noise sits in the regressors);
+* a record that the estimate fits exactly (residual ≤ 1e-10 of the output) gets NaN and the
+  reason: a residual-based covariance would be zero.
 
 >>> import numpy as np
 >>> rng = np.random.default_rng(1)
@@ -59,7 +68,7 @@ class IdentificationResult:
     estimate : ndarray (B, n)
         Final estimate per record (SI units).
     covariance : ndarray (B, n, n)
-        ``σ̂² (ΦᵀΦ)⁻¹`` at the final estimate (module docstring); NaN for rank-deficient records.
+        Per ``covariance_kind`` (module docstring); NaN where there is none.
     trajectory : ndarray (B, K, n) or None
         Estimates after the samples ``trajectory_samples`` (0-based), if stored.
     iterations_to_tol : ndarray (B, n) or None
@@ -90,6 +99,8 @@ class IdentificationResult:
     condition: np.ndarray
     residual_rms: np.ndarray
     n_samples: int
+    covariance_kind: str = "least_squares"
+    indefinite: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:
@@ -106,9 +117,12 @@ class IdentificationResult:
         out = []
         if self.rank_deficient[i]:
             out.append(f"rank-deficient regression (eigenvalue ratio {self.condition[i]:.1e} "
-                       f"< {RCOND:g}): a parameter is not excited")
+                       f"< {RCOND:g}): a parameter is not excited (with forgetting: within "
+                       "the window the estimate rests on)")
         if self.diverged[i]:
             out.append("the recursion diverged (non-finite or growing innovations)")
+        if self.indefinite is not None and self.indefinite[i]:
+            out.append("RLS: the final P is not positive definite (numerically unstable)")
         for j in np.flatnonzero(self.at_bound[i]):
             out.append(f"{self.names[j]} = {self.estimate[i, j]:.6g} sits on its bound")
         return out
@@ -164,15 +178,25 @@ def _scales(reg: Regression, theta0: np.ndarray, scaling: str) -> tuple[np.ndarr
     return ys, s
 
 
-def _condition(phi_s: np.ndarray) -> np.ndarray:
+def _condition(phi_s: np.ndarray, forgetting: float = 1.0) -> np.ndarray:
+    """``λ_min / λ_max`` of the scaled information; with forgetting, ``λ_min`` of the
+    exponentially weighted information (what the estimate rests on at the end) over
+    ``Σw λ_max / T`` of the whole record's: a record whose excitation stopped is rank deficient
+    *in its window*, and RLS's ``P`` winds up."""
     lam = np.linalg.eigvalsh(np.einsum("btn,btm->bnm", phi_s, phi_s))
     top = np.maximum(lam[:, -1], 1e-300)
-    return np.where(lam[:, -1] > 0, lam[:, 0] / top, 0.0)
+    cond = np.where(lam[:, -1] > 0, lam[:, 0] / top, 0.0)
+    if forgetting < 1.0:
+        T = phi_s.shape[1]
+        w = forgetting ** (T - 1 - np.arange(T))
+        lw = np.linalg.eigvalsh(np.einsum("t,btn,btm->bnm", w, phi_s, phi_s))[:, 0]
+        cond = np.minimum(cond, lw / (w.sum() * top / T))
+    return cond
 
 
 def identify(regression: Regression, method="misg", *, theta0, bounds: Bounds | None = None,
              truth=None, tol: float = 0.05, scaling: str = "columns",
-             stride: int | None = None) -> IdentificationResult:
+             stride: int | None = None, covariance=None) -> IdentificationResult:
     """Identify ``θ`` in ``y = φᵀθ + v`` for every record of ``regression``.
 
     Parameters
@@ -194,6 +218,8 @@ def identify(regression: Regression, method="misg", *, theta0, bounds: Bounds | 
         Parameter scaling (module docstring).
     stride : int, optional
         Store the trajectory every ``stride`` samples (and the last); ``None`` stores none.
+    covariance : array (n, n) or (B, n, n), optional
+        The estimates' covariance when it is known from elsewhere (module docstring).
 
     Raises
     ------
@@ -227,15 +253,17 @@ def identify(regression: Regression, method="misg", *, theta0, bounds: Bounds | 
         out = m.run(phi_s, y_s, np.clip(th0 / s, lo_s, hi_s), lo_s, hi_s, truth=tr_s,
                     tol=tol, stride=stride)
     est = out.theta * s
-    cond = _condition(phi_s)
+    cond = _condition(phi_s, float(getattr(m, "forgetting", 1.0)))
     rank_def = cond < RCOND
     finite = np.all(np.isfinite(out.theta), axis=1) & np.isfinite(out.peak)
     with np.errstate(invalid="ignore", divide="ignore"):
         growing = out.innov_late > DIVERGENCE_RATIO * out.innov_early
     diverged = ~finite | (growing & np.isfinite(out.innov_late))
+    if out.indefinite is not None:                 # RLS: P overflowed or lost definiteness
+        diverged = diverged | out.indefinite
     resid = regression.y - np.einsum("btn,bn->bt", regression.phi, est)
     rms = np.sqrt(np.mean(resid**2, axis=1))
-    cov = _covariance(regression, resid, rank_def | ~finite)
+    cov, kind = _covariance(regression, resid, rank_def | ~finite, m, covariance)
     width = hi - lo
     tiny = np.where(np.isfinite(width), 1e-9 * width, 0.0)
     at_bound = (np.isfinite(lo) & (est <= lo + tiny)) | (np.isfinite(hi) & (est >= hi - tiny))
@@ -245,29 +273,57 @@ def identify(regression: Regression, method="misg", *, theta0, bounds: Bounds | 
         method=m.name, names=regression.names, estimate=est, covariance=cov, trajectory=traj,
         trajectory_samples=out.samples, iterations_to_tol=iters, tol=float(tol), reference=ref,
         at_bound=at_bound, diverged=diverged, rank_deficient=rank_def, condition=cond,
-        residual_rms=rms, n_samples=T)
+        residual_rms=rms, n_samples=T, covariance_kind=kind, indefinite=out.indefinite)
 
 
-def _covariance(reg: Regression, resid: np.ndarray, bad: np.ndarray) -> np.ndarray:
+def _covariance(reg: Regression, resid: np.ndarray, bad: np.ndarray, method, given
+                ) -> tuple[np.ndarray, str]:
+    """The estimates' covariance and its kind (module docstring)."""
     B, T, n = reg.phi.shape
-    sigma2 = np.sum(resid**2, axis=1) / (T - n)
-    A = reg.information()
+    if given is not None:
+        C = np.asarray(given, dtype=float)
+        if C.shape not in ((n, n), (B, n, n)) or not np.all(np.isfinite(C)):
+            raise ValueError(f"covariance has shape {C.shape}: need ({n}, {n}) or ({B}, {n}, "
+                             f"{n}), finite")
+        return np.broadcast_to(C, (B, n, n)).copy(), "given"
+    form = getattr(method, "covariance_form", None)
     cov = np.full((B, n, n), np.nan)
-    good = ~bad
-    if good.any():
-        # scale columns before inverting: k and c columns differ by ~1e9 in SI
-        d = np.sqrt(np.diagonal(A[good], axis1=1, axis2=2))
-        d = np.where(d > 0, d, 1.0)
-        An = A[good] / (d[:, :, None] * d[:, None, :])
-        cov[good] = sigma2[good, None, None] * np.linalg.inv(An) / (d[:, :, None] * d[:, None, :])
-    return cov
+    if form is None:
+        return cov, "none"
+    exact = np.sqrt(np.mean(resid**2, axis=1)) <= 1e-10 * np.sqrt(np.mean(reg.y**2, axis=1))
+    good = ~(bad | exact)
+    if not good.any():
+        return cov, "exact_fit" if exact.any() else form
+    w = np.ones(T) if form == "least_squares" else \
+        float(method.forgetting) ** (T - 1 - np.arange(T))
+    phi = reg.phi[good]
+    A = np.einsum("t,btn,btm->bnm", w, phi, phi)
+    # weighted residual variance; degrees of freedom Σw − n Σw²/Σw (T − n when w = 1)
+    sigma2 = np.einsum("t,bt->b", w, resid[good] ** 2) / (w.sum() - n * np.sum(w**2) / w.sum())
+    Ainv = _scaled_inv(A)
+    if form == "least_squares":
+        cov[good] = sigma2[:, None, None] * Ainv
+    else:
+        Bm = np.einsum("t,btn,btm->bnm", w**2, phi, phi)
+        cov[good] = sigma2[:, None, None] * Ainv @ Bm @ Ainv
+    return cov, form
+
+
+def _scaled_inv(A: np.ndarray) -> np.ndarray:
+    """Inverse of information matrices whose columns differ by ~1e9 (k and c in SI): scale to
+    unit diagonal first."""
+    d = np.sqrt(np.diagonal(A, axis1=1, axis2=2))
+    d = np.where(d > 0, d, 1.0)
+    return np.linalg.inv(A / (d[:, :, None] * d[:, None, :])) / (d[:, :, None] * d[:, None, :])
 
 
 def _iterations(out, traj, est, tol, T):
     if out.last_violation is not None:
-        # the estimate after sample t has used t + 1 samples; the first good one follows t_v
-        it = np.where(out.last_violation < 0, 0.0, out.last_violation + 2.0)
-        it[out.last_violation >= T - 1] = np.inf
+        # the estimate after sample t has used t + 1 samples, so the first good one after a
+        # violation at t needs t + 2; θ0 (t = −1) outside the tolerance needs 1; −2: never out
+        lv = out.last_violation
+        it = np.where(lv == -2, 0.0, lv + 2.0)
+        it[lv >= T - 1] = np.inf
         return it, "truth"
     if traj is None:
         return None, None

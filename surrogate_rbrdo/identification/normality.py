@@ -4,11 +4,12 @@ for the joint distribution, and the R² of each normal Q–Q plot.
 The multivariate tests are written out here (a few array operations each) rather than taken
 from pingouin, whose ``multivariate_normality`` is the same Henze–Zirkler statistic but pulls
 pandas, seaborn and statsmodels into the toolkit; statsmodels has no multivariate normality
-test. ``tests/identification/test_normality.py`` checks both against pingouin when it is
-installed. Henze–Zirkler is the decision test: it is affine invariant and consistent against
-every alternative, and was among the most powerful omnibus tests in Mecklin & Mundfrom's (2005)
-comparison; Mardia's skewness and kurtosis are reported beside it because they say *how* the
-data depart (asymmetric tails or heavy tails).
+test. ``tests/identification/test_trend_normality.py`` checks Henze–Zirkler against pingouin
+when it is installed (Mardia's statistics are not cross-checked). Henze–Zirkler is the
+decision test: it is affine invariant and consistent against every alternative, and was among
+the most powerful omnibus tests in Mecklin & Mundfrom's (2005) comparison; Mardia's skewness
+and kurtosis are reported beside it because they say *how* the data depart (asymmetric tails
+or heavy tails).
 
 >>> import numpy as np
 >>> X = np.random.default_rng(0).normal(size=(300, 3))

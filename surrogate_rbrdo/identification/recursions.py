@@ -7,27 +7,33 @@ records at once: the loop is over time, every step is one array operation over t
 
 Update rules (``e`` innovations, ``φ`` regressors, estimate ``ϑ``, projection ``Π`` onto the box):
 
-* **MISG** (Ding & Chen 2007, *IEEE TAC* 52(4); the paper's Eq. 8), innovation length ``p``:
+* **MISG** (Ding F., Chen T., "Performance analysis of multi-innovation gradient type
+  identification methods", *Automatica* 43(1):1–14, 2007; the paper's Eq. 8), innovation
+  length ``p``:
   ``Φ = [φ(t) … φ(t−p+1)]``, ``E = Y − Φᵀϑ``, ``ϑ ← Π(ϑ + μ Φ E / d(t))`` with
 
   - ``step="accumulated"`` (default): ``d = λ r(t−1) + ‖Φ‖²``, ``r(t) = λ r(t−1) + ‖φ(t)‖²``,
     ``r(0) = r0``. For ``p = 1``, ``λ = 1`` this is Ding's SG (``φ e / r(t)``); for ``p > 1``
-    it is the paper's ``μ Φ I / (r(k) + ‖Φ_p‖²)`` with ``r(k)`` the accumulated energy of the
-    past samples. The gain decays like ``1/t``, so the estimate averages the noise out and
-    converges in mean square under persistent excitation (Ding & Chen 2007, Thm. 1). With a
-    forgetting factor ``λ < 1`` the gain settles at about ``(1 − λ)μ``, which tracks a slow
-    drift at the price of a noise floor. This is the default because it is the only form that
-    converges to the true parameters in noise.
+    it is *our reading* of the paper's Eq. 8 ``μ Φ I / (r(k) + ‖Φ_p‖²)`` with ``r(k)`` the
+    accumulated energy of the samples before the window's newest (Ding & Chen's MISG divides
+    by ``r(t)`` itself: the same for ``p = 1``, smaller steps for ``p > 1``, since
+    ``d = r(t) + Σ_{j<p} ‖φ(t−j)‖²``). The gain decays like ``1/t``, so the estimate averages
+    the noise out and converges in mean square under persistent excitation (Ding & Chen 2007,
+    Thm. 1). With a forgetting factor ``λ < 1`` the gain settles at about ``(1 − λ)μ``, which
+    tracks a slow drift at the price of a noise floor. This is the default because it is the
+    only form that converges to the true parameters in noise.
   - ``step="normalised"``: ``d = δ + ‖Φ‖²`` — the normalised-gradient (NLMS for ``p = 1``,
     affine-projection-like for ``p > 1``) form with a constant step ``μ ∈ (0, 2)``: fast at the
     start, but the estimate keeps fluctuating with a misadjustment ∝ ``μ σ²`` (no averaging).
 
 * **SG** = MISG with ``p = 1``; "SG with a tuned gain" is SG with ``μ > 1``.
 * **RLS** with forgetting ``λ``: ``K = Pφ / (λ + φᵀPφ)``, ``ϑ ← ϑ + K e``,
-  ``P ← (P − K φᵀ P) / λ``, ``P(0) = p0 I``; the *reported* estimate is ``Π(ϑ)``. The state is
-  not projected: with ``λ = 1`` and a large ``p0`` RLS is the growing-window least-squares
-  solution, and clipping its state would break that (after a clipped first step the collapsed
-  ``P`` keeps the clipping error for hundreds of samples).
+  ``P ← (P − K φᵀ P) / λ`` re-symmetrised every step, ``P(0) = p0 I``; the *reported* estimate
+  is ``Π(ϑ)``. It equals exponentially weighted least squares with weights ``λ^{T−1−t}`` (and a
+  prior ``λ^T / p0`` on ``ϑ − ϑ0``); a final ``P`` that is not positive definite is flagged.
+  The state is not projected: with ``λ = 1`` and a large ``p0`` RLS is the growing-window
+  least-squares solution, and clipping its state would break that (after a clipped first
+  step the collapsed ``P`` keeps the clipping error for hundreds of samples).
 * **Batch LS** on the first ``t`` samples (its "trajectory" is the growing-window estimate);
   the final estimate is the least-squares solution of the whole record, projected.
 """
@@ -52,7 +58,8 @@ class KernelOutput:
     """What a kernel returns, in scaled units.
 
     ``last_violation`` is, per record and parameter, the last sample index whose estimate was
-    farther than the tolerance from the reference (−1: never); ``peak`` the largest ``|ϑ|``
+    farther than the tolerance from the reference (−1: only the initial estimate ``θ0`` was,
+    −2: never); ``peak`` the largest ``|ϑ|``
     before projection; ``innov_early``/``innov_late`` the RMS a-priori innovation over the
     first and last quarter of the record (NaN where the kernel has none).
     """
@@ -64,16 +71,20 @@ class KernelOutput:
     peak: np.ndarray
     innov_early: np.ndarray
     innov_late: np.ndarray
+    indefinite: np.ndarray | None = None
 
 
 class _Tracker:
     """Trajectory storage, tolerance tracking and divergence statistics of a time loop."""
 
-    def __init__(self, B: int, n: int, T: int, *, truth, tol: float, stride: int | None):
+    def __init__(self, B: int, n: int, T: int, *, truth, tol: float, stride: int | None,
+                 theta0: np.ndarray | None = None):
         self.T = T
         self.truth = truth
         self.tol_abs = None if truth is None else tol * np.abs(truth)
-        self.last = None if truth is None else np.full((B, n), -1, dtype=np.int64)
+        self.last = None if truth is None else np.full((B, n), -2, dtype=np.int64)
+        if self.last is not None and theta0 is not None:
+            self.last[np.abs(theta0 - truth) > self.tol_abs] = -1
         self.stride = stride
         self.samples = None if stride is None else np.unique(
             np.r_[np.arange(stride - 1, T, stride), T - 1])
@@ -100,9 +111,11 @@ class _Tracker:
             self.traj[:, self._k] = theta
             self._k += 1
 
-    def output(self, theta: np.ndarray, innovations: bool = True) -> KernelOutput:
+    def output(self, theta: np.ndarray, innovations: bool = True,
+               indefinite: np.ndarray | None = None) -> KernelOutput:
         rms = np.sqrt(self.e2 / self.q) if innovations else np.full_like(self.e2, np.nan)
-        return KernelOutput(theta, self.traj, self.samples, self.last, self.peak, rms[0], rms[1])
+        return KernelOutput(theta, self.traj, self.samples, self.last, self.peak, rms[0], rms[1],
+                            indefinite)
 
 
 def _check_forgetting(value: float) -> None:
@@ -161,6 +174,11 @@ class MISG:
         return int(self.p)
 
     @property
+    def covariance_form(self) -> str | None:
+        """SG/MISG are not least-squares estimators: no covariance formula (``None``)."""
+        return None
+
+    @property
     def name(self) -> str:
         return f"{self.label}(p={self.p})" if self.label == "MISG" else self.label
 
@@ -169,7 +187,7 @@ class MISG:
         """Run the recursion over a scaled batch ``phi (B, T, n)``, ``y (B, T)``."""
         B, T, n = phi.shape
         p = int(self.p)
-        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride)
+        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride, theta0=theta0)
         nrm = np.einsum("btn,btn->bt", phi, phi)
         cs = np.concatenate([np.zeros((B, 1)), np.cumsum(nrm, axis=1)], axis=1)
         th = np.array(theta0, dtype=float, copy=True)
@@ -224,11 +242,16 @@ class RLS:
         _check_forgetting(self.forgetting)
         check_positive("p0", self.p0)
 
+    @property
+    def covariance_form(self) -> str:
+        """``"least_squares"`` (λ = 1) or ``"ewls"`` (exponentially weighted, λ < 1)."""
+        return "least_squares" if self.forgetting == 1.0 else "ewls"
+
     def run(self, phi: np.ndarray, y: np.ndarray, theta0: np.ndarray, lo: np.ndarray,
             hi: np.ndarray, *, truth=None, tol: float = 0.05, stride=None) -> KernelOutput:
         """Run RLS over a scaled batch ``phi (B, T, n)``, ``y (B, T)``."""
         B, T, n = phi.shape
-        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride)
+        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride, theta0=theta0)
         th = np.array(theta0, dtype=float, copy=True)
         P = np.broadcast_to(float(self.p0) * np.eye(n), (B, n, n)).copy()
         lam = float(self.forgetting)
@@ -241,8 +264,12 @@ class RLS:
             tr.innovation(t, e)
             th = th + K * e[:, None]
             P = (P - K[:, :, None] * Pp[:, None, :]) / lam
+            # re-symmetrise: with λ < 1 the round-off of the update grows like λ^−t and an
+            # unsymmetric P turns indefinite (review item 1: min eigenvalue −6.9 at λ = 0.99)
+            P = 0.5 * (P + np.swapaxes(P, 1, 2))
             tr.record(t, np.clip(th, lo, hi), th)
-        return tr.output(np.clip(th, lo, hi))
+        lam_min = np.linalg.eigvalsh(P)[:, 0]
+        return tr.output(np.clip(th, lo, hi), indefinite=~(lam_min > 0))
 
 
 @RECURSIONS.register("batch_ls")
@@ -258,6 +285,7 @@ class BatchLS:
     ridge: float = 1e-12
     min_samples: ClassVar[int] = 1
     name: ClassVar[str] = "batch LS"
+    covariance_form: ClassVar[str] = "least_squares"
 
     def __post_init__(self) -> None:
         check_int("chunk", self.chunk, minimum=1)
@@ -267,7 +295,7 @@ class BatchLS:
             hi: np.ndarray, *, truth=None, tol: float = 0.05, stride=None) -> KernelOutput:
         """Growing-window LS over a scaled batch ``phi (B, T, n)``, ``y (B, T)``."""
         B, T, n = phi.shape
-        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride)
+        tr = _Tracker(B, n, T, truth=truth, tol=tol, stride=stride, theta0=theta0)
         A = np.zeros((B, n, n))
         b = np.zeros((B, n))
         eye = np.eye(n)

@@ -34,8 +34,8 @@ import numpy as np
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.identification.regression import Regression
+from surrogate_rbrdo.spindle.assembly import RPM
 
-RPM = np.pi / 30.0
 EXCITATIONS = ("unbalance", "run_up", "random")
 #: (bearing, direction) of each regression, in channel order
 CHANNELS = (("front", "y"), ("front", "z"), ("rear", "y"), ("rear", "z"))

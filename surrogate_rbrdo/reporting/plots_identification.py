@@ -1,5 +1,6 @@
 """Figures of the identification: convergence (paper Fig. 1), speed trend ±2σ (Fig. 3) and
-normal Q–Q plots with R² (Fig. 4)."""
+normal Q–Q plots with R² (Fig. 4); :func:`write_identification_figures` draws all three for an
+identification run (what the ``identification`` experiment kind writes)."""
 
 from __future__ import annotations
 
@@ -9,19 +10,28 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from surrogate_rbrdo.reporting.figures import pyplot as _plt
+from surrogate_rbrdo.identification.condensation import (
+    condense_reactions,
+    node_at,
+    phasor_time_regression,
+)
+from surrogate_rbrdo.identification.identify import identify
+from surrogate_rbrdo.identification.recursions import MISG, RLS, SG
+from surrogate_rbrdo.identification.scatter import run_factors
+from surrogate_rbrdo.reporting.figures import pyplot as _pyplot
 from surrogate_rbrdo.reporting.figures import save_figure as _save
+from surrogate_rbrdo.spindle.assembly import SpindleModel
 
 
 def plot_convergence(results: Mapping[str, object], truth: np.ndarray, path: str | Path, *,
-                     tol: float = 0.05) -> Path:
+                     tol: float = 0.05, reference_label: str = "truth") -> Path:
     """Median (line) and interquartile band (shade) over records of the relative error of
     ``k`` and ``c`` vs samples, one curve per method (the paper's Fig. 1, with both parameters).
 
     ``results`` maps a label to an :class:`~surrogate_rbrdo.identification.IdentificationResult`
     computed with a ``stride`` (its trajectory is plotted); ``truth`` is ``(n,)`` or ``(B, n)``.
     """
-    plt = _plt()
+    plt = _pyplot()
     first = next(iter(results.values()))
     n = first.estimate.shape[1]
     fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.2), squeeze=False)
@@ -39,7 +49,7 @@ def plot_convergence(results: Mapping[str, object], truth: np.ndarray, path: str
     for j, ax in enumerate(axes[0]):
         ax.axhline(tol, color="k", lw=0.8, ls=":")
         ax.set_xlabel("samples (iterations)")
-        ax.set_ylabel(f"|{first.names[j]} / truth − 1|")
+        ax.set_ylabel(f"|{first.names[j]} / {reference_label} − 1|")
         ax.set_title(f"{first.names[j]}: median and IQR over {first.estimate.shape[0]} records")
     axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
@@ -48,30 +58,33 @@ def plot_convergence(results: Mapping[str, object], truth: np.ndarray, path: str
 
 def plot_trend(model, speeds_rpm: np.ndarray, values: np.ndarray, path: str | Path, *,
                truth=None, coefficients=None) -> Path:
-    """Identified values vs speed with the fitted trend, the ±2σ scatter band (trend × (1 ± 2
-    σ_e)) and the trend's 95 % interval; ``truth`` (callable speed → ``(d,)``) is drawn dashed.
+    """Identified values vs speed with the fitted trend, the ±2σ band of the scatter the study
+    gets at each speed (trend × (1 ± 2 σ_e(Ω))) and the trend's 95 % interval (statistical and
+    systematic); ``truth`` (callable speed → ``(d,)``) is drawn dashed.
 
     ``model`` is an :class:`~surrogate_rbrdo.identification.model.IdentifiedUncertainty`;
     ``values (N, d)`` are its input columns (SI).
     """
-    plt = _plt()
+    plt = _pyplot()
     names = list(model.coefficients if coefficients is None else coefficients)
     cols = [model.coefficients.index(c) for c in names]
     ncol = min(len(cols), 2)
     nrow = int(np.ceil(len(cols) / ncol))
     fig, axes = plt.subplots(nrow, ncol, figsize=(6 * ncol, 3.6 * nrow), squeeze=False)
-    grid = np.linspace(np.min(speeds_rpm), np.max(speeds_rpm), 200)
-    sd = np.sqrt(np.diag(model.factor_cov))
+    lo_s, hi_s = model.speed_range_rpm
+    grid = np.linspace(lo_s, hi_s, 120)
+    sd = np.sqrt(np.array([np.diag(model.factor_cov_at(s)) for s in grid]))      # (G, d)
+    ci = np.array([model.trend_interval(s) for s in grid])                       # (G, 2, d)
     for ax, j in zip(axes.ravel(), cols, strict=False):
         tr = model.trends[j]
-        t, ts = tr.predict(grid), tr.predict_std(grid)
+        t = tr.predict(grid)
         scale = 1e6 if "_k_" in model.coefficients[j] else 1.0
         unit = "MN/m" if scale == 1e6 else "N s/m"
         ax.plot(speeds_rpm, values[:, j] / scale, ".", ms=2.5, color="0.55", label="identified")
         ax.plot(grid, t / scale, "C0", lw=1.5, label=f"trend ({tr.law})")
-        ax.fill_between(grid, t * (1 - 2 * sd[j]) / scale, t * (1 + 2 * sd[j]) / scale,
-                        color="C0", alpha=0.15, lw=0, label="±2σ scatter")
-        ax.fill_between(grid, (t - 1.96 * ts) / scale, (t + 1.96 * ts) / scale, color="C1",
+        ax.fill_between(grid, t * (1 - 2 * sd[:, j]) / scale, t * (1 + 2 * sd[:, j]) / scale,
+                        color="C0", alpha=0.15, lw=0, label=f"±2σ {model.scatter} scatter")
+        ax.fill_between(grid, ci[:, 0, j] / scale, ci[:, 1, j] / scale, color="C1",
                         alpha=0.5, lw=0, label="trend 95 % CI")
         if truth is not None:
             ax.plot(grid, np.array([truth(s)[j] for s in grid]) / scale, "k--", lw=1,
@@ -88,7 +101,7 @@ def plot_trend(model, speeds_rpm: np.ndarray, values: np.ndarray, path: str | Pa
 
 def plot_qq(factors: np.ndarray, names, path: str | Path) -> Path:
     """Normal Q–Q plot of each column of ``factors`` with its fitted line and R² (Fig. 4)."""
-    plt = _plt()
+    plt = _pyplot()
     X = np.asarray(factors, dtype=float)
     names = list(names)
     ncol = min(len(names), 4)
@@ -106,4 +119,61 @@ def plot_qq(factors: np.ndarray, names, path: str | Path) -> Path:
     return _save(fig, path)
 
 
-__all__ = ["plot_convergence", "plot_qq", "plot_trend"]
+def campaign_convergence(model: SpindleModel, run, speed_rpm: float, *,
+                         n_samples: int = 2000, dt_s: float = 1e-4) -> tuple[dict, np.ndarray]:
+    """SG, MISG(p = 3) and RLS on the 1× time samples of the used records at the campaign speed
+    nearest ``speed_rpm`` (:func:`phasor_time_regression`, ``Δt`` = 0.1 ms as the paper): the
+    results with trajectories, and each record's closed-form estimate (their reference — least
+    squares on these samples equals it exactly, so the curves show the recursions' convergence,
+    not the identification error)."""
+    resp, camp = run.responses, run.campaign
+    ok = camp.used
+    speeds = np.unique(resp.speed_rpm[ok])
+    s = float(speeds[np.argmin(np.abs(speeds - speed_rpm))])
+    rows = np.flatnonzero(ok & (resp.speed_rpm == s))
+    probe = [node_at(model, float(p)) for p in resp.positions_mm[::2]]
+    unb = [(node_at(model, pos), U * np.exp(1j * np.radians(ph)))
+           for pos, U, ph in resp.unbalance]
+    cr = condense_reactions(model, [s], probe_nodes=probe, unbalance=unb)
+    x, r = cr.reactions(resp.phasors[rows], np.full(rows.size, s))
+    reg = phasor_time_regression(x, r, np.full(rows.size, s), n_samples=n_samples, dt_s=dt_s)
+    est = camp.identification.estimate[rows]                        # (n, 8): k, c per b, dir
+    ref = est.reshape(rows.size, -1, 2, 2).transpose(0, 1, 3, 2).reshape(-1, 2)
+    th0 = ref * [0.8, 0.7]
+    res = {m.name: identify(reg, m, theta0=th0, stride=10) for m in (SG(), MISG(p=3), RLS())}
+    return res, ref
+
+
+def write_identification_figures(model: SpindleModel, run, out_dir: str | Path, *,
+                                 convergence_speed_rpm: float = 10_000.0) -> dict[str, Path]:
+    """Fig. 1 (convergence at one speed), Fig. 3 (trends ±2σ) and Fig. 4 (Q–Q of each run's
+    detrended factors — the independent sample — and of all records') of an
+    :class:`~surrogate_rbrdo.identification.experiment.IdentificationRun` into ``out_dir``."""
+    out = Path(out_dir)
+    u, camp = run.uncertainty, run.campaign
+    cols = [camp.identification.names.index(c) for c in u.coefficients]
+    sp = run.responses.speed_rpm[camp.used]
+    X = camp.identification.estimate[camp.used][:, cols]
+    res, ref = campaign_convergence(model, run, convergence_speed_rpm)
+    e = X / u.trend(sp)
+    runs = run_factors(e, run.responses.groups[camp.used], _rel_cov(camp, cols, u, sp))
+    return {"fig1_convergence": plot_convergence(res, ref, out / "identification_convergence.png",
+                                                 reference_label="closed form"),
+            "fig3_trend": plot_trend(u, sp, X, out / "identification_trend.png"),
+            "fig4_qq": plot_qq(runs, [f"{c} (per run)" for c in u.coefficients],
+                               out / "identification_qq.png"),
+            "fig4_qq_records": plot_qq(e, u.coefficients,
+                                       out / "identification_qq_records.png")}
+
+
+def _rel_cov(camp, cols, u, sp):
+    """The used records' identification covariance of the factors (for run weighting)."""
+    C = camp.identification.covariance
+    if C is None:
+        return None
+    t = u.trend(sp)
+    return C[camp.used][:, cols][:, :, cols] / (t[:, :, None] * t[:, None, :])
+
+
+__all__ = ["campaign_convergence", "plot_convergence", "plot_qq", "plot_trend",
+           "write_identification_figures"]

@@ -43,6 +43,7 @@ from surrogate_rbrdo.rig.simulate import (
 )
 from surrogate_rbrdo.rig.store import DatasetWriter, read_record
 from surrogate_rbrdo.rig.truth import Truth, _child
+from surrogate_rbrdo.spindle.geometry import Unbalance
 
 Progress = Callable[[int, int, str], None]
 
@@ -57,6 +58,10 @@ class CampaignOptions:
 
     ``runup``: ``(start_rpm, end_rpm, duration_s)`` of the run-up (and the reverse run-down if
     ``rundown``), ``None`` for none; impacts: hits per direction (x, y) at the tool tip.
+    ``trial_unbalance``: ``(position_mm, magnitude_kgm, phase_deg)`` of a known trial mass;
+    every run then measures each speed twice, without and with it (record ids ``..._trial``,
+    label ``trial = 1``, the mass in the record's ``provenance["test_setup"]``): the
+    difference isolates a known excitation (influence-coefficient practice, ISO 21940-13).
     """
 
     speeds_rpm: tuple[float, ...] = field(default_factory=_default_speeds)
@@ -69,6 +74,7 @@ class CampaignOptions:
     impacts_per_direction: int = 5
     impact_duration_s: float = 1.0
     sensors: SensorSet = SensorSet()
+    trial_unbalance: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         sp = np.asarray(self.speeds_rpm, float)
@@ -87,6 +93,12 @@ class CampaignOptions:
                 raise ValueError(f"runup = {self.runup} is not allowed: need 0 < start_rpm < "
                                  "end_rpm and duration_s > 0")
             object.__setattr__(self, "runup", (float(a), float(b), float(d)))
+        if self.trial_unbalance is not None:
+            pos, U, ph = (float(v) for v in self.trial_unbalance)
+            if not (np.isfinite(pos) and np.isfinite(ph) and U > 0 and np.isfinite(U)):
+                raise ValueError(f"trial_unbalance = {self.trial_unbalance} is not allowed: "
+                                 "need (position_mm, magnitude_kgm > 0, phase_deg), finite")
+            object.__setattr__(self, "trial_unbalance", (pos, U, ph))
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -138,7 +150,7 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
         "seed": {"entropy": str(root_ss.entropy), "spawn_key": list(root_ss.spawn_key)}})
     done = writer.done()
     n_steady = options.builds * options.tools_per_build * options.repeats * len(
-        options.speeds_rpm)
+        options.speeds_rpm) * (1 if options.trial_unbalance is None else 2)
     total = n_steady + _n_extra(options)
     rows: list[tuple[Any, ...]] = []
     count = written = 0
@@ -149,20 +161,24 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
             check_stable(st0.model(), st0.theta, _stability_speeds(options))
             for r in range(options.repeats):
                 st = truth.state(root_ss, build=b, tool=tl, run=r)
-                ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" for i in range(len(options.speeds_rpm))]
-                todo = [i for i, rid in enumerate(ids) if rid not in done]
-                new = _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) \
-                    if todo else {}
-                for i, rid in enumerate(ids):
-                    rec = new.get(rid) or read_record(writer.root / f"records/{rid}.npz")
-                    if rid in new:
-                        writer.write(rec, labels={"build": b, "tool": tl, "run": r,
-                                                  "repeat": r, "speed_index": i})
-                        written += 1
-                    rows += _phasor_rows(rec, b, tl, r)
-                    count += 1
-                    if progress:
-                        progress(count, total, rid)
+                for trial in (False, True) if options.trial_unbalance else (False,):
+                    ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" + ("_trial" if trial else "")
+                           for i in range(len(options.speeds_rpm))]
+                    todo = [i for i, rid in enumerate(ids) if rid not in done]
+                    new = _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r,
+                                  trial) if todo else {}
+                    for i, rid in enumerate(ids):
+                        rec = new.get(rid) or read_record(writer.root / f"records/{rid}.npz")
+                        if rid in new:
+                            labels = {"build": b, "tool": tl, "run": r, "repeat": r,
+                                      "speed_index": i}
+                            writer.write(rec, labels={**labels, "trial": 1} if trial
+                                         else labels)
+                            written += 1
+                        rows += _phasor_rows(rec, b, tl, r)
+                        count += 1
+                        if progress:
+                            progress(count, total, rid)
             for rec_id, make in _extras(truth, st0, options, inst, root_ss, b, tl):
                 kind = "impact" if "_hit" in rec_id else "ramp"
                 (impacts if kind == "impact" else ramps).append(rec_id)
@@ -207,11 +223,20 @@ def _provenance(truth, st, inst, root_ss, b, tl, r) -> dict[str, Any]:
             "seed_spawn_key": list(root_ss.spawn_key)}
 
 
-def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r) -> dict[str, Record]:
+def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False
+            ) -> dict[str, Record]:
     sp = np.asarray(options.speeds_rpm)[todo]
-    rngs = [np.random.default_rng(_child(root_ss, 3, b, tl, r, i)) for i in todo]
+    key = 6 if trial else 3                      # trial records draw from their own streams
+    rngs = [np.random.default_rng(_child(root_ss, key, b, tl, r, i)) for i in todo]
     base = _provenance(truth, st, inst, root_ss, b, tl, r)
-    prov = [{**base, "seed_key": [3, b, tl, r, i]} for i in todo]
+    if trial:
+        pos, U, ph = options.trial_unbalance
+        base["test_setup"] = {"trial_unbalance": {"position_mm": pos, "magnitude_kgm": U,
+                                                  "phase_deg": ph}}
+        g = st.geometry
+        st = dataclasses.replace(st, geometry=dataclasses.replace(
+            g, unbalances=g.unbalances + (Unbalance(pos, U, ph),)))
+    prov = [{**base, "seed_key": [key, b, tl, r, i]} for i in todo]
     recs = steady_records(st.model(), st.theta, sp, options.sensors, inst, rngs,
                           duration_s=options.duration_s, ids=[ids[i] for i in todo],
                           provenance=prov)
