@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from scipy.signal import spectrogram
 
+from surrogate_rbrdo.reporting.figures import pyplot as _plt
+from surrogate_rbrdo.reporting.figures import save_figure
 from surrogate_rbrdo.rig.campaign import CampaignResult
 from surrogate_rbrdo.rig.demod import critical_speeds_from_ramp, track_1x
 from surrogate_rbrdo.rig.frf import h1_frf, modal_fit
@@ -24,20 +26,9 @@ from surrogate_rbrdo.spindle.harmonic import unbalance_response
 from surrogate_rbrdo.spindle.modal import campbell
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _save(plt, fig, path: Path) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def bode_stats(result: CampaignResult, channel: str) -> dict[str, np.ndarray]:

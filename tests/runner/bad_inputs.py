@@ -82,6 +82,17 @@ magnitude_kgm = 1e-5
 """
 
 
+RIG = """[experiment]
+name = "g"
+kind = "rig"
+[rig.campaign]
+speeds_rpm = [6000.0]
+repeats = 1
+duration_s = 0.1
+runup = [1000.0, 2000.0, 0.5]
+impacts_per_direction = 0
+"""
+
 def _set(base: str, table: str, line: str) -> str:
     """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
     head = f"[{table}]\n"
@@ -105,6 +116,10 @@ def R(table: str, line: str) -> str:          # noqa: N802
 
 def V(table: str, line: str) -> str:          # noqa: N802
     return _set(VALIDATION, table, line)
+
+
+def G(table: str, line: str) -> str:          # noqa: N802
+    return _set(RIG, table, line)
 
 
 ARR = r"must be an array of"
@@ -459,6 +474,117 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("val_key", V("validation", "n_tests = 3"), {}, [], r"unknown key validation.n_tests"),
     ("val_n_theta_huge", _sub(VALIDATION, "n_theta = 20", "n_theta = 100000000000"), {}, [],
      r"validation.n_theta = 100000000000 is not allowed: .* GB of memory"),
+    # ------------------------------------------------------------------ [rig] (kind rig)
+    ("rig_scalar", "rig = 3\n" + RIG.split("[rig.campaign]")[0], {}, [],
+     r"rig = 3 is not allowed: " + TAB),
+    ("rig_key", G("rig", "colour = 1"), {}, [],
+     r"unknown key rig.colour; allowed: \['campaign', 'design', 'effects', 'figures', "
+     r"'sensors', 'variability'\]"),
+    ("rig_effects_str", G("rig", "effects = 'none'"), {}, [],
+     r"rig.effects = 'none' is not allowed: must be an array of tables"),
+    ("rig_effects_item", G("rig", "effects = [3]"), {}, [],
+     r"rig.effects\[0\] = 3 is not allowed: " + TAB),
+    ("rig_effect_unknown", G("rig", "effects = [{name = 'warp'}]"), {}, [],
+     r"rig.effects\[0\]: unknown effect 'warp'; known: .*tool_interface"),
+    ("rig_effect_param", G("rig", "effects = [{name = 'anisotropy', q = 1}]"), {}, [],
+     r"rig.effects\[0\]: unknown key\(s\) \['q'\]"),
+    ("rig_effect_value", G("rig", "effects = [{name = 'anisotropy', s = 'big'}]"), {}, [],
+     r"rig.effects\[0\]: .*s = 'big' is not allowed"),
+    ("rig_unstable", G("rig", "effects = [{name = 'cross_coupling', kappa = 0.3}]"), {}, [],
+     r"rig.effects = \[.*\] is not allowed: the truth is unstable at .* rpm"),
+    ("rig_design_short", G("rig", "design = [2000.0, 500.0]"), {}, [],
+     r"rig.design = \[2000.0, 500.0\] is not allowed: must be an array of 3 numbers"),
+    ("rig_design_str", G("rig", "design = 'baseline'"), {}, [],
+     r"rig.design = 'baseline' is not allowed: " + ARR),
+    ("rig_design_outside", G("rig", "design = [2000.0, 900.0, 65.0]"), {}, [],
+     r"rig.design span_mm = 900.0 is not allowed: must lie in \[300.0, 750.0\]"),
+    ("rig_figures_str", G("rig", "figures = 'yes'"), {}, [],
+     r"rig.figures = 'yes' is not allowed: " + BOOL),
+    ("rig_var_key", G("rig.variability", "bearing_cov = 0.1"), {}, [],
+     r"unknown key rig.variability.bearing_cov; allowed: \['balance_grade_mm_s', "),
+    ("rig_var_cov_big", G("rig.variability", "bearing_k_cov = 2.0"), {}, [],
+     r"rig.variability.bearing_k_cov = 2.0 is not allowed: must lie in \[0.0, 1.0\]"),
+    ("rig_var_cov_neg", G("rig.variability", "thermal_preload_cov = -0.1"), {}, [],
+     r"rig.variability.thermal_preload_cov = -0.1 is not allowed: must lie in"),
+    ("rig_var_cov_nan", G("rig.variability", "tool_mass_cov = nan"), {}, [],
+     r"rig.variability.tool_mass_cov = nan is not allowed: must be a finite number"),
+    ("rig_var_grade_str", G("rig.variability", "balance_grade_mm_s = 'G2.5'"), {}, [],
+     r"rig.variability.balance_grade_mm_s = 'G2.5' is not allowed: " + NUM),
+    ("rig_var_fraction_order", G("rig.variability", "unbalance_fraction = [1.0, 0.5]"), {},
+     [], r"rig.variability.unbalance_fraction = \(1.0, 0.5\) is not allowed: need 0 <= lo"),
+    ("rig_var_fraction_len", G("rig.variability", "unbalance_fraction = [0.5]"), {}, [],
+     r"rig.variability.unbalance_fraction = \[0.5\] is not allowed: must be an array of 2"),
+    ("rig_var_disk_int", G("rig.variability", "tool_disk = 5"), {}, [],
+     r"rig.variability.tool_disk = 5 is not allowed: " + STR),
+    ("rig_sensors_key", G("rig.sensors", "bogus = 1"), {}, [],
+     r"unknown key rig.sensors.bogus; allowed: \['daq', 'extra', 'hammer', 'keyphasor'"),
+    ("rig_noise_str", G("rig.sensors", "noise = 'no'"), {}, [],
+     r"rig.sensors.noise = 'no' is not allowed: " + BOOL),
+    ("rig_targets", G("rig.sensors", "targets = ['tip']"), {}, [],
+     r"rig.sensors.targets\[\] = 'tip' is not allowed: must be one of \['front', 'rear', "
+     r"'tool'\]"),
+    ("rig_probe_noise_neg", G("rig.sensors", "probe = { noise_rms_m = -1e-9 }"), {}, [],
+     r"rig.sensors.probe.noise_rms_m = -1e-09 is not allowed: must be a finite number >= 0"),
+    ("rig_probe_sens_zero", G("rig.sensors", "probe = { sensitivity_V_per_m = 0.0 }"), {}, [],
+     r"rig.sensors.probe.sensitivity_V_per_m = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_probe_key", G("rig.sensors", "probe = { noise = 1e-9 }"), {}, [],
+     r"unknown key rig.sensors.probe.noise; allowed: \[.*'noise_rms_m'"),
+    ("rig_daq_bits_big", G("rig.sensors", "daq = { bits = 40 }"), {}, [],
+     r"rig.sensors.daq.bits = 40 is not allowed: at most 31"),
+    ("rig_daq_bits_float", G("rig.sensors", "daq = { bits = 12.5 }"), {}, [],
+     r"rig.sensors.daq.bits = 12.5 is not allowed: " + INT),
+    ("rig_daq_rate_zero", G("rig.sensors", "daq = { sample_rate_hz = 0.0 }"), {}, [],
+     r"rig.sensors.daq.sample_rate_hz = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_keyphasor_edge", G("rig.sensors", "keyphasor = { edge_deg = 50.0 }"), {}, [],
+     r"rig.sensors.keyphasor.edge_deg = 50.0 is not allowed: must lie in \[0.0, 30.0\]"),
+    ("rig_hammer_peak", G("rig.sensors", "hammer = { peak_N = -3.0 }"), {}, [],
+     r"rig.sensors.hammer.peak_N = -3.0 is not allowed: must be a finite number > 0"),
+    ("rig_campaign_key", G("rig.campaign", "repeat = 3"), {}, [],
+     r"unknown key rig.campaign.repeat; allowed: \[.*'repeats'"),
+    ("rig_repeats_zero", _sub(RIG, "repeats = 1", "repeats = 0"), {}, [],
+     r"rig.campaign.repeats = 0 is not allowed: must be an integer >= 1"),
+    ("rig_repeats_float", _sub(RIG, "repeats = 1", "repeats = 2.5"), {}, [],
+     r"rig.campaign.repeats = 2.5 is not allowed: " + INT),
+    ("rig_speeds_str", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = 'fast'"), {}, [],
+     r"rig.campaign.speeds_rpm = 'fast' is not allowed: must be an array of numbers, e.g. "
+     r"\[1.0, 2.0\] or a table \{start, stop, num\}"),
+    ("rig_speeds_order", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [3000.0, 2000.0]"),
+     {}, [], r"rig.campaign.speeds_rpm = \(3000.0, 2000.0\) is not allowed: a strictly "
+             r"increasing list"),
+    ("rig_speeds_item", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [3000.0, 'x']"), {},
+     [], r"rig.campaign.speeds_rpm\[1\] = 'x' is not allowed: " + NUM),
+    ("rig_grid_missing", _sub(RIG, "speeds_rpm = [6000.0]",
+                              "speeds_rpm = { start = 1000.0, stop = 2000.0 }"), {}, [],
+     r"rig.campaign.speeds_rpm.num is missing: it is required"),
+    ("rig_grid_key", _sub(RIG, "speeds_rpm = [6000.0]",
+                          "speeds_rpm = { start = 1e3, stop = 2e3, num = 3, step = 1 }"), {}, [],
+     r"unknown key rig.campaign.speeds_rpm.step; allowed: \['num', 'start', 'stop'\]"),
+    ("rig_grid_order", _sub(RIG, "speeds_rpm = [6000.0]",
+                            "speeds_rpm = { start = 2e3, stop = 1e3, num = 3 }"), {}, [],
+     r"rig.campaign.speeds_rpm.stop = 1000.0 is not allowed: must be > start = 2000.0"),
+    ("rig_grid_num_float", _sub(RIG, "speeds_rpm = [6000.0]",
+                                "speeds_rpm = { start = 1e3, stop = 2e3, num = 2.5 }"), {}, [],
+     r"rig.campaign.speeds_rpm.num = 2.5 is not allowed: " + INT),
+    ("rig_runup_order", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]",
+                             "runup = [2000.0, 1000.0, 0.5]"), {}, [],
+     r"rig.campaign.runup = \(2000.0, 1000.0, 0.5\) is not allowed: need 0 < start_rpm"),
+    ("rig_runup_len", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]", "runup = [1000.0, 2000.0]"),
+     {}, [], r"rig.campaign.runup = \[1000.0, 2000.0\] is not allowed: must be an array of 3"),
+    ("rig_rundown_int", G("rig.campaign", "rundown = 1"), {}, [],
+     r"rig.campaign.rundown = 1 is not allowed: " + BOOL),
+    ("rig_duration_zero", _sub(RIG, "duration_s = 0.1", "duration_s = 0.0"), {}, [],
+     r"rig.campaign.duration_s = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_impacts_neg", _sub(RIG, "impacts_per_direction = 0", "impacts_per_direction = -1"),
+     {}, [], r"rig.campaign.impacts_per_direction = -1 is not allowed: must be an integer >= 0"),
+    ("rig_builds_zero", G("rig.campaign", "builds = 0"), {}, [],
+     r"rig.campaign.builds = 0 is not allowed: must be an integer >= 1"),
+    ("rig_campaign_sensors", G("rig.campaign", "sensors = { noise = false }"), {}, [],
+     r"rig.campaign.sensors is not allowed: the sensors are \[rig.sensors\]"),
+    ("rig_memory", _sub(RIG, "duration_s = 0.1", "duration_s = 1e6"), {}, [],
+     r"rig.campaign.duration_s = 1000000.0 is not allowed: .* GB of memory, more than"),
+    ("rig_disk", _sub(RIG, "repeats = 1", "repeats = 1000000000"), {}, [],
+     r"rig.campaign.repeats = 1000000000 is not allowed: 1000000002 records .* GB of disk, "
+     r"more than"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),
