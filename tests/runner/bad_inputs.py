@@ -93,6 +93,18 @@ runup = [1000.0, 2000.0, 0.5]
 impacts_per_direction = 0
 """
 
+RIG_VAL = """[experiment]
+name = "w"
+kind = "validation"
+[validation]
+n_replications = 4
+ramps = 0
+[designs]
+a = [2000.0, 500.0, 65.0]
+b = [3000.0, 350.0, 75.0]
+"""
+
+
 def _set(base: str, table: str, line: str) -> str:
     """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
     head = f"[{table}]\n"
@@ -120,6 +132,10 @@ def V(table: str, line: str) -> str:          # noqa: N802
 
 def G(table: str, line: str) -> str:          # noqa: N802
     return _set(RIG, table, line)
+
+
+def W(table: str, line: str) -> str:          # noqa: N802
+    return _set(RIG_VAL, table, line)
 
 
 ARR = r"must be an array of"
@@ -585,6 +601,74 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("rig_disk", _sub(RIG, "repeats = 1", "repeats = 1000000000"), {}, [],
      r"rig.campaign.repeats = 1000000000 is not allowed: 1000000002 records .* GB of disk, "
      r"more than"),
+    # ------------------------------------------------------------------ kind validation
+    ("rv_designs_none", RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs: designs has 0 entries: need a baseline and at least one other design"),
+    ("rv_design_one", _sub(RIG_VAL, "b = [3000.0, 350.0, 75.0]\n", ""), {}, [],
+     r"designs: designs has 1 entries"),
+    ("rv_design_short", _sub(RIG_VAL, "a = [2000.0, 500.0, 65.0]", "a = [2000.0, 500.0]"), {},
+     [], r"designs.a = \[2000.0, 500.0\] is not allowed: must be an array of 3 numbers"),
+    ("rv_design_str", _sub(RIG_VAL, "a = [2000.0, 500.0, 65.0]", "a = 'baseline'"), {}, [],
+     r"designs.a = 'baseline' is not allowed: " + ARR),
+    ("rv_design_outside", W("designs", "c = [2000.0, 900.0, 65.0]"), {}, [],
+     r"designs.c: design span_mm = 900.0 is not allowed: must lie in"),
+    ("rv_design_name", W("designs", "'a b' = [2000.0, 500.0, 65.0]"), {}, [],
+     r"designs: design name 'a b' is not allowed: a non-empty name without spaces"),
+    ("rv_baseline", W("validation", "baseline = 'z'"), {}, [],
+     r"designs: baseline = 'z' is not allowed: one of \['a', 'b'\]"),
+    ("rv_key", W("validation", "replications = 20"), {}, [],
+     r"unknown key validation.replications; allowed: \[.*'n_replications'"),
+    ("rv_n_small", _sub(RIG_VAL, "n_replications = 4", "n_replications = 2"), {}, [],
+     r"validation.n_replications = 2 is not allowed: must be an integer >= 4"),
+    ("rv_method", W("validation", "method = 'fast'"), {}, [],
+     r"validation.method = 'fast' is not allowed: must be one of \['phasors', 'records'\]"),
+    ("rv_shared", W("validation", "shared = ['bearing']"), {}, [],
+     r"validation.shared\[\] = 'bearing' is not allowed: must be one of \['bearings'"),
+    ("rv_speeds_str", W("validation", "speeds_rpm = 'all'"), {}, [],
+     r"validation.speeds_rpm = 'all' is not allowed: must be an array of numbers, .* or a "
+     r"table"),
+    ("rv_speeds_table", W("validation", "speeds_rpm = { start = 1000.0, stop = 2000.0 }"), {},
+     [], r"validation.speeds_rpm = \{'start': 1000.0, 'stop': 2000.0\} is not allowed: a "
+         r"table needs start, stop and step"),
+    ("rv_speeds_order", W("validation", "speeds_rpm = [2000.0, 1000.0]"), {}, [],
+     r"validation.speeds_rpm = \(2000.0, 1000.0\) is not allowed: a strictly increasing"),
+    ("rv_peak_zoom", W("validation", "peak = { n_zoom = 0 }"), {}, [],
+     r"validation.peak.n_zoom = 0 is not allowed: must be an integer >= 1"),
+    ("rv_ramps", _sub(RIG_VAL, "ramps = 0", "ramps = 5"), {}, [],
+     r"validation.ramps = 5 is not allowed: at most n_replications = 4"),
+    ("rv_rated_neg", W("validation", "rated_speed_rpm = -1.0"), {}, [],
+     r"validation.rated_speed_rpm = -1.0 is not allowed"),
+    ("rv_sensors_here", W("validation", "sensors = { noise = false }"), {}, [],
+     r"validation.sensors is not allowed: the sensors are \[rig.sensors\]"),
+    ("rv_no_tool_probe", W("rig.sensors", "targets = ['front', 'rear']"), {}, [],
+     r"rig.sensors.targets = \['front', 'rear'\] is not allowed: validation measures the "
+     r"tool tip"),
+    ("rv_rig_campaign", W("rig.campaign", "repeats = 3"), {}, [],
+     r"unknown key rig.campaign; allowed: \['effects', 'sensors', 'variability'\]"),
+    ("rv_rig_effect", W("rig", "effects = [{name = 'warp'}]"), {}, [],
+     r"rig.effects\[0\]: unknown effect 'warp'"),
+    ("rv_unstable", W("rig", "effects = [{name = 'cross_coupling', kappa = 0.3}]"), {}, [],
+     r"rig.effects: design 'a': the truth is unstable at"),
+    ("rv_model_n", W("model", "n_samples = 5"), {}, [],
+     r"model.n_samples = 5 is not allowed: must be an integer >= 10"),
+    ("rv_model_compare", W("model", "compare = 'yes'"), {}, [],
+     r"model.compare = 'yes' is not allowed: " + BOOL),
+    ("rv_spindle_file", W("spindle", "geometry = 'g.toml'"), {"g.toml": GEOMETRY_OK}, [],
+     r"spindle.geometry = 'g.toml' is not allowed: the rig's truth is the reference spindle"),
+    ("rv_uncertainty", W("uncertainty", "std = [0.05]"), {}, [],
+     r"uncertainty.std = \[0.05\] is not allowed: need 2 values"),
+    ("rv_table", W("study", "x = 1"), {}, [],
+     r"unknown table study; allowed: \['designs', 'model', 'rig', 'spindle', 'uncertainty', "
+     r"'validation'\]"),
+    ("rv_from_int", "[designs]\nfrom = 3\n" + RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs.from = 3 is not allowed: " + STR),
+    ("rv_from_not_study", "[designs]\nfrom = '.'\n" + RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs.from = '.' is not allowed: not a finished study run folder"),
+    ("rv_from_and_points", W("designs", "from = '.'"), {}, [],
+     r"unknown key designs.a; allowed with designs.from: \['from', 'names'\]"),
+    ("rv_from_with_spindle", "[designs]\nfrom = '.'\n" + RIG_VAL.split("[designs]")[0]
+     + "[spindle]\n", {}, [],
+     r"\[spindle\] and \[uncertainty\] are not allowed with designs.from"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),
