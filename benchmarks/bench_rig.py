@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from surrogate_rbrdo.rig.campaign import CampaignOptions, run_campaign
+from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, run_campaign
 from surrogate_rbrdo.rig.phasors import sample_phasors
 from surrogate_rbrdo.rig.truth import reference_truth
 
@@ -33,6 +33,12 @@ def main() -> None:
     shutil.rmtree(out, ignore_errors=True)
     truth = reference_truth()
     print(f"load average: {os.getloadavg()}")
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    est = footprint(CampaignOptions(repeats=args.repeats))
+    print(f"footprint estimate of the whole campaign (rig.campaign.footprint): "
+          f"{est.n_records} records, {est.disk_bytes / 1e6:.0f} MB on disk, "
+          f"{est.memory_bytes / 1e6:.0f} MB above the interpreter's {rss0:.0f} MB "
+          f"(sized by {est.memory_by})")
     t0 = time.perf_counter()
     steady = run_campaign(truth, CampaignOptions(repeats=args.repeats, runup=None,
                                                  impacts_per_direction=0),
@@ -47,7 +53,8 @@ def main() -> None:
     print(f"run-up + run-down (1000-24000 rpm, 10 s each) and 10 impacts: "
           f"{t2 - t1:.1f} s ({extra.n_records - 1} records)")
     print(f"campaign total: {t2 - t0:.1f} s")
-    print(f"peak RSS: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak RSS: {peak:.0f} MB ({peak - rss0:.0f} MB above the start)")
     st = truth.state(np.random.default_rng(0).bit_generator.seed_seq, build=0, tool=0, run=0)
     sens = CampaignOptions().sensors
     inst = sens.install(np.random.default_rng(1))

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from scipy.signal import spectrogram
 
+from surrogate_rbrdo.reporting.figures import pyplot as _plt
+from surrogate_rbrdo.reporting.figures import save_figure
 from surrogate_rbrdo.rig.campaign import CampaignResult
 from surrogate_rbrdo.rig.demod import critical_speeds_from_ramp, track_1x
 from surrogate_rbrdo.rig.frf import h1_frf, modal_fit
@@ -24,20 +26,9 @@ from surrogate_rbrdo.spindle.harmonic import unbalance_response
 from surrogate_rbrdo.spindle.modal import campbell
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _save(plt, fig, path: Path) -> Path:
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def bode_stats(result: CampaignResult, channel: str) -> dict[str, np.ndarray]:
@@ -122,10 +113,16 @@ def plot_campbell_runup(camp, measured: dict[str, list[float]], path: Path) -> P
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     sp = camp.speeds_rpm
+    top = max(sp[-1] / 60.0 * 1.6, 1.0)
+    labelled: set[str] = set()
     for k in range(camp.frequency_hz.shape[1]):
         for whirl, ls in (("forward", "-"), ("backward", "--")):
             f = np.where(camp.whirl[:, k] == whirl, camp.frequency_hz[:, k], np.nan)
-            ax.plot(sp, f, ls, color="0.4", lw=1)
+            if np.any(f < top):
+                ax.plot(sp, f, ls, color="0.4", lw=1, label=None if whirl in labelled
+                        else f"model, {whirl} whirl")
+                labelled.add(whirl)
+    hidden = int(np.sum(np.nanmin(camp.frequency_hz, axis=0) >= top))
     ax.plot(sp, sp / 60.0, "k:", lw=1, label="1x")
     ax.plot(camp.critical_speeds_rpm, camp.critical_speeds_rpm / 60.0, "o", mfc="none",
             color="k", ms=9, label="model critical speeds")
@@ -134,9 +131,11 @@ def plot_campbell_runup(camp, measured: dict[str, list[float]], path: Path) -> P
         ax.plot(v, v / 60.0, mk, ms=7, label=f"measured ({label})")
     ax.set_xlabel("speed (rpm)")
     ax.set_ylabel("frequency (Hz)")
-    ax.set_ylim(0, max(sp[-1] / 60.0 * 1.6, 1.0))
+    ax.set_ylim(0, top)
     ax.legend(fontsize=8)
-    ax.set_title("Campbell: model vs critical speeds from run-ups")
+    more = f"\n({hidden} of the model's {camp.frequency_hz.shape[1]} modes lie above " \
+        f"{top:.0f} Hz, not shown)" if hidden else ""
+    ax.set_title(f"Campbell: model vs critical speeds from run-ups{more}", fontsize=10)
     return _save(plt, fig, path)
 
 
@@ -168,8 +167,10 @@ def plot_waterfall(record, path: Path, channel: str = "tool_x") -> Path:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     sp = record.speed_at(t)
     keep = f < 1200
-    ax.pcolormesh(sp, f[keep], 10 * np.log10(S[keep] + 1e-40), shading="auto")
-    ax.plot(sp, sp / 60.0, "w:", lw=1)
+    mesh = ax.pcolormesh(sp, f[keep], 10 * np.log10(S[keep] + 1e-40), shading="auto")
+    fig.colorbar(mesh, ax=ax, label="PSD (dB re 1 m²/Hz)")
+    ax.plot(sp, sp / 60.0, "w:", lw=1, label="1x")
+    ax.legend(fontsize=8, loc="upper left")
     ax.set_xlabel("speed (rpm)")
     ax.set_ylabel("frequency (Hz)")
     ax.set_title(f"{record.kind} waterfall (spectrogram), {channel}")

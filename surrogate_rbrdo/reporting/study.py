@@ -8,7 +8,7 @@ a timing column, so reruns with one seed give byte-identical tables).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -73,6 +73,26 @@ def verification_rows(ver: Verification) -> list[dict[str, Any]]:
                                                           strict=True)})
         rows.append(row)
     return rows
+
+
+def verification_fe(rows: Iterable[Mapping[str, str]]) -> dict[str, dict[str, Any]]:
+    """``verification.csv`` read back (rows as ``csv.DictReader`` gives them): per design,
+    ``x`` and the FE model's ``n``, ``mean``, ``std`` (m), ``pf``, ``pf_ci`` (fractions).
+
+    >>> row = {"design": "baseline", "preload_N": "2000", "span_mm": "465.8",
+    ...        "diameter_mm": "65", "mean_um_fe": "21", "std_um_fe": "9.5", "pf_pct_fe": "50",
+    ...        "pf_ci_low_pct_fe": "40", "pf_ci_high_pct_fe": "60", "n_theta_fe": "100"}
+    >>> verification_fe([row])["baseline"]["pf_ci"]
+    (0.4, 0.6)
+    """
+    out = {}
+    for r in rows:
+        out[r["design"]] = {
+            "x": tuple(float(r[k]) for k in DESIGN_NAMES), "n": int(r["n_theta_fe"]),
+            "mean": float(r["mean_um_fe"]) * 1e-6, "std": float(r["std_um_fe"]) * 1e-6,
+            "pf": float(r["pf_pct_fe"]) / 100,
+            "pf_ci": (float(r["pf_ci_low_pct_fe"]) / 100, float(r["pf_ci_high_pct_fe"]) / 100)}
+    return out
 
 
 def strategy_rows(opt: Optimisation, ver: Verification) -> list[dict[str, Any]]:
@@ -232,4 +252,5 @@ def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt:
 
 
 __all__ = ["compromise_rows", "front_figures", "front_rows", "mbr_rows", "refine_rows",
-           "spindle_figures", "spotlight", "strategy_rows", "study_meta", "verification_rows"]
+           "spindle_figures", "spotlight", "strategy_rows", "study_meta", "verification_fe",
+           "verification_rows"]

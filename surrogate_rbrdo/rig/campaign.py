@@ -53,23 +53,49 @@ def _default_speeds() -> tuple[float, ...]:
 
 
 @dataclass(frozen=True)
+class SpeedGrid:
+    """``num`` speeds uniformly from ``start`` to ``stop`` rpm (``numpy.linspace``): the
+    config form ``speeds_rpm = { start = 1000.0, stop = 24000.0, num = 50 }``.
+
+    >>> SpeedGrid(1000.0, 3000.0, 3).speeds()
+    (1000.0, 2000.0, 3000.0)
+    """
+
+    start: float
+    stop: float
+    num: int
+
+    def __post_init__(self) -> None:
+        check_positive("start", self.start)
+        check_int("num", self.num, minimum=1)
+        if not (self.stop > self.start or (self.num == 1 and self.stop == self.start)):
+            raise ValueError(f"stop = {self.stop} is not allowed: must be > start = "
+                             f"{self.start}")
+
+    def speeds(self) -> tuple[float, ...]:
+        return tuple(np.linspace(self.start, self.stop, self.num).tolist())
+
+
+@dataclass(frozen=True)
 class CampaignOptions:
     """What to measure (defaults: the paper's campaign; see ``docs/rig.md``).
 
-    ``runup``: ``(start_rpm, end_rpm, duration_s)`` of the run-up (and the reverse run-down if
-    ``rundown``), ``None`` for none; impacts: hits per direction (x, y) at the tool tip.
+    ``speeds_rpm``: the steady-state speeds, a list or a :class:`SpeedGrid`; ``runup``:
+    ``(start_rpm, end_rpm, duration_s)`` of the run-up (and the reverse run-down if
+    ``rundown``), ``None`` or ``()`` (``runup = []`` in a config) for none; impacts: hits per
+    direction (x, y) at the tool tip.
     ``trial_unbalance``: ``(position_mm, magnitude_kgm, phase_deg)`` of a known trial mass;
     every run then measures each speed twice, without and with it (record ids ``..._trial``,
     label ``trial = 1``, the mass in the record's ``provenance["test_setup"]``): the
     difference isolates a known excitation (influence-coefficient practice, ISO 21940-13).
     """
 
-    speeds_rpm: tuple[float, ...] = field(default_factory=_default_speeds)
+    speeds_rpm: tuple[float, ...] | SpeedGrid = field(default_factory=_default_speeds)
     repeats: int = 20
     duration_s: float = 1.0
     builds: int = 1
     tools_per_build: int = 1
-    runup: tuple[float, float, float] | None = (1000.0, 24000.0, 10.0)
+    runup: tuple[float, float, float] | tuple[()] | None = (1000.0, 24000.0, 10.0)
     rundown: bool = True
     impacts_per_direction: int = 5
     impact_duration_s: float = 1.0
@@ -77,6 +103,8 @@ class CampaignOptions:
     trial_unbalance: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
+        if isinstance(self.speeds_rpm, SpeedGrid):
+            object.__setattr__(self, "speeds_rpm", self.speeds_rpm.speeds())
         sp = np.asarray(self.speeds_rpm, float)
         if sp.ndim != 1 or sp.size == 0 or np.any(sp <= 0) or np.any(np.diff(sp) <= 0):
             raise ValueError(f"speeds_rpm = {self.speeds_rpm} is not allowed: a strictly "
@@ -87,6 +115,8 @@ class CampaignOptions:
         check_int("impacts_per_direction", self.impacts_per_direction, minimum=0)
         check_positive("duration_s", self.duration_s)
         check_positive("impact_duration_s", self.impact_duration_s)
+        if self.runup == ():
+            object.__setattr__(self, "runup", None)
         if self.runup is not None:
             a, b, d = self.runup
             if not (0 < a < b and d > 0):
@@ -158,7 +188,7 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     for b in range(options.builds):
         for tl in range(options.tools_per_build):
             st0 = truth.state(root_ss, build=b, tool=tl, run=0)
-            check_stable(st0.model(), st0.theta, _stability_speeds(options))
+            check_stable(st0.model(), st0.theta, stability_speeds(options))
             for r in range(options.repeats):
                 st = truth.state(root_ss, build=b, tool=tl, run=r)
                 for trial in (False, True) if options.trial_unbalance else (False,):
@@ -199,12 +229,58 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                           tuple(impacts))
 
 
-def _stability_speeds(o: CampaignOptions) -> np.ndarray:
+def stability_speeds(o: CampaignOptions) -> np.ndarray:
     """Speeds at which the truth must be stable: the campaign's speeds and the ramp's range."""
     sp = list(o.speeds_rpm)
     if o.runup is not None:
         sp += np.linspace(o.runup[0], o.runup[1], 12).tolist()
     return np.unique(sp)
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """What a campaign writes and holds (an estimate, made before any work).
+
+    Disk: every record's samples (``daq.bits`` ≤ 16: 2 bytes, else 4) plus ~24 kB of
+    metadata (its provenance), and ``phasors.csv``. Memory above the interpreter's: the
+    largest of one run's steady records (all its speeds are held until written, ~128 bytes
+    per channel and sample of temporaries besides), one ramp (~96 bytes per channel and
+    sample: integration, driver filter in the frequency domain) and one impact (integrated at
+    4x the sample rate), plus 128 MB for what the report loads. Those per-sample costs were
+    measured with ``resource.getrusage`` (``benchmarks/bench_rig.py`` prints the estimate
+    beside the measured peak).
+    """
+
+    n_records: int
+    disk_bytes: float
+    memory_bytes: float
+    memory_by: str      # the option sizing the memory: duration_s, runup, impact_duration_s
+
+
+def footprint(options: CampaignOptions) -> Footprint:
+    """The :class:`Footprint` of a campaign.
+
+    >>> f = footprint(CampaignOptions())     # the paper's campaign
+    >>> f.n_records, round(f.disk_bytes / 1e6), round(f.memory_bytes / 1e6), f.memory_by
+    (1012, 169, 195, 'runup')
+    """
+    o, daq = options, options.sensors.daq
+    n_ch = len(o.sensors.probe_channels) + 1
+    item = np.dtype(daq.dtype).itemsize
+    n_s = round(o.duration_s * daq.sample_rate_hz)
+    n_r = 0 if o.runup is None else round(o.runup[2] * daq.sample_rate_hz)
+    n_i = round(o.impact_duration_s * daq.sample_rate_hz)
+    per_tool = o.builds * o.tools_per_build
+    steady = per_tool * o.repeats * len(o.speeds_rpm) * (1 + (o.trial_unbalance is not None))
+    ramps = per_tool * (0 if o.runup is None else 1 + o.rundown)
+    hits = per_tool * 2 * o.impacts_per_direction
+    meta = 24e3
+    disk = (steady * (n_ch * n_s * item + meta + 160.0 * (n_ch - 1))
+            + ramps * (n_ch * n_r * item + meta) + hits * (n_ch * n_i * item + meta))
+    memory = {"duration_s": n_ch * n_s * (len(o.speeds_rpm) * item + 128.0),
+              "runup": n_ch * n_r * 96.0, "impact_duration_s": n_ch * 4 * n_i * 48.0 * (hits > 0)}
+    by = max(memory, key=memory.get)
+    return Footprint(steady + ramps + hits, float(disk), memory[by] + 128e6, by)
 
 
 def _n_extra(o: CampaignOptions) -> int:

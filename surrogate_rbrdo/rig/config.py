@@ -1,78 +1,103 @@
-"""The ``[rig]`` table of an experiment config → a truth and campaign options.
+"""The ``[rig]`` table of an experiment config: its schema, and the truth and campaign options
+it describes.
 
-Everything has a documented default (``docs/rig.md``); the truth's hidden effects are given
-as ``effects = [{ name = "<registry name>", <parameters> }, ...]``, the same form as
-``[spindle] effects``. Unknown keys raise a ``ValueError`` naming the table.
+The tables are frozen dataclasses; the runner checks a config's ``[rig]`` against them
+(pydantic, strict: every key, type and range, errors naming the dotted path), and a Python
+user constructs them directly. Everything has a documented default (``docs/rig.md``); the
+truth's hidden effects are ``effects = [{ name = "<registry name>", <parameters> }, ...]``,
+the same form as ``[spindle] effects``.
 
->>> cfg = rig_config_from_dict({"effects": [{"name": "cross_coupling", "kappa": 0.05}],
-...                             "campaign": {"repeats": 2}})
+* :class:`RigTruthTable` — the truth and how it is measured: ``effects``, ``variability``
+  (:class:`~surrogate_rbrdo.rig.truth.Variability`), ``sensors``
+  (:class:`~surrogate_rbrdo.rig.sensors.SensorSet`); the ``[rig]`` of a validation.
+* :class:`RigTable` — adds the campaign: ``design`` (``[F N, L mm, D mm]`` of the truth,
+  default the reference baseline), ``campaign``
+  (:class:`~surrogate_rbrdo.rig.campaign.CampaignOptions` without ``sensors``) and
+  ``figures``; the ``[rig]`` of a rig campaign.
+
+>>> t = RigTable(effects=({"name": "cross_coupling", "kappa": 0.05},),
+...              campaign=CampaignOptions(repeats=2))
+>>> cfg = t.config()
 >>> [e.name for e in cfg.truth.hidden], cfg.options.repeats, len(cfg.options.speeds_rpm)
 (['cross_coupling'], 2, 50)
+>>> RigTable(design=(2000.0, 900.0, 65.0))
+Traceback (most recent call last):
+...
+ValueError: design span_mm = 900.0 is not allowed: must lie in [300.0, 750.0]
 """
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_keys
 from surrogate_rbrdo.rig.campaign import CampaignOptions
-from surrogate_rbrdo.rig.sensors import (
-    DAQModel,
-    HammerModel,
-    KeyphasorModel,
-    ProbeModel,
-    SensorSet,
-)
+from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth
-
-SENSOR_PARTS = {"probe": ProbeModel, "daq": DAQModel, "keyphasor": KeyphasorModel,
-                "hammer": HammerModel}
+from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict
+from surrogate_rbrdo.spindle.reference import reference_spindle
 
 
 @dataclass(frozen=True)
 class RigConfig:
-    """A parsed ``[rig]`` table: the truth, the campaign options and whether to draw figures."""
+    """A ``[rig]`` table made into objects: the truth, the campaign options (with the
+    sensors) and whether to draw figures."""
 
     truth: Truth
     options: CampaignOptions
     figures: bool = True
 
 
-def _build(cls: type, data: Mapping[str, Any], where: str) -> Any:
-    check_keys(where, data, {f.name for f in dataclasses.fields(cls)})
-    kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
-    return cls(**kw)
+@dataclass(frozen=True)
+class RigTruthTable:
+    """The rig's truth and its sensors: hidden ``effects`` (added to the reference spindle's
+    own), ``variability``, ``sensors``."""
+
+    effects: tuple[dict[str, Any], ...] = ()
+    variability: Variability = field(default_factory=Variability)
+    sensors: SensorSet = field(default_factory=SensorSet)
+
+    def __post_init__(self) -> None:
+        self.hidden()
+
+    def hidden(self) -> tuple[Effect, ...]:
+        """The hidden effects (each checked: registry name, parameters)."""
+        out = []
+        for i, e in enumerate(self.effects):
+            try:
+                out.append(effect_from_dict(dict(e)))
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"effects[{i}]: {exc}") from None
+        return tuple(out)
+
+    def truth(self, x: np.ndarray | None = None) -> Truth:
+        """The reference spindle (design ``x``, default the baseline) as the rig's truth."""
+        return reference_truth(self.hidden(), self.variability, x)
 
 
-def rig_config_from_dict(data: Mapping[str, Any]) -> RigConfig:
-    """Parse ``{"effects": [...], "design": [F, L, D], "variability": {...},
-    "sensors": {"probe": {...}, "daq": {...}, "keyphasor": {...}, "hammer": {...},
-    "targets": [...], "noise": true}, "campaign": {...}, "figures": true}``."""
-    check_keys("rig", data, {"effects", "design", "variability", "sensors", "campaign",
-                             "figures"})
-    var = _build(Variability, data.get("variability", {}), "rig.variability")
-    sdata = dict(data.get("sensors", {}))
-    check_keys("rig.sensors", sdata, set(SENSOR_PARTS) | {"targets", "noise"})
-    parts = {k: _build(cls, sdata.get(k, {}), f"rig.sensors.{k}")
-             for k, cls in SENSOR_PARTS.items()}
-    sensors = SensorSet(**parts, targets=tuple(sdata.get("targets", ("front", "rear", "tool"))),
-                        noise=bool(sdata.get("noise", True)))
-    camp = dict(data.get("campaign", {}))
-    check_keys("rig.campaign", camp, {f.name for f in dataclasses.fields(CampaignOptions)}
-               - {"sensors"})
-    if "speeds_rpm" in camp and isinstance(camp["speeds_rpm"], Mapping):
-        sp = camp["speeds_rpm"]
-        check_keys("rig.campaign.speeds_rpm", sp, {"start", "stop", "num"})
-        camp["speeds_rpm"] = tuple(np.linspace(sp["start"], sp["stop"], sp["num"]).tolist())
-    options = _build(CampaignOptions, {**camp}, "rig.campaign")
-    options = dataclasses.replace(options, sensors=sensors)
-    design = data.get("design")
-    truth = reference_truth(hidden=[dict(e) for e in data.get("effects", [])],
-                            variability=var,
-                            x=None if design is None else np.asarray(design, float))
-    return RigConfig(truth, options, bool(data.get("figures", True)))
+@dataclass(frozen=True)
+class RigTable(RigTruthTable):
+    """A rig campaign's ``[rig]``: the truth, its ``design``, the ``campaign`` (its sensors
+    are ``[rig.sensors]``) and ``figures``."""
+
+    design: tuple[float, float, float] | None = None
+    campaign: CampaignOptions = field(default_factory=CampaignOptions)
+    figures: bool = True
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.campaign.sensors != SensorSet():
+            raise ValueError("campaign.sensors is not allowed: the sensors are [rig.sensors]")
+        if self.design is not None:     # "design span_mm = 900.0 is not allowed: ..."
+            reference_spindle().design_map.check(np.asarray(self.design, float))
+
+    def config(self) -> RigConfig:
+        """The truth (at ``design``) and the campaign options with ``sensors``."""
+        x = None if self.design is None else np.asarray(self.design, float)
+        return RigConfig(self.truth(x), replace(self.campaign, sensors=self.sensors),
+                         self.figures)
+
+
+__all__ = ["RigConfig", "RigTable", "RigTruthTable"]

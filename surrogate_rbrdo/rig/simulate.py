@@ -27,7 +27,8 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.rig.integrate import IntegratorOptions, SpeedProfile, simulate
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import Installation, SensorSet
-from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+from surrogate_rbrdo.rig.truth import Truth
+from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel, build_model
 from surrogate_rbrdo.spindle.harmonic import unbalance_response
 from surrogate_rbrdo.spindle.modal import modal_analysis
 
@@ -68,6 +69,13 @@ def check_stable(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarray)
                 f"the truth is unstable at {s:.6g} rpm: the {m.frequency_hz[k]:.4g} Hz "
                 f"{m.whirl[k]} mode has damping ratio {m.damping_ratio[k]:.3g} (cross-coupling "
                 "too strong for the damping?); no steady state to measure")
+
+
+def check_nominal_stable(truth: Truth, speeds_rpm: np.ndarray) -> None:
+    """:func:`check_stable` for the truth without its variability (θ = 1): a check before a
+    campaign (which checks every drawn truth again)."""
+    model = build_model(truth.geometry, truth.all_effects, theta_bearings=truth.theta_bearings)
+    check_stable(model, np.ones((1, len(truth.theta_bearings))), speeds_rpm)
 
 
 def keyphasor_volts(sensors: SensorSet, angle: np.ndarray) -> np.ndarray:

@@ -19,7 +19,7 @@ from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.runner.kinds import Kind, StageContext, discover
 from surrogate_rbrdo.runner.runfolder import RunFolder, json_default
 from surrogate_rbrdo.runner.schema import load_toml, parse
-from surrogate_rbrdo.runner.tables import ExperimentTable
+from surrogate_rbrdo.runner.tables import ExperimentTable, require_disk
 
 
 class Terminated(BaseException):  # noqa: N818 - a signal, like KeyboardInterrupt
@@ -116,11 +116,14 @@ def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = 
     or :class:`~surrogate_rbrdo.runner.runfolder.AlreadyComplete`.
     """
     prep = prepare(config_path, seed=seed)
+    need = getattr(prep.plan, "disk_need", None)     # (field, value, bytes, what)
+    if need is not None and not resume:
+        require_disk(*need, Path(results_dir or prep.experiment.results_dir))
     run = _open(prep, results_dir, run_id, resume=resume, overwrite=overwrite)
     run.start(kind=prep.kind.name, seeds={"seed": prep.experiment.seed})
     ctx = StageContext(seed=prep.experiment.seed, progress=progress,
                        label=f"{prep.experiment.name}/{run.run_id}",
-                       cache_dir=run.path.parent / "_fe_cache")
+                       cache_dir=run.path.parent / "_fe_cache", run_dir=run.path)
     try:
         done = _stages(prep, run, ctx)
         t0 = time.perf_counter()

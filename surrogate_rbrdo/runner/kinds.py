@@ -10,7 +10,8 @@ module in ``surrogate_rbrdo/runner/experiments/`` (every module there is importe
 * ``build(config, base_dir) -> plan``: turns the validated tables into the objects the stages
   use (a spindle, a problem, options); raises ``ValueError`` naming the dotted path; runs
   before the run folder exists, so a rejected config leaves nothing behind. Default: the
-  config itself.
+  config itself. A plan that writes much may say so in ``disk_need = (field, value, bytes,
+  what)``; a new run is refused if the results root has less free space.
 * ``stages``: ``Stage(name, func)``, ``func(plan, done, ctx) -> result`` with ``done`` the
   results of the stages before (by name) and ``ctx`` a :class:`StageContext`. The result
   (a frozen dataclass) is pickled into the run folder when the stage ends, so ``--resume``
@@ -25,12 +26,14 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.runner import experiments
@@ -44,13 +47,35 @@ class StageContext:
 
     ``stream(i)`` is the ``i``-th child generator of the experiment's seed (the same on every
     resume, whatever ran before); ``cache_dir`` holds FE results shared by the runs of one
-    experiment; ``label`` (``experiment/run-id``) prefixes progress bars.
+    experiment; ``run_dir`` is the run folder, where a stage may stream output that it
+    resumes itself (a dataset written record by record); ``label`` (``experiment/run-id``)
+    prefixes progress bars; ``bar(what)`` is a progress callback for library loops.
     """
 
     seed: int
     progress: bool
     label: str
     cache_dir: Path
+    run_dir: Path
+
+    @contextmanager
+    def bar(self, what: str, unit: str = "it") -> Iterator[Callable[[int, int, str], None]]:
+        """A ``progress(done, total, label)`` callback drawing a bar ``<label> <what>`` that
+        shows the item in progress (does nothing without ``progress``)."""
+        if not self.progress:
+            yield lambda done, total, item: None
+            return
+        bar = tqdm(desc=f"{self.label} {what}", unit=unit, leave=False)
+
+        def update(done: int, total: int, item: str) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+            bar.set_postfix_str(item)
+
+        try:
+            yield update
+        finally:
+            bar.close()
 
     def seed_sequence(self, i: int) -> np.random.SeedSequence:
         """Child ``i`` of the experiment seed (``default_rng(seed).spawn(n)[i]``'s seeds)."""

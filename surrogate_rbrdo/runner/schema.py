@@ -45,6 +45,7 @@ WHAT = {
     "dataclass_type": "a table", "dict_type": "a table", "model_type": "a table",
     "mapping_type": "a table", "finite_number": "a finite number",
 }
+SCALARS = {str: "a string", float: "a number", int: "an integer", bool: "true or false"}
 
 
 def load_toml(path: str | Path, what: str = "config file") -> dict[str, Any]:
@@ -87,14 +88,36 @@ def _unwrap(tp: Any) -> Any:
     return tp
 
 
+def _members(tp: Any) -> dict[str, Any]:
+    """The members of a union of two or more types (``X | Y``) by pydantic's tag, the name it
+    puts into an error's location (``"tuple[float, ...]"``, ``"dict[str,float]"``)."""
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if typing.get_origin(tp) not in (typing.Union, types.UnionType) or len(args) < 2:
+        return {}
+    return {_tag(a.__name__ if isinstance(a, type) else str(a)): a for a in args}
+
+
+def _tag(name: str) -> str:
+    """A union member's name as pydantic writes it (``tuple[()]`` is ``tuple[]``)."""
+    return name.replace(" ", "").replace("()", "")
+
+
+def _is_tag(cls: Any, head: tuple[Any, ...], part: Any) -> bool:
+    """Whether ``part`` of a location after ``head`` names a union member (not a key)."""
+    return isinstance(part, str) and _tag(part) in _members(type_at(cls, head))
+
+
 def type_at(cls: Any, loc: tuple[Any, ...]) -> Any:
     """The annotation reached from ``cls`` along ``loc`` (dataclass fields, mapping values,
-    tuple items); ``None`` when the path leaves the schema."""
+    tuple items, union members by their tag); ``None`` when the path leaves the schema."""
     tp = cls
     for part in loc:
         tp = _unwrap(tp)
         origin, args = typing.get_origin(tp), typing.get_args(tp)
-        if dataclasses.is_dataclass(tp) and isinstance(part, str):
+        member = _members(tp).get(_tag(part)) if isinstance(part, str) else None
+        if member is not None:
+            tp = member
+        elif dataclasses.is_dataclass(tp) and isinstance(part, str):
             tp = typing.get_type_hints(tp).get(part)
         elif origin in (dict, Mapping, abc.Mapping) and len(args) == 2:
             tp = args[1]
@@ -140,9 +163,40 @@ def _array(cls: type, loc: tuple[Any, ...]) -> str:
     return f"an array of {size}numbers, e.g. [{example}]"
 
 
-def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
+def _shown(cls: type, loc: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``loc`` without union-member tags (the path a user wrote)."""
+    return tuple(p for i, p in enumerate(loc) if not _is_tag(cls, loc[:i], p))
+
+
+def _mismatch(cls: type, err: Mapping[str, Any]) -> bool:
+    """An error saying only that the value does not have one union member's shape."""
+    loc = tuple(err["loc"][1:])
+    return bool(loc) and err["type"].endswith("_type") and _is_tag(cls, loc[:-1], loc[-1])
+
+
+def _either(cls: type, loc: tuple[Any, ...]) -> str:
+    """What a union at ``loc`` allows: ``an array of numbers, ... or a table {a, b}``."""
+    out = []
+    for member in _members(type_at(cls, loc)).values():
+        if dataclasses.is_dataclass(member):
+            out.append(f"a table {{{', '.join(f.name for f in dataclasses.fields(member))}}}")
+        elif typing.get_origin(member) in (dict, abc.Mapping):
+            out.append("a table")
+        elif typing.get_origin(member) is tuple:
+            out.append(_array(member, ()))
+        else:
+            out.append(SCALARS.get(member, str(member)))
+    return " or ".join(out)
+
+
+def _message(cls: type, err: Mapping[str, Any], where: str, union: bool = False) -> str:
     loc = tuple(err["loc"][1:])          # drop the wrapper field
-    path = ".".join(p for p in (where, dotted(loc)) if p)
+    if union:                            # the value has the shape of no member of a union
+        path = ".".join(p for p in (where, dotted(_shown(cls, loc[:-1]))) if p)
+        return (f"{path} = {_short(err.get('input'))} is not allowed: must be "
+                f"{_either(cls, loc[:-1])}")
+    shown = _shown(cls, loc)
+    path = ".".join(p for p in (where, dotted(shown)) if p)
     kind = err["type"]
     if kind in ("unexpected_keyword_argument", "extra_forbidden"):
         allowed = fields_at(cls, loc[:-1])
@@ -150,14 +204,14 @@ def _message(cls: type, err: Mapping[str, Any], where: str) -> str:
                                                                       Mapping) else "key"
         return f"unknown {what} {path}; allowed: {sorted(allowed or [])}"
     if kind in ("missing", "missing_argument") and loc and isinstance(loc[-1], int):
-        parent = ".".join(p for p in (where, dotted(loc[:-1])) if p)
+        parent = ".".join(p for p in (where, dotted(shown[:-1])) if p)
         return (f"{parent} = {_short(err.get('input'))} is not allowed: must be "
                 f"{_array(cls, loc[:-1])}")
     if kind in ("missing", "missing_argument"):
         return f"{path} is missing: it is required"
     if kind == "value_error":
         msg = str(err["ctx"]["error"])
-        last = str(loc[-1]) if loc else where.rsplit(".", 1)[-1]
+        last = str(shown[-1]) if shown else where.rsplit(".", 1)[-1]
         if msg.startswith(f"{last}."):
             msg = msg[len(last) + 1:]
         first = msg.split(" ", 1)[0].split("[", 1)[0].split(".", 1)[0]
@@ -203,7 +257,9 @@ def parse(cls: type, data: Any, where: str = "") -> Any:
     try:
         return _adapter(cls).validate_json(text).value
     except ValidationError as exc:
-        raise ValueError(_message(cls, exc.errors()[0], where)) from None
+        errors = exc.errors()
+        fits = [e for e in errors if not _mismatch(cls, e)]
+        raise ValueError(_message(cls, (fits or errors)[0], where, union=not fits)) from None
 
 
 __all__ = ["dotted", "fields_at", "load_toml", "parse", "type_at"]

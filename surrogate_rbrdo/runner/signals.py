@@ -40,8 +40,10 @@ def _terminate(signum: int, frame: Any) -> None:
 
 
 def _relay(main_ident: int, stop: threading.Event) -> None:
+    # a short poll: leaving ``handled_signals`` joins this thread, so every ``rbrdo run``
+    # (and every test of the CLI) waits up to one poll on exit
     while not stop.is_set():
-        if signal.sigtimedwait({signal.SIGINT}, 0.2) is not None:
+        if signal.sigtimedwait({signal.SIGINT}, 0.02) is not None:
             _thread.interrupt_main(signal.SIGINT)
             signal.pthread_kill(main_ident, signal.SIGUSR1)   # wake a blocking wait
 

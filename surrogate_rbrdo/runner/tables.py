@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -246,6 +247,18 @@ def require_memory(field: str, value: Any, nbytes: float, detail: str) -> None:
                          f"GB of memory, more than the {have / 1e9:.3g} GB available")
 
 
+def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str | Path) -> None:
+    """Refuse ``field = value`` if what it writes (``nbytes``) exceeds the free space of the
+    file system holding ``root`` (or its nearest existing parent)."""
+    p = Path(root).absolute()
+    while not p.exists():
+        p = p.parent
+    free = shutil.disk_usage(p).free
+    if nbytes > free:
+        raise ValueError(f"{field} = {value!r} is not allowed: {detail} need ~{nbytes / 1e9:.3g} "
+                         f"GB of disk, more than the {free / 1e9:.3g} GB free under {str(p)!r}")
+
+
 __all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",
            "SpindleTable", "UncertaintyTable", "available_memory", "build_inputs",
-           "build_spindle", "require_memory"]
+           "build_spindle", "require_disk", "require_memory"]

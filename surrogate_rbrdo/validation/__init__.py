@@ -12,7 +12,13 @@ several designs on the rig's truth, Table 7's paired statistics, and model vs me
 """
 
 from surrogate_rbrdo.validation.agreement import Verdict
-from surrogate_rbrdo.validation.campaign import DesignResult, ValidationResult, validate_designs
+from surrogate_rbrdo.validation.campaign import (
+    DesignResult,
+    ValidationResult,
+    add_model,
+    measure_designs,
+    validate_designs,
+)
 from surrogate_rbrdo.validation.model import (
     ModelPrediction,
     ModelSpec,
@@ -49,6 +55,8 @@ __all__ = [
     "ValidationOptions",
     "ValidationResult",
     "Verdict",
+    "add_model",
+    "measure_designs",
     "min_detectable_d_z",
     "paired_comparison",
     "paired_power",

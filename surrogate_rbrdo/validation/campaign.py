@@ -16,15 +16,17 @@ True
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.rig.simulate import check_stable
+from surrogate_rbrdo.rig.simulate import check_nominal_stable, check_stable
 from surrogate_rbrdo.spindle.modal import Campbell
 from surrogate_rbrdo.validation.agreement import Verdict, compare_moments, holm
 from surrogate_rbrdo.validation.measure import (
@@ -101,7 +103,9 @@ class ValidationResult:
         return {} if self.model is None else self.model.campbell
 
 
-def _check_designs(designs: Mapping[str, Sequence[float]], baseline: str | None) -> str:
+def check_designs(designs: Mapping[str, Sequence[float]], baseline: str | None) -> str:
+    """The baseline's name; raises ``ValueError`` for fewer than two designs, a name that
+    cannot name a file, or an unknown ``baseline``."""
     if len(designs) < 2:
         raise ValueError(f"designs has {len(designs)} entries: need a baseline and at least "
                          "one other design")
@@ -113,6 +117,31 @@ def _check_designs(designs: Mapping[str, Sequence[float]], baseline: str | None)
     if base not in designs:
         raise ValueError(f"baseline = {baseline!r} is not allowed: one of {list(designs)}")
     return base
+
+
+def file_label(name: str) -> str:
+    """A design label that can name files.
+
+    >>> file_label("rbrdo 5%"), file_label("rdo/x, y")
+    ('rbrdo_5pct', 'rdo_x_y')
+    """
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name.replace("%", "pct"))
+
+
+def check_nominal_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]],
+                          options: ValidationOptions) -> None:
+    """Every design in the truth's design map and, without the truth's variability, stable at
+    the speeds it will run (``measure_designs`` checks each drawn truth again); the error
+    names the design."""
+    o = options
+    speeds = np.unique(np.r_[np.linspace(*o.speed_range_rpm, 12), o.rated_speed_rpm, o.ramp_rpm])
+    for name, x in designs.items():
+        try:
+            check_nominal_stable(truth.at(x), speeds)
+        except ValueError as exc:
+            raise ValueError(f"designs.{name}: {exc}") from None
+        except ModelError as exc:
+            raise ModelError(f"design {name!r}: {exc}") from None
 
 
 def _measure_design(i: int, name: str, x, states, o: ValidationOptions, inst, ss,
@@ -141,30 +170,14 @@ def _measure_design(i: int, name: str, x, states, o: ValidationOptions, inst, ss
         tuple(st.draws for st in states), sum(m.n_records for m in reps))
 
 
-def validate_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]], *,
-                     options: ValidationOptions = DEFAULT_OPTIONS,
-                     rng: np.random.Generator, model: ModelSpec | None = None,
-                     progress: Progress | None = None) -> ValidationResult:
-    """Build every design on the rig's truth, measure ``options.n_replications`` paired
-    replications of each, compare each design with the baseline (Table 7's analogue) and,
-    with a ``model``, its μ, σ, P_f, band and Campbell diagram with the measurement.
-
-    Parameters
-    ----------
-    truth : TruthFamily
-        The rig's truth for any design (hidden effects, variability, design map).
-    designs : mapping name -> x
-        Designs in the truth's design map (the baseline first unless ``options.baseline``).
-    rng : numpy.random.Generator
-        Root of every draw (truth, sensors, noise, bootstrap, model samples), addressed by
-        key so the same seed gives the same spindles whatever else is measured.
-    model : ModelSpec, optional
-        The model the study used (responses and random vector).
-    progress : callable(done, total, label), optional
-    """
+def measure_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]], *,
+                    options: ValidationOptions = DEFAULT_OPTIONS, rng: np.random.Generator,
+                    progress: Progress | None = None) -> ValidationResult:
+    """The rig's side of :func:`validate_designs`: measurements and Table 7's comparisons,
+    without a model (``model`` None, no verdicts; :func:`add_model` adds them)."""
     require_rng(rng)
     o = options
-    base = _check_designs(designs, o.baseline)
+    base = check_designs(designs, o.baseline)
     names = [base] + [k for k in designs if k != base]
     ordered = {k: designs[k] for k in names}
     t0 = time.perf_counter()
@@ -183,20 +196,54 @@ def validate_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]],
                         alpha=o.alpha, power=o.power, n_boot=o.n_boot)
         for d in results[1:] for q in ("peak", "rated"))
     t2 = time.perf_counter()
-    pred, verdicts = None, ()
-    if model is not None:
-        pred = predict_model(model, ordered, delta_lim_m=o.delta_lim_m, confidence=o.confidence,
-                             rng=np.random.default_rng(child_seed(ss, 6)),
-                             speeds_rpm=o.speeds_rpm,
-                             band_samples=o.band_samples,
-                             campbell_speeds_rpm=np.linspace(
-                                 0.0, CAMPBELL_OVERSPEED * o.speed_range_rpm[1],
-                                 o.campbell_speeds))
-        raw = [v for d in results for q, m in pred.moments[d.name].items()
-               for v in compare_moments(d.name, q, d.moments[q], m, u_cal=o.u_calibration)]
-        verdicts = tuple(holm(raw, o.alpha))
-    t3 = time.perf_counter()
     return ValidationResult(
-        o, base, results, comps, pred, verdicts, o.sensors.probe_channels, inst.to_dict(),
+        o, base, results, comps, None, (), o.sensors.probe_channels, inst.to_dict(),
         {"entropy": str(ss.entropy), "spawn_key": list(ss.spawn_key)},
-        {"measure_s": t1 - t0, "statistics_s": t2 - t1, "model_s": t3 - t2, "total_s": t3 - t0})
+        {"measure_s": t1 - t0, "statistics_s": t2 - t1, "model_s": 0.0, "total_s": t2 - t0})
+
+
+def add_model(result: ValidationResult, model: ModelSpec, *, rng: np.random.Generator
+              ) -> ValidationResult:
+    """``result`` with the model's μ, σ, P_f, band and Campbell diagram of every design and
+    the verdicts model vs measurement; ``rng`` is the generator the measurement had (its
+    stream for the model is addressed by key, as in :func:`validate_designs`)."""
+    require_rng(rng)
+    o, t0 = result.options, time.perf_counter()
+    ss = rng.bit_generator.seed_seq
+    ordered = {d.name: d.x for d in result.designs}
+    pred = predict_model(model, ordered, delta_lim_m=o.delta_lim_m, confidence=o.confidence,
+                         rng=np.random.default_rng(child_seed(ss, 6)), speeds_rpm=o.speeds_rpm,
+                         band_samples=o.band_samples,
+                         campbell_speeds_rpm=np.linspace(
+                             0.0, CAMPBELL_OVERSPEED * o.speed_range_rpm[1], o.campbell_speeds))
+    raw = [v for d in result.designs for q, m in pred.moments[d.name].items()
+           for v in compare_moments(d.name, q, d.moments[q], m, u_cal=o.u_calibration)]
+    dt = time.perf_counter() - t0
+    timings = {**result.timings, "model_s": dt, "total_s": result.timings["total_s"] + dt}
+    return replace(result, model=pred, verdicts=tuple(holm(raw, o.alpha)), timings=timings)
+
+
+def validate_designs(truth: TruthFamily, designs: Mapping[str, Sequence[float]], *,
+                     options: ValidationOptions = DEFAULT_OPTIONS,
+                     rng: np.random.Generator, model: ModelSpec | None = None,
+                     progress: Progress | None = None) -> ValidationResult:
+    """Build every design on the rig's truth, measure ``options.n_replications`` paired
+    replications of each, compare each design with the baseline (Table 7's analogue) and,
+    with a ``model``, its μ, σ, P_f, band and Campbell diagram with the measurement
+    (:func:`measure_designs`, then :func:`add_model`).
+
+    Parameters
+    ----------
+    truth : TruthFamily
+        The rig's truth for any design (hidden effects, variability, design map).
+    designs : mapping name -> x
+        Designs in the truth's design map (the baseline first unless ``options.baseline``).
+    rng : numpy.random.Generator
+        Root of every draw (truth, sensors, noise, bootstrap, model samples), addressed by
+        key so the same seed gives the same spindles whatever else is measured.
+    model : ModelSpec, optional
+        The model the study used (responses and random vector).
+    progress : callable(done, total, label), optional
+    """
+    res = measure_designs(truth, designs, options=options, rng=rng, progress=progress)
+    return res if model is None else add_model(res, model, rng=rng)

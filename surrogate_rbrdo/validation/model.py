@@ -74,6 +74,26 @@ class Moments:
                    (float(est.pf_ci[j][0]), float(est.pf_ci[j][1])), int(round(pf * n)))
 
     @classmethod
+    def from_summary(cls, n: int, mean: float, std: float, pf: float,
+                     pf_ci: tuple[float, float], confidence: float) -> Moments:
+        """Moments known only as ``n``, μ, σ, P_f and P_f's interval (a study's verification
+        table). The standard errors are σ/√n and, for σ, the normal-theory σ/√(2(n − 1)):
+        the distribution-free delta-method error needs the fourth moment, which such a table
+        does not hold (for a heavy-tailed y it is smaller than the true one).
+
+        >>> m = Moments.from_summary(1000, 20e-6, 5e-6, 0.3, (0.27, 0.33), 0.95)
+        >>> round(m.mean_se * 1e6, 4), round(m.std_se * 1e6, 4), m.n_fail
+        (0.1581, 0.1119, 300)
+        """
+        n = check_int("n", n, minimum=2)
+        tq = float(stats.t.ppf(0.5 + 0.5 * confidence, n - 1))
+        se, sd_se = std / np.sqrt(n), std / np.sqrt(2.0 * (n - 1))
+        f = float(np.exp(tq * sd_se / std)) if std > 0 else 1.0
+        return cls(n, float(mean), float(se), (mean - tq * se, mean + tq * se), float(std),
+                   float(sd_se), (std / f, std * f), float(pf),
+                   (float(pf_ci[0]), float(pf_ci[1])), int(round(pf * n)))
+
+    @classmethod
     def of_values(cls, y: np.ndarray, delta_lim_m: float, confidence: float) -> Moments:
         """Moments of measured values ``y`` (n,)."""
         y = np.asarray(y, float)

@@ -45,6 +45,9 @@ def _default_speeds() -> tuple[float, ...]:
 def _speed_list(value: Any) -> tuple[float, ...]:
     if isinstance(value, Mapping):
         check_keys("validation.speeds_rpm", value, {"start", "stop", "step"})
+        if set(value) != {"start", "stop", "step"}:
+            raise ValueError(f"speeds_rpm = {dict(value)!r} is not allowed: a table needs "
+                             "start, stop and step")
         a, b, s = (float(value[k]) for k in ("start", "stop", "step"))
         value = np.arange(a, b + 0.5 * s, s) if s > 0 and b > a else [np.nan]
     sp = np.asarray(value, dtype=float)
@@ -113,7 +116,7 @@ class ValidationOptions:
     baseline: str | None = None
     delta_lim_um: float = 19.5
     speed_range_rpm: tuple[float, float] = (1000.0, 24000.0)
-    speeds_rpm: tuple[float, ...] = field(default_factory=_default_speeds)
+    speeds_rpm: tuple[float, ...] | dict[str, float] = field(default_factory=_default_speeds)
     rated_speed_rpm: float = 24000.0
     peak: PeakOptions = PeakOptions()
     duration_s: float = 1.0
@@ -145,6 +148,8 @@ class ValidationOptions:
         object.__setattr__(self, "speed_range_rpm", (float(lo), float(hi)))
         object.__setattr__(self, "speeds_rpm", _speed_list(self.speeds_rpm))
         check_positive("rated_speed_rpm", self.rated_speed_rpm)
+        for name, least in (("n_grid", 2), ("n_candidates", 1), ("n_refine", 3), ("n_zoom", 1)):
+            check_int(f"peak.{name}", getattr(self.peak, name), minimum=least)
         check_positive("duration_s", self.duration_s)
         check_choice("method", self.method, METHODS)
         object.__setattr__(self, "replicate", check_groups("replicate", self.replicate, LEVELS))

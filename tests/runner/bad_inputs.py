@@ -82,6 +82,29 @@ magnitude_kgm = 1e-5
 """
 
 
+RIG = """[experiment]
+name = "g"
+kind = "rig"
+[rig.campaign]
+speeds_rpm = [6000.0]
+repeats = 1
+duration_s = 0.1
+runup = [1000.0, 2000.0, 0.5]
+impacts_per_direction = 0
+"""
+
+RIG_VAL = """[experiment]
+name = "w"
+kind = "validation"
+[validation]
+n_replications = 4
+ramps = 0
+[designs]
+a = [2000.0, 500.0, 65.0]
+b = [3000.0, 350.0, 75.0]
+"""
+
+
 def _set(base: str, table: str, line: str) -> str:
     """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
     head = f"[{table}]\n"
@@ -105,6 +128,14 @@ def R(table: str, line: str) -> str:          # noqa: N802
 
 def V(table: str, line: str) -> str:          # noqa: N802
     return _set(VALIDATION, table, line)
+
+
+def G(table: str, line: str) -> str:          # noqa: N802
+    return _set(RIG, table, line)
+
+
+def W(table: str, line: str) -> str:          # noqa: N802
+    return _set(RIG_VAL, table, line)
 
 
 ARR = r"must be an array of"
@@ -459,6 +490,185 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("val_key", V("validation", "n_tests = 3"), {}, [], r"unknown key validation.n_tests"),
     ("val_n_theta_huge", _sub(VALIDATION, "n_theta = 20", "n_theta = 100000000000"), {}, [],
      r"validation.n_theta = 100000000000 is not allowed: .* GB of memory"),
+    # ------------------------------------------------------------------ [rig] (kind rig)
+    ("rig_scalar", "rig = 3\n" + RIG.split("[rig.campaign]")[0], {}, [],
+     r"rig = 3 is not allowed: " + TAB),
+    ("rig_key", G("rig", "colour = 1"), {}, [],
+     r"unknown key rig.colour; allowed: \['campaign', 'design', 'effects', 'figures', "
+     r"'sensors', 'variability'\]"),
+    ("rig_effects_str", G("rig", "effects = 'none'"), {}, [],
+     r"rig.effects = 'none' is not allowed: must be an array of tables"),
+    ("rig_effects_item", G("rig", "effects = [3]"), {}, [],
+     r"rig.effects\[0\] = 3 is not allowed: " + TAB),
+    ("rig_effect_unknown", G("rig", "effects = [{name = 'warp'}]"), {}, [],
+     r"rig.effects\[0\]: unknown effect 'warp'; known: .*tool_interface"),
+    ("rig_effect_param", G("rig", "effects = [{name = 'anisotropy', q = 1}]"), {}, [],
+     r"rig.effects\[0\]: unknown key\(s\) \['q'\]"),
+    ("rig_effect_value", G("rig", "effects = [{name = 'anisotropy', s = 'big'}]"), {}, [],
+     r"rig.effects\[0\]: .*s = 'big' is not allowed"),
+    ("rig_unstable", G("rig", "effects = [{name = 'cross_coupling', kappa = 0.3}]"), {}, [],
+     r"rig.effects = \[.*\] is not allowed: the truth is unstable at .* rpm"),
+    ("rig_design_short", G("rig", "design = [2000.0, 500.0]"), {}, [],
+     r"rig.design = \[2000.0, 500.0\] is not allowed: must be an array of 3 numbers"),
+    ("rig_design_str", G("rig", "design = 'baseline'"), {}, [],
+     r"rig.design = 'baseline' is not allowed: " + ARR),
+    ("rig_design_outside", G("rig", "design = [2000.0, 900.0, 65.0]"), {}, [],
+     r"rig.design span_mm = 900.0 is not allowed: must lie in \[300.0, 750.0\]"),
+    ("rig_figures_str", G("rig", "figures = 'yes'"), {}, [],
+     r"rig.figures = 'yes' is not allowed: " + BOOL),
+    ("rig_var_key", G("rig.variability", "bearing_cov = 0.1"), {}, [],
+     r"unknown key rig.variability.bearing_cov; allowed: \['balance_grade_mm_s', "),
+    ("rig_var_cov_big", G("rig.variability", "bearing_k_cov = 2.0"), {}, [],
+     r"rig.variability.bearing_k_cov = 2.0 is not allowed: must lie in \[0.0, 1.0\]"),
+    ("rig_var_cov_neg", G("rig.variability", "thermal_preload_cov = -0.1"), {}, [],
+     r"rig.variability.thermal_preload_cov = -0.1 is not allowed: must lie in"),
+    ("rig_var_cov_nan", G("rig.variability", "tool_mass_cov = nan"), {}, [],
+     r"rig.variability.tool_mass_cov = nan is not allowed: must be a finite number"),
+    ("rig_var_grade_str", G("rig.variability", "balance_grade_mm_s = 'G2.5'"), {}, [],
+     r"rig.variability.balance_grade_mm_s = 'G2.5' is not allowed: " + NUM),
+    ("rig_var_fraction_order", G("rig.variability", "unbalance_fraction = [1.0, 0.5]"), {},
+     [], r"rig.variability.unbalance_fraction = \(1.0, 0.5\) is not allowed: need 0 <= lo"),
+    ("rig_var_fraction_len", G("rig.variability", "unbalance_fraction = [0.5]"), {}, [],
+     r"rig.variability.unbalance_fraction = \[0.5\] is not allowed: must be an array of 2"),
+    ("rig_var_disk_int", G("rig.variability", "tool_disk = 5"), {}, [],
+     r"rig.variability.tool_disk = 5 is not allowed: " + STR),
+    ("rig_sensors_key", G("rig.sensors", "bogus = 1"), {}, [],
+     r"unknown key rig.sensors.bogus; allowed: \['daq', 'extra', 'hammer', 'keyphasor'"),
+    ("rig_noise_str", G("rig.sensors", "noise = 'no'"), {}, [],
+     r"rig.sensors.noise = 'no' is not allowed: " + BOOL),
+    ("rig_targets", G("rig.sensors", "targets = ['tip']"), {}, [],
+     r"rig.sensors.targets\[\] = 'tip' is not allowed: must be one of \['front', 'rear', "
+     r"'tool'\]"),
+    ("rig_probe_noise_neg", G("rig.sensors", "probe = { noise_rms_m = -1e-9 }"), {}, [],
+     r"rig.sensors.probe.noise_rms_m = -1e-09 is not allowed: must be a finite number >= 0"),
+    ("rig_probe_sens_zero", G("rig.sensors", "probe = { sensitivity_V_per_m = 0.0 }"), {}, [],
+     r"rig.sensors.probe.sensitivity_V_per_m = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_probe_key", G("rig.sensors", "probe = { noise = 1e-9 }"), {}, [],
+     r"unknown key rig.sensors.probe.noise; allowed: \[.*'noise_rms_m'"),
+    ("rig_daq_bits_big", G("rig.sensors", "daq = { bits = 40 }"), {}, [],
+     r"rig.sensors.daq.bits = 40 is not allowed: at most 31"),
+    ("rig_daq_bits_float", G("rig.sensors", "daq = { bits = 12.5 }"), {}, [],
+     r"rig.sensors.daq.bits = 12.5 is not allowed: " + INT),
+    ("rig_daq_rate_zero", G("rig.sensors", "daq = { sample_rate_hz = 0.0 }"), {}, [],
+     r"rig.sensors.daq.sample_rate_hz = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_keyphasor_edge", G("rig.sensors", "keyphasor = { edge_deg = 50.0 }"), {}, [],
+     r"rig.sensors.keyphasor.edge_deg = 50.0 is not allowed: must lie in \[0.0, 30.0\]"),
+    ("rig_hammer_peak", G("rig.sensors", "hammer = { peak_N = -3.0 }"), {}, [],
+     r"rig.sensors.hammer.peak_N = -3.0 is not allowed: must be a finite number > 0"),
+    ("rig_campaign_key", G("rig.campaign", "repeat = 3"), {}, [],
+     r"unknown key rig.campaign.repeat; allowed: \[.*'repeats'"),
+    ("rig_repeats_zero", _sub(RIG, "repeats = 1", "repeats = 0"), {}, [],
+     r"rig.campaign.repeats = 0 is not allowed: must be an integer >= 1"),
+    ("rig_repeats_float", _sub(RIG, "repeats = 1", "repeats = 2.5"), {}, [],
+     r"rig.campaign.repeats = 2.5 is not allowed: " + INT),
+    ("rig_speeds_str", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = 'fast'"), {}, [],
+     r"rig.campaign.speeds_rpm = 'fast' is not allowed: must be an array of numbers, e.g. "
+     r"\[1.0, 2.0\] or a table \{start, stop, num\}"),
+    ("rig_speeds_order", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [3000.0, 2000.0]"),
+     {}, [], r"rig.campaign.speeds_rpm = \(3000.0, 2000.0\) is not allowed: a strictly "
+             r"increasing list"),
+    ("rig_speeds_item", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [3000.0, 'x']"), {},
+     [], r"rig.campaign.speeds_rpm\[1\] = 'x' is not allowed: " + NUM),
+    ("rig_grid_missing", _sub(RIG, "speeds_rpm = [6000.0]",
+                              "speeds_rpm = { start = 1000.0, stop = 2000.0 }"), {}, [],
+     r"rig.campaign.speeds_rpm.num is missing: it is required"),
+    ("rig_grid_key", _sub(RIG, "speeds_rpm = [6000.0]",
+                          "speeds_rpm = { start = 1e3, stop = 2e3, num = 3, step = 1 }"), {}, [],
+     r"unknown key rig.campaign.speeds_rpm.step; allowed: \['num', 'start', 'stop'\]"),
+    ("rig_grid_order", _sub(RIG, "speeds_rpm = [6000.0]",
+                            "speeds_rpm = { start = 2e3, stop = 1e3, num = 3 }"), {}, [],
+     r"rig.campaign.speeds_rpm.stop = 1000.0 is not allowed: must be > start = 2000.0"),
+    ("rig_grid_num_float", _sub(RIG, "speeds_rpm = [6000.0]",
+                                "speeds_rpm = { start = 1e3, stop = 2e3, num = 2.5 }"), {}, [],
+     r"rig.campaign.speeds_rpm.num = 2.5 is not allowed: " + INT),
+    ("rig_runup_order", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]",
+                             "runup = [2000.0, 1000.0, 0.5]"), {}, [],
+     r"rig.campaign.runup = \(2000.0, 1000.0, 0.5\) is not allowed: need 0 < start_rpm"),
+    ("rig_runup_len", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]", "runup = [1000.0, 2000.0]"),
+     {}, [], r"rig.campaign.runup = \[1000.0, 2000.0\] is not allowed: must be an array of 3"),
+    ("rig_rundown_int", G("rig.campaign", "rundown = 1"), {}, [],
+     r"rig.campaign.rundown = 1 is not allowed: " + BOOL),
+    ("rig_duration_zero", _sub(RIG, "duration_s = 0.1", "duration_s = 0.0"), {}, [],
+     r"rig.campaign.duration_s = 0.0 is not allowed: must be a finite number > 0"),
+    ("rig_impacts_neg", _sub(RIG, "impacts_per_direction = 0", "impacts_per_direction = -1"),
+     {}, [], r"rig.campaign.impacts_per_direction = -1 is not allowed: must be an integer >= 0"),
+    ("rig_builds_zero", G("rig.campaign", "builds = 0"), {}, [],
+     r"rig.campaign.builds = 0 is not allowed: must be an integer >= 1"),
+    ("rig_campaign_sensors", G("rig.campaign", "sensors = { noise = false }"), {}, [],
+     r"rig.campaign.sensors is not allowed: the sensors are \[rig.sensors\]"),
+    ("rig_memory", _sub(RIG, "duration_s = 0.1", "duration_s = 1e6"), {}, [],
+     r"rig.campaign.duration_s = 1000000.0 is not allowed: .* GB of memory, more than"),
+    ("rig_disk", _sub(RIG, "repeats = 1", "repeats = 1000000000"), {}, [],
+     r"rig.campaign.repeats = 1000000000 is not allowed: 1000000002 records .* GB of disk, "
+     r"more than"),
+    # ------------------------------------------------------------------ kind validation
+    ("rv_designs_none", RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs: designs has 0 entries: need a baseline and at least one other design"),
+    ("rv_design_one", _sub(RIG_VAL, "b = [3000.0, 350.0, 75.0]\n", ""), {}, [],
+     r"designs: designs has 1 entries"),
+    ("rv_design_short", _sub(RIG_VAL, "a = [2000.0, 500.0, 65.0]", "a = [2000.0, 500.0]"), {},
+     [], r"designs.a = \[2000.0, 500.0\] is not allowed: must be an array of 3 numbers"),
+    ("rv_design_str", _sub(RIG_VAL, "a = [2000.0, 500.0, 65.0]", "a = 'baseline'"), {}, [],
+     r"designs.a = 'baseline' is not allowed: " + ARR),
+    ("rv_design_outside", W("designs", "c = [2000.0, 900.0, 65.0]"), {}, [],
+     r"designs.c: design span_mm = 900.0 is not allowed: must lie in"),
+    ("rv_design_name", W("designs", "'a b' = [2000.0, 500.0, 65.0]"), {}, [],
+     r"designs: design name 'a b' is not allowed: a non-empty name without spaces"),
+    ("rv_baseline", W("validation", "baseline = 'z'"), {}, [],
+     r"designs: baseline = 'z' is not allowed: one of \['a', 'b'\]"),
+    ("rv_key", W("validation", "replications = 20"), {}, [],
+     r"unknown key validation.replications; allowed: \[.*'n_replications'"),
+    ("rv_n_small", _sub(RIG_VAL, "n_replications = 4", "n_replications = 2"), {}, [],
+     r"validation.n_replications = 2 is not allowed: must be an integer >= 4"),
+    ("rv_method", W("validation", "method = 'fast'"), {}, [],
+     r"validation.method = 'fast' is not allowed: must be one of \['phasors', 'records'\]"),
+    ("rv_shared", W("validation", "shared = ['bearing']"), {}, [],
+     r"validation.shared\[\] = 'bearing' is not allowed: must be one of \['bearings'"),
+    ("rv_speeds_str", W("validation", "speeds_rpm = 'all'"), {}, [],
+     r"validation.speeds_rpm = 'all' is not allowed: must be an array of numbers, .* or a "
+     r"table"),
+    ("rv_speeds_table", W("validation", "speeds_rpm = { start = 1000.0, stop = 2000.0 }"), {},
+     [], r"validation.speeds_rpm = \{'start': 1000.0, 'stop': 2000.0\} is not allowed: a "
+         r"table needs start, stop and step"),
+    ("rv_speeds_order", W("validation", "speeds_rpm = [2000.0, 1000.0]"), {}, [],
+     r"validation.speeds_rpm = \(2000.0, 1000.0\) is not allowed: a strictly increasing"),
+    ("rv_peak_zoom", W("validation", "peak = { n_zoom = 0 }"), {}, [],
+     r"validation.peak.n_zoom = 0 is not allowed: must be an integer >= 1"),
+    ("rv_ramps", _sub(RIG_VAL, "ramps = 0", "ramps = 5"), {}, [],
+     r"validation.ramps = 5 is not allowed: at most n_replications = 4"),
+    ("rv_rated_neg", W("validation", "rated_speed_rpm = -1.0"), {}, [],
+     r"validation.rated_speed_rpm = -1.0 is not allowed"),
+    ("rv_sensors_here", W("validation", "sensors = { noise = false }"), {}, [],
+     r"validation.sensors is not allowed: the sensors are \[rig.sensors\]"),
+    ("rv_no_tool_probe", W("rig.sensors", "targets = ['front', 'rear']"), {}, [],
+     r"rig.sensors.targets = \['front', 'rear'\] is not allowed: validation measures the "
+     r"tool tip"),
+    ("rv_rig_campaign", W("rig.campaign", "repeats = 3"), {}, [],
+     r"unknown key rig.campaign; allowed: \['effects', 'sensors', 'variability'\]"),
+    ("rv_rig_effect", W("rig", "effects = [{name = 'warp'}]"), {}, [],
+     r"rig.effects\[0\]: unknown effect 'warp'"),
+    ("rv_unstable", W("rig", "effects = [{name = 'cross_coupling', kappa = 0.3}]"), {}, [],
+     r"rig.effects: design 'a': the truth is unstable at"),
+    ("rv_model_n", W("model", "n_samples = 5"), {}, [],
+     r"model.n_samples = 5 is not allowed: must be an integer >= 10"),
+    ("rv_model_compare", W("model", "compare = 'yes'"), {}, [],
+     r"model.compare = 'yes' is not allowed: " + BOOL),
+    ("rv_spindle_file", W("spindle", "geometry = 'g.toml'"), {"g.toml": GEOMETRY_OK}, [],
+     r"spindle.geometry = 'g.toml' is not allowed: the rig's truth is the reference spindle"),
+    ("rv_uncertainty", W("uncertainty", "std = [0.05]"), {}, [],
+     r"uncertainty.std = \[0.05\] is not allowed: need 2 values"),
+    ("rv_table", W("study", "x = 1"), {}, [],
+     r"unknown table study; allowed: \['designs', 'model', 'rig', 'spindle', 'uncertainty', "
+     r"'validation'\]"),
+    ("rv_from_int", "[designs]\nfrom = 3\n" + RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs.from = 3 is not allowed: " + STR),
+    ("rv_from_not_study", "[designs]\nfrom = '.'\n" + RIG_VAL.split("[designs]")[0], {}, [],
+     r"designs.from = '.' is not allowed: not a finished study run folder"),
+    ("rv_from_and_points", W("designs", "from = '.'"), {}, [],
+     r"unknown key designs.a; allowed with designs.from: \['from', 'names'\]"),
+    ("rv_from_with_spindle", "[designs]\nfrom = '.'\n" + RIG_VAL.split("[designs]")[0]
+     + "[spindle]\n", {}, [],
+     r"\[spindle\] and \[uncertainty\] are not allowed with designs.from"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),
