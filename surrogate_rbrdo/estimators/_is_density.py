@@ -57,8 +57,8 @@ class ControlVariateResult:
 def cv_estimate(tail: np.ndarray, half: np.ndarray, logw: np.ndarray, beta: Any,
                 w_floor: float) -> ControlVariateResult:
     """P(tail) by IS with the half-space indicators ``half`` ``(N,)`` or ``(N, K)`` (known means
-    ``Φ(−|β_k|)``) as control variates (least-squares coefficients; Rubinstein & Kroese 2017,
-    §5.3).
+    ``Φ(−|β_k|)``) as control variates (least-squares coefficients, cross-fitted on two halves
+    of the sample; Rubinstein & Kroese 2017, §5.3).
 
     ``pf_se`` is the sample standard error of ``Y − c·C``, floored by
     ``w_floor · √(p̃(1 − p̃)/N)``, ``p̃ = 1/(N + 2)`` (Laplace's rule for an event not seen in
@@ -82,19 +82,31 @@ def cv_estimate(tail: np.ndarray, half: np.ndarray, logw: np.ndarray, beta: Any,
     y = np.where(tail, w, 0.0)
     c = np.where(half, w[:, None], 0.0)
     mu = special.ndtr(-np.abs(beta))
-    coef = np.zeros(half.shape[1])
-    use = c.var(axis=0, ddof=1) > 0 if n > 1 else np.zeros(half.shape[1], bool)
-    if use.any():
-        cc = np.atleast_2d(np.cov(c[:, use], rowvar=False, ddof=1))
-        cy = np.array([np.cov(c[:, k], y, ddof=1)[0, 1] for k in np.flatnonzero(use)])
-        coef[use] = np.linalg.lstsq(cc, cy, rcond=1e-12)[0]
-    r = y - (c - mu) @ coef
+    # cross-fitted coefficients (two folds, each corrected with the other's): a coefficient
+    # fitted on the points it corrects biases the estimate towards them and shrinks its error
+    # (measured on the four-branch system: 0.19 SE of bias, scatter 1.2 x the reported SE)
+    fold = np.arange(n) % 2
+    r = y.copy()
+    for f in (0, 1) if n >= 8 else ():
+        r[fold == f] -= (c[fold == f] - mu) @ _cv_coef(y[fold != f], c[fold != f])
     p = float(r.mean())
+    coef = _cv_coef(y, c)
     se = float(r.std(ddof=1) / np.sqrt(n)) if n > 1 else np.nan
     p_tilde = 1.0 / (n + 2.0)
     floor = float(w_floor * np.sqrt(p_tilde * (1.0 - p_tilde) / n))
     return ControlVariateResult(min(max(p, 0.0), 1.0), max(se, floor), coef, _ess(y),
                                 pareto_khat(y), int(np.count_nonzero(tail != half.any(1))))
+
+
+def _cv_coef(y: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Least-squares control-variate coefficients of ``y`` on the columns of ``c``."""
+    coef = np.zeros(c.shape[1])
+    use = c.var(axis=0, ddof=1) > 0 if len(y) > 1 else np.zeros(c.shape[1], bool)
+    if use.any():
+        cc = np.atleast_2d(np.cov(c[:, use], rowvar=False, ddof=1))
+        cy = np.array([np.cov(c[:, k], y, ddof=1)[0, 1] for k in np.flatnonzero(use)])
+        coef[use] = np.linalg.lstsq(cc, cy, rcond=1e-12)[0]
+    return coef
 
 
 @dataclass(frozen=True)

@@ -315,8 +315,10 @@ class _Stages:
 
 
 def _geometry(pts: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``β_k``, centres ``u_k`` and shares ``π_k ∝ Φ(−|β_k|)`` of a list of design points."""
-    beta = np.array([q.beta for q in pts])
+    """``β_k = ±‖u_k‖``, centres ``u_k`` and shares ``π_k ∝ Φ(−|β_k|)`` of a list of design
+    points (the distance itself, not FORM's β clipped at ``beta_max`` when not reached: the
+    half-space at ``u_k`` has probability ``Φ(−‖u_k‖)``)."""
+    beta = np.array([np.copysign(np.linalg.norm(q.u_star), q.beta) for q in pts])
     shares = special.ndtr(-np.abs(beta))
     shares = shares / shares.sum() if shares.sum() > 0 else np.full(len(pts), 1 / len(pts))
     return beta, np.array([q.u_star for q in pts]), shares
