@@ -27,6 +27,7 @@ from surrogate_rbrdo.formulations import (
     FormulationOptions,
     make_formulation,
 )
+from surrogate_rbrdo.optimization import NSGA2Options, run_nsga2
 from surrogate_rbrdo.spindle.evaluate import AtSpeedAmplitudeResponse
 from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.surrogates import KrgSE, KrigingOptions
@@ -155,3 +156,38 @@ def test_rbdo_with_form_runs_on_the_fe_model_for_designs_that_never_fail():
             p_target=0.01, n_theta=50, estimator="form", deterministic=NO_DET))
     ev = form.evaluate(X)
     np.testing.assert_allclose(ev.G[:, 0], special.ndtr(-10.0) / 0.01 - 1.0)
+
+
+#: small budgets for the optimiser runs (the point is that every estimator completes)
+RUN_BUDGET = {"ais": {"n_per_level": 100, "n_final": 200, "max_levels": 6},
+              "subset": {"n_per_level": 200, "max_levels": 6}, "is": {"n_samples": 200}}
+
+
+def _nsga_over_the_spindle_box(estimator):
+    form = make_formulation(
+        "rbrdo", response=FE, inputs=INPUTS, limit=LIMIT, rng=np.random.default_rng(0),
+        options=FormulationOptions(p_target=1e-3, n_theta=100, estimator=estimator,
+                                   estimator_options=RUN_BUDGET.get(estimator, {}),
+                                   deterministic=NO_DET))
+    lo, hi = SPINDLE.design_map.bounds[:, 0], SPINDLE.design_map.bounds[:, 1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EstimatorWarning)
+        res = run_nsga2(form, lo, hi, rng=np.random.default_rng(3),
+                        options=NSGA2Options(pop_size=8, n_gen=2))
+    assert res.archive.X.shape == (16, 3)
+    assert np.isfinite(res.archive.F).all() and np.isfinite(res.archive.G).all()
+    assert res.n_surrogate_calls > 0 and len(res.history) == 2
+
+
+@pytest.mark.parametrize("estimator", ["form", "subset", "ais"])
+def test_nsga2_over_the_spindle_box_completes(estimator):
+    """The issue's original symptom: NSGA-II's first population over the whole design box holds
+    designs whose FORM search steps to θ ≤ 0 and designs that never fail (subset/ais used to
+    raise). With the FE model in the loop every estimator completes the run."""
+    _nsga_over_the_spindle_box(estimator)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("estimator", sorted(ESTIMATORS))
+def test_nsga2_over_the_spindle_box_completes_with_every_estimator(estimator):
+    _nsga_over_the_spindle_box(estimator)
