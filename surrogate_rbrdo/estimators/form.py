@@ -127,6 +127,20 @@ def _line_search(G: LimitStateU, u: np.ndarray, g: float, grad: np.ndarray, d: n
     return best[0], best[1], False, lam_in, lam_out
 
 
+def _start(G: Any, m: int, start: tuple[np.ndarray, float] | None
+           ) -> tuple[np.ndarray, float, float]:
+    """Start point, its ``G`` and ``G(0)``; the mean point outside the domain is an error."""
+    if start is None:
+        u = np.zeros(m)
+        g = float(G(u[None, :])[0])
+        if not np.isfinite(g):
+            raise ModelError("FORM: the mean point (u = 0) lies outside the model's physical "
+                             "domain")
+        return u, g, g
+    u = np.array(start[0], dtype=float)
+    return u, float(G(u[None, :])[0]), float(start[1])
+
+
 def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
           fd_step: float, fd_scheme: str, beta_max: float = np.inf,
           start: tuple[np.ndarray, float] | None = None,
@@ -148,19 +162,11 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
     of ``G(0)``, known from an earlier search, are then not recomputed); ``stop(u)`` ends the
     search (``status = "failed"``) when it returns True for an iterate.
     """
-    if start is None:
-        u = np.zeros(m)
-        g = g_origin = float(G(u[None, :])[0])
-        if not np.isfinite(g):
-            raise ModelError("FORM: the mean point (u = 0) lies outside the model's physical "
-                             "domain")
-    else:
-        u, g_origin = np.array(start[0], dtype=float), float(start[1])
-        g = float(G(u[None, :])[0])
-        if not np.isfinite(g):
-            return DesignPoint(np.nan, u, np.full(m, np.nan), np.full(m, np.nan), g, False, 0,
-                               G.calls, "start point outside the physical domain", "failed",
-                               g_origin)
+    u, g, g_origin = _start(G, m, start)
+    if not np.isfinite(g):
+        return DesignPoint(np.nan, u, np.full(m, np.nan), np.full(m, np.nan), g, False, 0,
+                           G.calls, "start point outside the physical domain", "failed",
+                           g_origin)
     scale = abs(g_origin)
     sign0 = 1.0 if g_origin >= 0 else -1.0
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)

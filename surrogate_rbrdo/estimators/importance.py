@@ -1,37 +1,39 @@
-"""Importance sampling at the design points, with their FORM hyperplanes as control variates.
+"""Importance sampling at the design points, in two stages, with their FORM hyperplanes as
+control variates.
 
-After an iHL-RF search for ``u*`` and a search for further design points (Der Kiureghian &
-Dakessian 1998, :mod:`._design_points`; all counted), ``N`` points are drawn from the mixture
-``q = Σ_k π_k φ(v − u_k)`` (``π_k ∝ Φ(−β_k)``, the weights of multi-point FORM) — from the fixed
-``u`` under common random numbers — and weighted by ``w = φ(v)/q(v)``. Besides
-``Y = w·1[v fails]`` (plain IS: ``E[Y] = P_f``) the half-spaces beyond each design point's
-hyperplane give controls ``C_k = w·1[u_k·v ≥ ‖u_k‖²]`` with exactly known means ``Φ(−β_k)``;
-the estimate is the control-variate one (Rubinstein & Kroese 2017, *Simulation and the Monte
-Carlo Method*, §5.3), ``P_f = mean(Y) − c·(mean(C) − Φ(−β))`` with least-squares ``c``:
-unbiased (up to the O(1/N) of ``c``) for any failure domain, exact for a union of half-spaces
-(a series system of limit states linear in ``u``) and better the closer the limit state is to
-its hyperplanes. ``pf_se`` is the sample standard error of ``Y − c·C``, floored where no sample
-fell where the failure domain and the half-spaces disagree (:func:`cv_estimate`).
+After an iHL-RF search for ``u₁`` and a search for further design points (Der Kiureghian &
+Dakessian 1998, :mod:`._design_points`; all counted):
+
+1. **Stage 1** (a share ``pilot`` of the sample): the mixture ``Σ_k π_k φ(v − u_k)``
+   (``π_k ∝ Φ(−β_k)``, the weights of multi-point FORM) plus, where it can find something, a
+   defensive shell (:mod:`._is_density`). Its tail samples outside every known half-space
+   start further design-point searches.
+2. **Stage 2** (the rest): at each design point a Gaussian fitted to the stage-1 tail samples in
+   the FORM geometry (a mean along ``α_k``, one spread along and one across:
+   :class:`~._is_density.ScaledGaussians`, after Bucher 1988), with 20 % of it from the
+   stage-1 mixture (defensive). Its estimate and SE are the result: given stage 1 it is a plain
+   IS run from a fixed density.
+
+In both stages ``w = φ(v)/q(v)`` and, besides ``Y = w·1[v fails]``, the half-spaces beyond each
+design point's hyperplane give controls ``C_k = w·1[u_k·v ≥ ‖u_k‖²]`` with exactly known means
+``Φ(−β_k)`` (Rubinstein & Kroese 2017, *Simulation and the Monte Carlo Method*, §5.3):
+``P_f = mean(Y − c·(C − Φ(−β)))`` with cross-fitted least-squares ``c``, unbiased for any
+failure domain, exact for a union of half-spaces (a series system of limit states linear in
+``u``). Under common random numbers the rows of the fixed ``u`` are transformed, never redrawn.
 
 When the mean point lies in the failure domain (FORM's β < 0, P_f > 1/2) the density at ``u*``
-covers the *safe* tail, and weighting the failures has a variance of order ``exp(β²)`` (at
-β = −3 a plain IS run of 2000 points returned 0.46 ± 0.06 for P_f = 0.9987): there the
-complement is estimated, ``P_f = 1 − P(safe)``, with the same half-space as control.
+covers the *safe* tail and the complement is estimated, ``P_f = 1 − P(safe)`` (weighting the
+failures there has a variance of order ``exp(β²)``: at β = −3 a plain IS run of 2000 points
+returned 0.46 ± 0.06 for P_f = 0.9987).
 
-**What it cannot see, and says.** Design points the searches do not find (they start from the
-origin and from the mirror image of the first point) are reached only by a defensive *shell*:
-a share ``defensive`` of the sample from the standard normal outside the ball of radius
-``shell·|β|`` — used only where it can be expected to find a second region as probable as the
-first (:func:`shell_share`: in a few dimensions; in ten dimensions at 3e-7 it would find
-nothing and only cost variance). Two diagnostics raise an :class:`~._tail.EstimatorWarning`:
+**What it cannot see, and says.** Two diagnostics raise an :class:`~._tail.EstimatorWarning`:
 more than 20 % of P_f from failures outside every design point's half-space (a failure domain
-that bends back towards the mean — concave — or has regions the searches missed: the error is
-then that of a handful of hits), and a heavy tail of the failure weights of the main
-components (Pareto ``k̂ > 0.7``, :mod:`._tail`). A limit state that FORM finds not reached
-(``status = "not_reached"``) is sampled at the last point ``u_b`` of the search for the
-superset ``{G ≤ G(u_b)}``: ``pf`` then estimates an upper bound of P_f with its own error
-(``pf_bound = "upper"``, ``pf_ci = [0, upper end]``). Points outside the model's physical
-domain are not failures (:mod:`._common`).
+that bends back towards the mean — concave — or regions the searches missed), and a heavy tail
+of the weights (Pareto ``k̂ > 0.7``, :mod:`._tail`). A limit state that FORM finds not reached
+(``status = "not_reached"``) is sampled at the last point ``u_b`` of the search for the superset
+``{G ≤ G(u_b)}``: ``pf`` then estimates an upper bound of P_f with its own error
+(``pf_bound = "upper"``, ``pf_ci = [0, upper end]``). Points outside the model's physical domain
+are not failures (:mod:`._common`).
 """
 
 from __future__ import annotations
