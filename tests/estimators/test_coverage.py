@@ -22,18 +22,24 @@ from surrogate_rbrdo.estimators.problems import (
 )
 
 pytestmark = pytest.mark.known_answer
-SAMPLING = [("mc", {"n_samples": 20_000}, 10), ("is", {}, 10), ("subset", {}, 10),
-            ("ais", {}, 4)]
+SAMPLING = [("mc", {"n_samples": 20_000}), ("is", {}), ("subset", {})]
+CHEAP = [linear_standard(beta=3.0, dim=2), paraboloid(beta=3.0, kappa=0.3, dim=5),
+         series_four_branch(7.0), two_design_points()]
 
 
-@pytest.mark.parametrize("prob", [linear_standard(beta=3.0, dim=2),
-                                  paraboloid(beta=3.0, kappa=0.3, dim=5),
-                                  series_four_branch(7.0), two_design_points()],
-                         ids=lambda p: p.name)
-@pytest.mark.parametrize("name, opts, seeds", SAMPLING, ids=[s[0] for s in SAMPLING])
-def test_interval_covers_or_the_method_says_so(name, opts, seeds, prob):
-    row = coverage(prob, name, opts, n_seeds=seeds)
-    assert row.silent_misses <= seeds // 10, row
+@pytest.mark.parametrize("prob", CHEAP, ids=lambda p: p.name)
+@pytest.mark.parametrize("name, opts", SAMPLING, ids=[s[0] for s in SAMPLING])
+def test_interval_covers_or_the_method_says_so(name, opts, prob):
+    row = coverage(prob, name, opts, n_seeds=10)
+    assert row.silent_misses <= 1, row
+
+
+@pytest.mark.parametrize("prob", CHEAP[2:], ids=lambda p: p.name)
+def test_ais_covers_several_modes(prob):
+    """ais (iCE with vMFN mixtures, default budget) on the multi-modal problems: no silent miss
+    in 4 runs (its full coverage over 40 seeds is in the slow table)."""
+    row = coverage(prob, "ais", {}, n_seeds=4)
+    assert row.silent_misses == 0, row
 
 
 @pytest.mark.parametrize("prob", [two_sided_linear(dim=5, beta=3.5),

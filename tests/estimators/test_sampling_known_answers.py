@@ -96,14 +96,14 @@ def test_is_finds_several_design_points_and_ais_copes(prob):
         assert within(run("ais", prob, seed=seed), prob)
 
 
-@pytest.mark.parametrize("k", [6.0, 7.0])
-def test_ais_unbiased_on_series_system(k):
-    """Mean of 10 independent runs within 4 standard errors of the mean, and honest SEs."""
-    prob = series_four_branch(k)
-    res = [run("ais", prob, seed=s) for s in range(10)]
+def test_ais_unbiased_on_series_system():
+    """Mean of 8 independent runs within 4 standard errors of the mean, and honest SEs (the
+    k = 7 system: its weaker branch pair carries 21 % of P_f)."""
+    prob = series_four_branch(7.0)
+    res = [run("ais", prob, seed=s) for s in range(8)]
     pf = np.array([r.pf[0] for r in res])
     se = np.array([r.pf_se[0] for r in res])
-    assert abs(pf.mean() - prob.pf_exact[0]) <= 4 * pf.std(ddof=1) / np.sqrt(10)
+    assert abs(pf.mean() - prob.pf_exact[0]) <= 4 * pf.std(ddof=1) / np.sqrt(8)
     assert np.all(np.abs(pf - prob.pf_exact[0]) <= 4 * se)
     assert 0.5 < pf.std(ddof=1) / se.mean() < 2.0        # reported SE matches the scatter
 

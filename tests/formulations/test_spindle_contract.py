@@ -41,7 +41,7 @@ X = np.array([[2000.0, 500.0, 65.0], [3000.0, 600.0, 80.0]])
 NO_DET = DeterministicOptions(stress=False, resonance="none")
 #: small budgets so that 2 responses x 7 estimators x 4 formulations stay fast
 BUDGET = {"ais": {"n_per_level": 100, "n_final": 200, "max_levels": 8},
-          "subset": {"max_levels": 8}}
+          "subset": {"max_levels": 8}, "is": {"n_samples": 400}}
 
 
 class KrigingResponse:
@@ -179,7 +179,7 @@ def _nsga_over_the_spindle_box(estimator):
     assert res.n_surrogate_calls > 0 and len(res.history) == 2
 
 
-@pytest.mark.parametrize("estimator", ["form", "subset", "ais"])
+@pytest.mark.parametrize("estimator", ["form", "subset"])
 def test_nsga2_over_the_spindle_box_completes(estimator):
     """The issue's original symptom: NSGA-II's first population over the whole design box holds
     designs whose FORM search steps to θ ≤ 0 and designs that never fail (subset/ais used to
