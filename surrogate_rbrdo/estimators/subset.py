@@ -27,8 +27,8 @@ correlated bound ``Σ_k δ_k`` is ``diagnostics["pf_cov_upper"]``.
 the product so far estimates ``P(G ≤ γ_last)`` with ``γ_last > 0``, which contains the failure
 domain: with ``on_failure="bound"`` (default) it is reported as an upper bound
 (``status = "not_reached"``, ``pf_ci = [0, …]``); ``"nan"`` and ``"raise"`` give NaN or a
-``ModelError``. Points outside the model's physical domain count as failures
-(:mod:`._common`). ``mean``/``std`` of ``y`` come from level 0.
+``ModelError``. Points outside the model's physical domain are not failures: a chain never
+moves there (:mod:`._common`). ``mean``/``std`` of ``y`` come from level 0.
 """
 
 from __future__ import annotations
