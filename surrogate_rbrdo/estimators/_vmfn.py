@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from surrogate_rbrdo.estimators._gmm import _ess, _lse
+from surrogate_rbrdo.estimators._gmm import _ess, _lse, e_step
 
 #: smallest concentration handled by the general formula (below: the uniform limit)
 KAPPA_MIN = 1e-8
@@ -215,10 +215,7 @@ def _em(u: np.ndarray, w: np.ndarray, k: int, rng: np.random.Generator,
         if not keep.any():
             keep = ess == ess.max()
         mix = _m_step(u, wr[:, keep])
-        lp = mix.component_logpdf(u)
-        ll = _lse(lp)
-        resp = np.exp(lp - ll[:, None])
-        obj = float(w @ ll)
+        resp, obj = e_step(mix, u, w)
         if obj - prev < 1e-5 * max(1.0, abs(obj)):
             break
         prev = obj
