@@ -28,7 +28,7 @@ class OutsideDomainError(ModelError, ValueError):
     θ ≤ 0).
 
     A :class:`ModelError` (so ``on_failure="nan"`` and the estimators handle it: a point outside
-    the domain counts as a failure, see ``docs/estimators.md``) and, for callers that validate
+    the domain is not a failure, see ``docs/estimators.md``) and, for callers that validate
     their own input, a :class:`ValueError`. ``rows`` holds the indices of the offending rows of
     the batch the model was given, when the model knows them (``None`` otherwise).
     """

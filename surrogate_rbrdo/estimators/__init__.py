@@ -3,15 +3,15 @@
 Every estimator is a frozen dataclass of its options with
 ``estimate(response, inputs, limit, x, *, rng, u=None) -> Estimate``:
 
-========== ==========================================================================
+========== ====================================================================================
 ``mc``     crude Monte Carlo (Eqs. 12-14), Clopper-Pearson interval
-``is``     importance sampling centred at the FORM design point
-``ais``    adaptive IS: cross-entropy with a Gaussian mixture and a defensive component
+``is``     importance sampling at the design points (two stages, half-space control variates)
+``ais``    adaptive IS: improved cross-entropy with vMFN (or Gaussian) mixtures
 ``form``   FORM by iHL-RF with finite-difference gradients
 ``sorm``   SORM (Breitung / Hohenbichler-Rackwitz) from the FORM design point
 ``subset`` subset simulation (Au & Beck) with conditional sampling in u space
 ``fosm``   first-order second-moment: μ, σ and the Cornell index
-========== ==========================================================================
+========== ====================================================================================
 
 >>> sorted(ESTIMATORS)
 ['ais', 'form', 'fosm', 'is', 'mc', 'sorm', 'subset']

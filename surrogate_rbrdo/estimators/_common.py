@@ -1,13 +1,19 @@
 """Helpers shared by the estimators: argument checks, checked model evaluation, intervals.
 
-**Physical domain.** A model raises :class:`~surrogate_rbrdo.core.errors.OutsideDomainError`
-for inputs outside its physical domain (e.g. a bearing stiffness factor θ ≤ 0, which a normal
-θ reaches with a tiny probability and a FORM search can step into). :func:`evaluate_in_domain`
-isolates those points (by the rows the error names, else by bisection of the batch) and
-evaluates the others; the estimators count a point outside the domain as a **failure**. The
-reported P_f is then that of "failure or outside the domain", an upper bound of the physical
-P_f that exceeds it by at most P(θ outside the domain) (``n_outside_domain`` in the
-diagnostics says when it happened).
+**Physical domain — one meaning for every estimator.** A model raises
+:class:`~surrogate_rbrdo.core.errors.OutsideDomainError` for inputs outside its physical domain
+(e.g. a bearing stiffness factor θ ≤ 0, which a normal θ reaches with a tiny probability and a
+FORM search or a Markov chain can step into). Such a point is **not a failure**: the response
+is not defined there, and the mass the input model puts outside the domain is a defect of the
+input model, not of the design. Every estimator reports ``P_f = P(failure and inside the
+domain)``, and the sampling estimators report the share of their sample that fell outside
+(``diagnostics["n_outside_domain"]``; crude MC also ``p_outside``). :func:`evaluate_in_domain`
+isolates the points outside (by the rows the error names, each claim checked, else by
+bisection of the batch) and evaluates the others; :class:`LimitStateU` gives them
+``G = +inf`` (safe), so a design-point search steps back from them and a Markov chain rejects
+them. Moments of ``y`` are those of the points inside (the distribution of ``y`` conditional on
+the domain). Where the domain matters, :func:`~surrogate_rbrdo.uncertainty.stiffness_factors`
+offers inputs with positive support.
 """
 
 from __future__ import annotations
@@ -78,8 +84,10 @@ def evaluate_in_domain(response: Callable, x: np.ndarray, theta: np.ndarray
     Returns ``y`` of shape ``(P, N)`` (NaN in the columns outside the domain), the boolean mask
     ``inside`` of shape ``(N,)`` and the number of model points evaluated (what
     :class:`~surrogate_rbrdo.core.CountingResponse` counts: only calls that returned). Rows
-    named by :class:`OutsideDomainError` are dropped and the rest evaluated again; an error
-    without rows splits the batch in halves. Any other error propagates.
+    named by :class:`OutsideDomainError` are set apart and both parts evaluated again (the named
+    rows are outside only once a batch of exactly them raises: the claim is checked, at the cost
+    of one call that raises); an error without rows splits the batch in halves. Any other error
+    propagates.
 
     >>> from surrogate_rbrdo.core.errors import OutsideDomainError
     >>> def resp(x, t):
@@ -100,15 +108,16 @@ def evaluate_in_domain(response: Callable, x: np.ndarray, theta: np.ndarray
             y[:, idx] = evaluate(response, x, theta[idx])
             calls += x.shape[0] * idx.size
         except OutsideDomainError as exc:
-            rows = np.asarray(exc.rows if exc.rows is not None else (), dtype=int)
-            if rows.size and rows.min() >= 0 and rows.max() < idx.size:
+            rows = np.unique(np.asarray(exc.rows if exc.rows is not None else (), dtype=int))
+            named = rows.size > 0 and rows.min() >= 0 and rows.max() < idx.size
+            if named and rows.size == idx.size or (not named and idx.size == 1):
+                inside[idx] = False          # every point of this batch is outside
+            elif named:
+                # the claim is checked: the named rows are evaluated again on their own (a
+                # model that reorders or deduplicates θ cannot drop the wrong points)
                 bad = np.zeros(idx.size, dtype=bool)
                 bad[rows] = True
-                inside[idx[bad]] = False
-                if (~bad).any():
-                    todo.append(idx[~bad])
-            elif idx.size == 1:
-                inside[idx] = False
+                todo += [idx[bad], idx[~bad]]
             else:                       # the model did not say which rows: bisect the batch
                 todo += [idx[: idx.size // 2], idx[idx.size // 2:]]
     return y, inside, calls
@@ -117,7 +126,7 @@ def evaluate_in_domain(response: Callable, x: np.ndarray, theta: np.ndarray
 class LimitStateU:
     """``G(u) = limit.g(response(x_p, T(u)))`` for one design, counting model calls.
 
-    A point outside the model's physical domain gets ``G = −inf`` (a failure, see the module
+    A point outside the model's physical domain gets ``G = +inf`` (not a failure, see the module
     docstring); ``n_outside`` counts them and ``last_y`` is NaN there.
     """
 
@@ -136,7 +145,7 @@ class LimitStateU:
         self.calls += calls
         self.n_outside += int(np.count_nonzero(~inside))
         self.last_y = y[0]
-        return np.where(inside, self.limit.g(np.where(inside, y[0], 0.0)), -np.inf)
+        return np.where(inside, self.limit.g(np.where(inside, y[0], 0.0)), np.inf)
 
 
 def log_std_normal(v: np.ndarray) -> np.ndarray:
@@ -167,11 +176,16 @@ def clopper_pearson(k: np.ndarray, n: int, level: float) -> np.ndarray:
 
 
 def normal_ci(pf: np.ndarray, se: np.ndarray, level: float) -> np.ndarray:
-    """Normal-approximation interval ``pf ± z se`` clipped to ``[0, 1]``; ``[0, 1]`` if no hit."""
+    """Normal-approximation interval ``pf ± z se`` clipped to ``[0, 1]``; ``[0, 1]`` where there
+    is no hit and no error to go by (``pf = 0`` with a zero or NaN ``se``).
+
+    >>> normal_ci(np.array([0.1, 0.0, 0.0]), np.array([0.01, 1e-5, 0.0]), 0.95).round(5).tolist()
+    [[0.0804, 0.1196], [0.0, 2e-05], [0.0, 1.0]]
+    """
     z = z_of(level)
     lo = np.clip(pf - z * se, 0.0, 1.0)
     hi = np.clip(pf + z * se, 0.0, 1.0)
-    none = pf <= 0
+    none = (pf <= 0) & ~(se > 0)
     return np.column_stack([np.where(none, 0.0, lo), np.where(none, 1.0, hi)])
 
 

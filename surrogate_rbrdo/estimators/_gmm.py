@@ -9,6 +9,7 @@ dimensions cannot collapse.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.linalg import solve_triangular
@@ -53,6 +54,14 @@ def _lse(a: np.ndarray) -> np.ndarray:
     """Row-wise log-sum-exp of a finite ``(n, K)`` array."""
     mx = a.max(axis=1)
     return mx + np.log(np.exp(a - mx[:, None]).sum(axis=1))
+
+
+def e_step(mix: Any, x: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
+    """Responsibilities ``(n, K)`` of a mixture with ``component_logpdf`` and its weighted
+    log-likelihood ``Σ w_i log q(x_i)``."""
+    lp = mix.component_logpdf(x)
+    ll = _lse(lp)
+    return np.exp(lp - ll[:, None]), float(w @ ll)
 
 
 def _ess(w: np.ndarray) -> float:
@@ -134,10 +143,7 @@ def _em(x: np.ndarray, w: np.ndarray, k_eff: int, gcov: np.ndarray, rng: np.rand
         chols = np.array([_chol(_shrunk_cov(x, wr[:, k], means[k], gcov))
                           for k in range(nk.size)])
         gm = GaussianMixture(nk / nk.sum(), means, chols)
-        lp = gm.component_logpdf(x)
-        ll = _lse(lp)
-        resp = np.exp(lp - ll[:, None])
-        obj = float(w @ ll)
+        resp, obj = e_step(gm, x, w)
         if obj - prev < 1e-5 * max(1.0, abs(obj)):
             break
         prev = obj

@@ -49,7 +49,7 @@ class PerDesign(NamedTuple):
 
     pf: np.ndarray
     se: np.ndarray
-    extra: np.ndarray
+    extra: np.ndarray       # (P, k): the estimator's own per-design diagnostics
     levels: np.ndarray
     status: np.ndarray      # "converged", "not_reached" (pf is an upper bound) or "failed"
     calls: int
@@ -67,7 +67,7 @@ class LevelResult(NamedTuple):
 
     pf: float
     se: float
-    extra: float
+    extra: Any              # a float or a 1-D array: the estimator's own diagnostics
     level: int
     reached: bool
     y0: np.ndarray
@@ -90,7 +90,8 @@ def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: n
     """
     x, u = check_args(inputs, limit, x, rng, u)
     p, m = x.shape[0], inputs.dim
-    pf, se, extra, levels = nan_p(p), nan_p(p), nan_p(p), np.zeros(p, int)
+    pf, se, levels = nan_p(p), nan_p(p), np.zeros(p, int)
+    extra = []
     status = np.full(p, "converged", dtype=object)
     nout = np.zeros(p, int)
     y0s, calls = [], 0
@@ -100,7 +101,8 @@ def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: n
         calls += G.calls
         nout[i] = G.n_outside
         y0s.append(r.y0)
-        pf[i], se[i], extra[i], levels[i] = r.pf, r.se, r.extra, r.level
+        pf[i], se[i], levels[i] = r.pf, r.se, r.level
+        extra.append(np.atleast_1d(np.asarray(r.extra, dtype=float)))
         if r.reached:
             continue
         if est.on_failure == "raise":
@@ -109,8 +111,9 @@ def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: n
                 f"levels (max_levels={est.max_levels}; {why}); {advice}")
         status[i] = "not_reached" if est.on_failure == "bound" else "failed"
         if est.on_failure == "nan":
-            pf[i] = se[i] = extra[i] = np.nan
-    return PerDesign(pf, se, extra, levels, status.astype(str), calls, nout,
+            pf[i] = se[i] = np.nan
+            extra[-1] = np.full_like(extra[-1], np.nan)
+    return PerDesign(pf, se, np.vstack(extra), levels, status.astype(str), calls, nout,
                      mc_with_outside(np.vstack(y0s), limit))
 
 

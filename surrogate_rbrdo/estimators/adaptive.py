@@ -1,24 +1,32 @@
-"""Adaptive importance sampling by cross-entropy with Gaussian mixtures (CE-GM).
+"""Adaptive importance sampling: improved cross-entropy (iCE) with a flexible mixture.
 
-Levels ``k = 1, 2, …`` draw ``n_per_level`` points from ``h_k`` (``h_1 = φ``), set the
-intermediate threshold ``γ_k = max(0, ρ-quantile of G)`` and refit ``h_{k+1}`` to the points with
-``G ≤ γ_k``, weighted by ``φ/h_k`` (the cross-entropy update, Rubinstein & Kroese 2004; Gaussian
-mixtures as in Geyer, Papaioannou & Straub 2019, *Struct. Safety* 76). The mixture is fitted by
-weighted EM with up to ``n_components`` components, their number chosen by BIC, covariances
-shrunk towards a well-conditioned target (no collapse in 10-D). Once ``γ_k = 0`` a fresh sample
-of ``n_final`` points is drawn from the defensive mixture ``q = (1 − a) h + a N(0, c I)``
-(Hesterberg 1995) with ``c ≥ 1`` the mean square radius of ``h`` per dimension, so every failure
-branch has a sampling density no thinner than a widened ``φ``. The final estimate is unbiased
-for any failure domain (``q`` has full support); starting from ``φ`` the mixture grows over all
-branches of a series system instead of locking onto one design point, and when the mean point
-fails (``P_f > 0.5``) adaptation stops at once.
+The improved cross-entropy method of Papaioannou, Geyer & Straub (2019, *Reliability
+Engineering & System Safety* 191, 106564) adapts the IS density ``h`` to a sequence of smooth
+approximations of the optimal density, ``φ(u) Φ(−G(u)/σ_j)``: level ``j`` draws
+``n_per_level`` points from ``h_j`` (``h_1 = φ``), chooses ``σ_{j+1} < σ_j`` so that the
+coefficient of variation of the ratios ``Φ(−G/σ_{j+1}) / Φ(−G/σ_j)`` equals ``cov_target``
+(1.5, the paper's value), and refits ``h`` to the points weighted by
+``φ/h_j · Φ(−G/σ_{j+1})`` (weighted maximum likelihood: the cross-entropy update). It stops
+when the coefficient of variation of ``1[G ≤ 0] / Φ(−G/σ_j)`` is below ``cov_target`` (the
+smoothed target has become the failure domain) and refits ``h`` to the failures. Unlike the
+quantile-based multilevel CE every sample carries information, and the smooth weights keep
+all regions the samples have seen.
 
-``pf_se`` is the standard error of the final, independent sample (the adaptation levels only
-choose the density, so the estimate and its error are those of one plain IS run). Its weights'
-tail is checked: a Pareto ``k̂ > 0.7`` (:mod:`._tail`; e.g. Gaussian cross-entropy in 100
-dimensions, where the weights degenerate) raises an :class:`~._tail.EstimatorWarning`.
-Designs that never fail: see ``on_failure``. Points outside the model's physical domain count
-as failures (:mod:`._common`).
+The family of ``h`` is ``density``: ``"vmfn"`` (default), a mixture of von Mises–Fisher ×
+Nakagami components in polar coordinates (:mod:`._vmfn`; Wang & Song 2016; Papaioannou et al.
+2019), whose parameters grow like ``m`` and which stays reliable in many dimensions, or
+``"gm"``, a Gaussian mixture (Geyer, Papaioannou & Straub 2019, *Structural Safety* 76;
+:mod:`._gmm`), whose covariances degrade beyond a few tens of dimensions. The number of
+components (≤ ``n_components``) is chosen by the BIC at every fit.
+
+``pf_se`` is the standard error of a final, independent sample of ``n_final`` points from the
+defensive mixture ``(1 − a) h + a φ̃`` (Hesterberg 1995; ``φ̃ = φ`` for vMFN, ``N(0, c I)``
+with ``c ≥ 1`` the mean square radius of ``h`` per dimension for the Gaussian mixture): the
+adaptation levels only choose the density, so the estimate and its error are those of one
+plain IS run, unbiased for any failure domain. Its weights' tail is checked: a Pareto
+``k̂ > 0.7`` (:mod:`._tail`) raises an :class:`~._tail.EstimatorWarning`. Designs that never
+fail: see ``on_failure``. Points outside the model's physical domain are not failures
+(:mod:`._common`).
 
 ``mean``/``std`` of ``y`` come from the level-1 sample (plain Monte Carlo, ``n_per_level``
 points, or the fixed ``u``); the levels after it use ``rng``.
@@ -31,11 +39,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy import optimize, special
 
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
 from surrogate_rbrdo.estimators._common import LimitStateU, log_std_normal, make_estimate
 from surrogate_rbrdo.estimators._gmm import GaussianMixture, fit_mixture
+from surrogate_rbrdo.estimators._is_density import is_weights_estimate
 from surrogate_rbrdo.estimators._levels import (
     ON_FAILURE,
     LevelResult,
@@ -44,33 +54,91 @@ from surrogate_rbrdo.estimators._levels import (
     run_per_design,
 )
 from surrogate_rbrdo.estimators._tail import EstimatorWarning, pareto_khat
-from surrogate_rbrdo.estimators.importance import KHAT_LIMIT, is_weights_estimate
+from surrogate_rbrdo.estimators._vmfn import fit_vmfn, standard_normal_vmfn
+from surrogate_rbrdo.estimators.importance import KHAT_LIMIT
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
+
+DENSITIES = ("vmfn", "gm")
+#: quantile of G monitored to detect a failure domain that is never reached
+MONITOR_QUANTILE = 0.1
+
+
+def next_sigma(g: np.ndarray, sigma: float, target: float) -> float:
+    """``σ' ∈ (0, σ)`` with ``CoV[Φ(−G/σ')/Φ(−G/σ)] = target`` over the finite ``g`` (``σ = inf``
+    stands for the constant ``Φ(0)``). The CoV grows as ``σ'`` shrinks: found by bisection in
+    ``log σ'``, in logs (no underflow); the smallest ``σ'`` tried when even it stays below
+    ``target``.
+
+    >>> g = np.linspace(-1.0, 5.0, 200)
+    >>> s = next_sigma(g, np.inf, 1.5)
+    >>> r = special.ndtr(-g / s)
+    >>> round(float(r.std() / r.mean()), 3)
+    1.5
+    """
+    g = g[np.isfinite(g)]
+    scale = float(np.max(np.abs(g))) if g.size and np.max(np.abs(g)) > 0 else 1.0
+    hi = np.log(min(sigma, 100.0 * scale))
+    lo = np.log(1e-9 * scale)           # σ' not below 1e-9 of the scale of G
+    if hi <= lo:
+        return float(np.exp(hi))
+
+    def log_phi(s: float) -> np.ndarray:
+        return special.log_ndtr(np.clip(-g / s, -1e100, 1e100))
+
+    base = np.log(0.5) if not np.isfinite(sigma) else log_phi(sigma)
+
+    def miss(log_s: float) -> float:
+        lr = log_phi(np.exp(log_s)) - base
+        r = np.exp(lr - np.max(lr))
+        return float(np.std(r) / np.mean(r)) - target
+
+    if miss(lo) <= 0:
+        return float(np.exp(lo))
+    if miss(hi) >= 0:
+        return float(np.exp(hi))
+    return float(np.exp(optimize.brentq(miss, lo, hi, xtol=1e-8)))
+
+
+def smooth_cov(g: np.ndarray, sigma: float) -> float:
+    """CoV of ``1[G ≤ 0]/Φ(−G/σ)`` over the sample (``inf`` without failures; ``Φ(−G/σ) ≥ 1/2``
+    at the failures, so no division by an underflow).
+
+    >>> smooth_cov(np.array([-1.0, -2.0, 3.0, 4.0]), np.inf)
+    1.0
+    """
+    fail = g <= 0
+    if not fail.any():
+        return np.inf
+    r = np.zeros(g.size)
+    r[fail] = 1.0 / (0.5 if not np.isfinite(sigma) else special.ndtr(-g[fail] / sigma))
+    return float(np.std(r) / np.mean(r))
 
 
 @ESTIMATORS.register("ais")
 @dataclass(frozen=True)
 class CrossEntropyIS:
-    """Cross-entropy adaptive importance sampling (Gaussian mixture, defensive component).
+    """Improved cross-entropy adaptive importance sampling (vMFN or Gaussian mixture).
 
     Parameters
     ----------
     n_per_level : int
-        Points per adaptation level (level 0 uses ``u`` when given).
-    rho : float
-        Quantile defining the intermediate thresholds, in (0, 0.5].
+        Points per adaptation level (level 1 uses ``u`` when given).
+    cov_target : float
+        Target coefficient of variation of the smoothing weights (``δ*``), > 0.
     n_final : int
-        Points of the final IS estimate.
+        Points of the final, independent IS estimate.
+    density : {"vmfn", "gm"}
+        Family of the IS density: von Mises–Fisher–Nakagami or Gaussian mixture.
     n_components : int
         Largest number of mixture components (the BIC picks 1..n_components).
     defensive : float
-        Weight ``a`` of the widened standard normal in the final mixture, in [0, 0.999];
-        0 switches it off.
+        Weight ``a`` of the defensive component in the final mixture, in [0, 0.999].
     max_levels : int
     on_failure : {"bound", "raise", "nan"}
-        When ``max_levels`` is reached (or the thresholds stall) before ``γ = 0``: report the
-        IS estimate of ``P(G ≤ γ_last)`` of the last level as an upper bound
-        (``status = "not_reached"``), raise ``ModelError``, or give NaN.
+        When no sample has failed after ``max_levels`` levels (or the monitored 10 % quantile of
+        ``G`` stopped decreasing): report the IS estimate of ``P(G ≤ γ)`` of the last level, ``γ``
+        that quantile (> 0), as an upper bound (``status = "not_reached"``), raise
+        ``ModelError``, or give NaN.
     ci_level : float
 
     Examples
@@ -84,8 +152,9 @@ class CrossEntropyIS:
     """
 
     n_per_level: int = 1000
-    rho: float = 0.1
+    cov_target: float = 1.5
     n_final: int = 2000
+    density: str = "vmfn"
     n_components: int = 4
     defensive: float = 0.1
     max_levels: int = 30
@@ -94,21 +163,28 @@ class CrossEntropyIS:
 
     def __post_init__(self) -> None:
         check_int("n_per_level", self.n_per_level, minimum=20)
-        if check_range("rho", self.rho, 0.0, 0.5) == 0.0:
-            raise ValueError("rho = 0.0 is not allowed: must lie in (0, 0.5]")
+        if check_range("cov_target", self.cov_target, 0.0, 100.0) == 0.0:
+            raise ValueError("cov_target = 0.0 is not allowed: must lie in (0, 100]")
         check_int("n_final", self.n_final, minimum=2)
+        check_choice("density", self.density, DENSITIES)
         check_int("n_components", self.n_components, minimum=1)
         check_range("defensive", self.defensive, 0.0, 0.999)
         check_int("max_levels", self.max_levels, minimum=1)
         check_choice("on_failure", self.on_failure, ON_FAILURE)
         check_range("ci_level", self.ci_level, 0.0, 1.0, inclusive=False)
 
+    def _fit(self, v: np.ndarray, logw: np.ndarray, rng: np.random.Generator) -> Any:
+        keep = np.isfinite(logw)
+        if self.density == "vmfn":
+            return fit_vmfn(v[keep], logw[keep], self.n_components, rng)
+        return fit_mixture(v[keep], logw[keep], self.n_components, rng)
+
     def _one(self, G: LimitStateU, m: int, u0: np.ndarray | None, rng: np.random.Generator
              ) -> LevelResult:
-        h = GaussianMixture(np.ones(1), np.zeros((1, m)), np.eye(m)[None])
+        h = (standard_normal_vmfn(m) if self.density == "vmfn"
+             else GaussianMixture(np.ones(1), np.zeros((1, m)), np.eye(m)[None]))
         v = u0 if u0 is not None else rng.standard_normal((self.n_per_level, m))
-        y0 = None
-        level, stall = 0, StallGuard()
+        sigma, y0, stall, level = np.inf, None, StallGuard(), 0
         for level in range(1, self.max_levels + 1):
             if level > 1:
                 v = h.sample(self.n_per_level, rng)
@@ -116,34 +192,47 @@ class CrossEntropyIS:
             if y0 is None:
                 y0 = G.last_y.copy()
             logw = log_std_normal(v) - h.logpdf(v)
-            # "lower": no interpolation between -inf values (points outside the domain)
-            gamma = max(float(np.quantile(g, self.rho, method="lower")), 0.0)
-            elite = g <= gamma if gamma > 0 else g < 0
-            if elite.sum() < 2:
-                elite = g <= gamma
-            if gamma > 0 and (stall(gamma, level, g) or level == self.max_levels):
-                # not reached: IS estimate of P(G <= γ) from this level, an upper bound of P_f
-                pf, se, ess = is_weights_estimate(g <= gamma, logw)
-                return LevelResult(pf, se, ess, level, False, y0)
-            h = fit_mixture(v[elite], logw[elite], self.n_components, rng)
-            if gamma == 0.0:
+            fail = g <= 0
+            if smooth_cov(g, sigma) <= self.cov_target:
                 break
+            quant = float(np.quantile(g, MONITOR_QUANTILE, method="lower"))
+            if not fail.any() and (stall(quant, level, g) or level == self.max_levels):
+                # not reached: IS estimate of P(G <= γ), an upper bound of P_f
+                pf, se, _ = is_weights_estimate(g <= quant, logw)
+                return LevelResult(pf, se, np.nan, level, False, y0)
+            sigma = next_sigma(g, sigma, self.cov_target)
+            with np.errstate(divide="ignore"):
+                h = self._fit(v, logw + special.log_ndtr(-g / sigma), rng)
+        if fail.sum() >= 2:           # the cross-entropy update on the failures themselves
+            with np.errstate(divide="ignore"):
+                h = self._fit(v, np.where(fail, logw, -np.inf), rng)
+        pf, se, khat = self._final(G, h, m, rng)
+        return LevelResult(pf, se, khat, level, True, y0)
+
+    def _final(self, G: LimitStateU, h: Any, m: int, rng: np.random.Generator
+               ) -> tuple[float, float, float]:
+        """The independent final estimate from the defensive mixture: ``(pf, se, k̂)``."""
         n, a = self.n_final, self.defensive
-        # defensive component N(0, c I), c = mean square radius of h per dimension (>= 1)
-        second = h.weights @ (np.sum(h.means**2, axis=1)
-                              + np.einsum("kij,kij->k", h.chols, h.chols))
-        c = max(1.0, float(second) / m)
-        pick = rng.random(n) < a
-        v = np.where(pick[:, None], np.sqrt(c) * rng.standard_normal((n, m)), h.sample(n, rng))
-        lq = h.logpdf(v)
-        if a > 0:
-            ld = log_std_normal(v / np.sqrt(c)) - 0.5 * m * np.log(c)
-            lq = np.logaddexp(np.log1p(-a) + lq, np.log(a) + ld)
+        if self.density == "vmfn":
+            q = h.with_defensive(a)
+            v = q.sample(n, rng)
+            lq = q.logpdf(v)
+        else:   # defensive N(0, c I), c = mean square radius of h per dimension (>= 1)
+            second = h.weights @ (np.sum(h.means**2, axis=1)
+                                  + np.einsum("kij,kij->k", h.chols, h.chols))
+            c = max(1.0, float(second) / m)
+            pick = rng.random(n) < a
+            v = np.where(pick[:, None], np.sqrt(c) * rng.standard_normal((n, m)),
+                         h.sample(n, rng))
+            lq = h.logpdf(v)
+            if a > 0:
+                ld = log_std_normal(v / np.sqrt(c)) - 0.5 * m * np.log(c)
+                lq = np.logaddexp(np.log1p(-a) + lq, np.log(a) + ld)
         fail = G(v) < 0
         logw = log_std_normal(v) - lq
         pf, se, _ = is_weights_estimate(fail, logw)
         khat = pareto_khat(np.where(fail, np.exp(np.where(fail, logw, 0.0)), 0.0))
-        return LevelResult(pf, se, khat, level, True, y0)
+        return pf, se, khat
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
@@ -154,14 +243,14 @@ class CrossEntropyIS:
             advice="increase max_levels or n_per_level, or pass on_failure='bound' for an "
                    "upper bound")
         mc = r.moments
-        khat = np.where(r.status == "converged", r.extra, np.nan)
+        khat = np.where(r.status == "converged", r.extra[:, 0], np.nan)
         heavy = np.flatnonzero(np.nan_to_num(khat, nan=-np.inf) > KHAT_LIMIT)
         if heavy.size:
             warnings.warn(
                 f"cross-entropy IS: heavy-tailed final weights for design(s) "
                 f"{heavy[:10].tolist()} (Pareto k = {np.round(khat[heavy[:10]], 2).tolist()} > "
-                f"{KHAT_LIMIT}): the fitted density misses part of the failure domain (e.g. in "
-                "high dimension), pf_se is unreliable; use 'subset'",
+                f"{KHAT_LIMIT}): the fitted density misses part of the failure domain, pf_se is "
+                "unreliable; use 'subset'",
                 EstimatorWarning, stacklevel=2)
         return make_estimate(
             "ais", r.calls, r.pf.size, mean=mc.mean, std=mc.std, mean_se=mc.mean_se,
@@ -169,5 +258,6 @@ class CrossEntropyIS:
             pf_ci=interval(r.pf, r.se, r.status, self.ci_level),
             diagnostics={"ci_level": self.ci_level, "ci_method": "normal", "pareto_k": khat,
                          "levels": r.levels, "converged": r.status == "converged",
-                         "status": r.status, "n_outside_domain": r.n_outside},
+                         "status": r.status, "n_outside_domain": r.n_outside,
+                         "density": self.density},
         )

@@ -14,6 +14,7 @@ in *Reliability and Optimization of Structural Systems*, Springer.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -49,6 +50,7 @@ class DesignPoint:
     calls: int
     message: str
     status: str = "converged"
+    g_origin: float = float("nan")
 
 
 def fd_gradient(G: LimitStateU, u: np.ndarray, g_u: float, step: float,
@@ -125,24 +127,48 @@ def _line_search(G: LimitStateU, u: np.ndarray, g: float, grad: np.ndarray, d: n
     return best[0], best[1], False, lam_in, lam_out
 
 
+def _start(G: Any, m: int, start: tuple[np.ndarray, float] | None
+           ) -> tuple[np.ndarray, float, float]:
+    """Start point, its ``G`` and ``G(0)``; the mean point outside the domain is an error."""
+    if start is None:
+        u = np.zeros(m)
+        g = float(G(u[None, :])[0])
+        if not np.isfinite(g):
+            raise ModelError("FORM: the mean point (u = 0) lies outside the model's physical "
+                             "domain")
+        return u, g, g
+    u = np.array(start[0], dtype=float)
+    return u, float(G(u[None, :])[0]), float(start[1])
+
+
 def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
-          fd_step: float, fd_scheme: str, beta_max: float = np.inf) -> DesignPoint:
+          fd_step: float, fd_scheme: str, beta_max: float = np.inf,
+          start: tuple[np.ndarray, float] | None = None,
+          stop: Callable[[np.ndarray], bool] | None = None) -> DesignPoint:
     """Run iHL-RF on ``G`` from the origin; never raises on non-convergence (see ``status``).
 
-    Convergence: ``|G(u)| / |G(0)| <= tol_g`` and the relative distance of ``u`` from the line
-    through ``α``, ``‖u − (α·u)α‖ / max(1, ‖u‖) <= tol_u``. When the line search cannot
-    improve at a point with ``|G|`` converged and that distance below ``√tol_u`` (the accuracy a
-    finite-difference gradient allows; the error of ``β`` is second order in it), the search
-    has converged too. The limit state is *not reached* when an iterate still on the side of
-    ``G(0)`` lies beyond ``beta_max``, or when the step towards the linearised design point
-    leaves the physical domain twice in a row and ``G`` keeps its sign up to the domain's edge.
+    Convergence: ``|G(u)| <= tol_g · max(|G(0)|, ‖∇G(u)‖)`` — relative to ``G(0)``, or, where
+    ``G(0)`` is itself tiny (a design next to its limit state, whose ``G`` is then limited by
+    round-off), a distance ``|G|/‖∇G‖ <= tol_g`` from the limit state in standard space — and
+    the relative distance of ``u`` from the line through ``α``,
+    ``‖u − (α·u)α‖ / max(1, ‖u‖) <= tol_u``. When the line search cannot improve at a point
+    with ``|G|`` converged and that distance below ``√tol_u`` (the accuracy a finite-difference
+    gradient allows; the error of ``β`` is second order in it), the search has converged too.
+    The limit state is *not reached* when an iterate still on the side of ``G(0)`` lies beyond
+    ``beta_max``, or when the step towards the linearised design point leaves the physical
+    domain twice in a row and ``G`` keeps its sign up to the domain's edge.
+
+    ``start = (u0, G(0))`` starts the search at ``u0`` instead of the origin (the sign and scale
+    of ``G(0)``, known from an earlier search, are then not recomputed); ``stop(u)`` ends the
+    search (``status = "failed"``) when it returns True for an iterate.
     """
-    u = np.zeros(m)
-    g = float(G(u[None, :])[0])
+    u, g, g_origin = _start(G, m, start)
     if not np.isfinite(g):
-        raise ModelError("FORM: the mean point (u = 0) lies outside the model's physical domain")
-    scale = abs(g) if g != 0 else 1.0
-    sign0 = 1.0 if g >= 0 else -1.0
+        return DesignPoint(np.nan, u, np.full(m, np.nan), np.full(m, np.nan), g, False, 0,
+                           G.calls, "start point outside the physical domain", "failed",
+                           g_origin)
+    scale = abs(g_origin)
+    sign0 = 1.0 if g_origin >= 0 else -1.0
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)
     msg, status, it, blocked = "maximum number of iterations reached", "failed", 0, 0
     while it < max_iter:
@@ -152,12 +178,15 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
             msg = (f"limit state not reached within beta_max = {beta_max:g} "
                    f"(|beta| >= {np.linalg.norm(u):.4g})")
             break
+        if stop is not None and stop(u):
+            msg = "stopped by the caller"
+            break
         ng = float(np.linalg.norm(grad))
         if not np.isfinite(ng) or ng == 0.0:
             msg = f"zero or non-finite gradient of the limit state at u={u.tolist()}"
             break
         alpha = -grad / ng
-        if abs(g) / scale <= tol_g and _alignment(u, alpha) <= tol_u:
+        if abs(g) <= tol_g * max(scale, ng) and _alignment(u, alpha) <= tol_u:
             status, msg = "converged", "converged"
             break
         d = ((grad @ u - g) / ng**2) * grad - u
@@ -178,7 +207,7 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
         if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
             ng = float(np.linalg.norm(grad))
-            if (np.isfinite(ng) and ng > 0 and abs(g) / scale <= tol_g
+            if (np.isfinite(ng) and ng > 0 and abs(g) <= tol_g * max(scale, ng)
                     and _alignment(u, -grad / ng) <= np.sqrt(tol_u)):
                 status = "converged"
                 msg = ("converged (the line search cannot improve further: the alignment is "
@@ -188,7 +217,8 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
     alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
     beta = sign0 * min(float(np.linalg.norm(u)),
                        beta_max if status == "not_reached" else np.inf)
-    return DesignPoint(beta, u, alpha, grad, g, status == "converged", it, G.calls, msg, status)
+    return DesignPoint(beta, u, alpha, grad, g, status == "converged", it, G.calls, msg, status,
+                       g_origin)
 
 
 @ESTIMATORS.register("form")
@@ -200,17 +230,20 @@ class FORM:
     ``"mc"`` for moments). Diagnostics: ``beta``, ``u_star`` and ``theta_star`` ``(P, m)``,
     ``alpha`` (unit vector towards failure), ``importance_factors`` ``α²``, ``converged``,
     ``status`` (``"converged"``, ``"not_reached"``, ``"failed"``), ``pf_bound``
-    (``"upper"``/``"lower"`` where ``pf`` is a bound, else ``""``), ``n_iter``, ``calls``
+    (``"upper"``/``"lower"`` where the limit state was not reached, else ``""``), ``n_iter``,
+    ``calls``
     (model calls per design), ``message``.
 
     **Limit state not reached.** When the search meets the edge of the model's physical
-    domain (the model raises ``OutsideDomainError``, e.g. a stiffness factor θ ≤ 0) or passes
-    ``‖u‖ = beta_max`` with ``G`` still of the sign of ``G(0)``, the design never fails
-    (never survives) as far as the search can see: ``pf = Φ(−|β_b|)`` with ``β_b`` the distance
-    reached is reported as an **upper bound** (a lower bound ``1 − Φ(−|β_b|)`` when the mean
-    point fails), ``pf_ci = [0, pf]`` (``[pf, 1]``), ``status = "not_reached"``. The bound is
-    first-order: FORM only explores along its search path. Not an error, whatever
-    ``on_failure`` says.
+    domain (the model raises ``OutsideDomainError``, e.g. a stiffness factor θ ≤ 0; points
+    outside are not failures, :mod:`._common`) or passes ``‖u‖ = beta_max`` with ``G`` still of
+    the sign of ``G(0)`` at the last point ``u_b``, the design never fails (never survives) as
+    far as the search can see: ``status = "not_reached"``, ``pf = Φ(−|β_b|)`` with
+    ``β_b = ‖u_b‖`` (``1 − Φ(−|β_b|)`` when the mean point fails) and
+    ``pf_bound = "upper"`` (``"lower"``): ``pf`` is the first-order probability of
+    ``{G ≤ G(u_b)}``, a superset of the failure domain. It is not a rigorous bound (FORM only
+    explores along its path), so ``pf_ci`` stays NaN, as for every FORM result. Not an error,
+    whatever ``on_failure`` says.
 
     Parameters
     ----------
@@ -270,9 +303,16 @@ class FORM:
                x_row: np.ndarray) -> DesignPoint:
         """Design-point search for one design ``x_row`` (shape ``(d,)``)."""
         G = LimitStateU(response, inputs, limit, np.asarray(x_row, dtype=float))
-        return ihlrf(G, inputs.dim, max_iter=self.max_iter, tol_g=self.tol_g,
-                     tol_u=self.tol_u, fd_step=self.fd_step, fd_scheme=self.fd_scheme,
-                     beta_max=self.beta_max)
+        return self.run(G, inputs.dim)
+
+    def run(self, G: Any, m: int, *, start: tuple[np.ndarray, float] | None = None,
+            max_iter: int | None = None, stop: Callable[[np.ndarray], bool] | None = None
+            ) -> DesignPoint:
+        """iHL-RF with these options on a limit-state function ``G(u (n, m)) -> (n,)`` that
+        counts its calls in ``G.calls`` (``start``, ``stop``: see :func:`ihlrf`)."""
+        return ihlrf(G, m, max_iter=self.max_iter if max_iter is None else max_iter,
+                     tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
+                     fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop)
 
     def check(self, dp: DesignPoint, p: int) -> None:
         """Raise ``ModelError`` for a failed search when ``on_failure == "raise"``."""
@@ -306,25 +346,24 @@ class FORM:
         if ok.any():
             theta[ok] = inputs.from_standard(ustar[ok])
         pf = special.ndtr(-beta)
-        bound, ci = bound_interval(pf, beta, status)
         return make_estimate(
-            "form", calls, p, pf=pf, pf_ci=ci,
+            "form", calls, p, pf=pf,
             diagnostics={"beta": beta, "u_star": ustar, "theta_star": theta, "alpha": alpha,
                          "importance_factors": alpha**2, "converged": status == "converged",
-                         "status": status, "pf_bound": bound, "n_iter": nit, "calls": per,
+                         "status": status, "pf_bound": bound_labels(beta, status),
+                         "n_iter": nit, "calls": per,
                          "message": msgs},
         )
 
 
-def bound_interval(pf: np.ndarray, beta: np.ndarray, status: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """``pf_bound`` labels and the ``pf_ci`` of a FORM-type result: ``[0, pf]`` where ``pf``
-    is an upper bound (limit state not reached from a safe mean), ``[pf, 1]`` where it is a
-    lower bound (not reached from a failing mean), NaN elsewhere."""
-    nr = status == "not_reached"
-    bound = np.where(nr, np.where(beta >= 0, "upper", "lower"), "")
-    ci = np.full((pf.size, 2), np.nan)
-    up, lo = nr & (beta >= 0), nr & (beta < 0)
-    ci[up] = np.column_stack([np.zeros(up.sum()), pf[up]])
-    ci[lo] = np.column_stack([pf[lo], np.ones(lo.sum())])
-    return bound, ci
+def bound_labels(beta: np.ndarray, status: np.ndarray) -> np.ndarray:
+    """``pf_bound`` of a design-point result: ``"upper"`` where the limit state was not reached
+    from a safe mean (``pf`` is that of a superset of the failure domain), ``"lower"`` where it
+    was not reached from a failing mean, ``""`` elsewhere.
+
+    >>> bound_labels(np.array([3.0, 10.0, -10.0]), np.array(["converged", "not_reached",
+    ...                                                       "not_reached"])).tolist()
+    ['', 'upper', 'lower']
+    """
+    nr = np.asarray(status) == "not_reached"
+    return np.where(nr, np.where(np.asarray(beta) >= 0, "upper", "lower"), "")

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -89,25 +90,30 @@ def mc_with_outside(y: np.ndarray, limit: LimitState, *, ci_level: float = 0.95,
                     method: str = "mc") -> Estimate:
     """:func:`mc_from_values` where NaN marks a point outside the model's physical domain.
 
-    Such points count as failures (the estimate is that of "failure or outside the domain",
-    see :mod:`._common`); μ_y, σ_y and their errors use the points inside only, row by row.
-    ``diagnostics["n_outside_domain"]`` counts them per design. Without NaN this is
+    Such points are **not failures** (:mod:`._common`): ``pf`` is the share of the ``N`` points
+    that fail inside the domain, ``P(failure and inside)``, with its Clopper–Pearson interval.
+    μ_y, σ_y and their errors use the points inside only, row by row: the moments of ``y``
+    conditional on the domain (``y`` is not defined outside). ``diagnostics`` adds
+    ``n_outside_domain`` and ``p_outside`` (their share) per design. Without NaN this is
     :func:`mc_from_values`.
 
     >>> from surrogate_rbrdo.core import LimitState
     >>> est = mc_with_outside(np.array([[1.0, 2.0, np.nan, 4.0]]), LimitState(3.5))
-    >>> est.pf.tolist(), est.mean.round(6).tolist(), est.diagnostics["n_outside_domain"].tolist()
-    ([0.5], [2.333333], [1])
+    >>> est.pf.tolist(), est.mean.round(6).tolist(), est.diagnostics["p_outside"].tolist()
+    ([0.25], [2.333333], [0.25])
     """
     y = np.asarray(y, dtype=float)
     out = np.isnan(y)
     if not out.any():
-        return mc_from_values(y, limit, ci_level=ci_level, method=method)
+        est = mc_from_values(y, limit, ci_level=ci_level, method=method)
+        zero = np.zeros(y.shape[0], dtype=int)
+        return replace(est, diagnostics=MappingProxyType(
+            {**est.diagnostics, "n_outside_domain": zero, "p_outside": zero.astype(float)}))
     p, n = y.shape
     rows = [mc_from_values(r[np.isfinite(r)][None, :], limit, ci_level=ci_level, method=method)
             if np.isfinite(r).any() else None for r in y]
     nout = out.sum(axis=1)
-    nfail = nout + np.array([0 if e is None else e.diagnostics["n_failures"][0] for e in rows])
+    nfail = np.array([0 if e is None else e.diagnostics["n_failures"][0] for e in rows])
     pf = nfail / n
 
     def col(name: str) -> np.ndarray:
@@ -118,7 +124,7 @@ def mc_with_outside(y: np.ndarray, limit: LimitState, *, ci_level: float = 0.95,
         mean_se=col("mean_se"), std_se=col("std_se"), pf=pf, pf_se=np.sqrt(pf * (1 - pf) / n),
         pf_ci=clopper_pearson(nfail, n, ci_level),
         diagnostics={"ci_level": ci_level, "ci_method": "clopper-pearson", "n_samples": n,
-                     "n_failures": nfail, "n_outside_domain": nout})
+                     "n_failures": nfail, "n_outside_domain": nout, "p_outside": nout / n})
 
 
 #: below this many failures the normal interval pf ± 3·SE of crude MC is unreliable (Poisson
@@ -132,10 +138,11 @@ class MonteCarlo:
     """Crude Monte Carlo over ``n_samples`` θ samples, vectorised over designs.
 
     With ``u`` given, its rows are the (common) standard-normal sample and ``n_samples`` is
-    ignored. Points outside the model's physical domain count as failures
-    (:func:`mc_with_outside`). Fewer than ``MC_MIN_FAILURES`` failures for a design raise an
-    :class:`~._tail.EstimatorWarning` (the normal interval is then unreliable; ``pf_ci`` is
-    exact).
+    ignored. Points outside the model's physical domain are not failures and the moments are
+    those of the points inside (:func:`mc_with_outside`); when there are any, an
+    :class:`~._tail.EstimatorWarning` says how many. Fewer than ``MC_MIN_FAILURES`` failures
+    for a design raise an :class:`~._tail.EstimatorWarning` (the normal interval is then
+    unreliable; ``pf_ci`` is exact).
 
     >>> from surrogate_rbrdo.core import LimitState
     >>> from surrogate_rbrdo.uncertainty import MultivariateNormal
@@ -169,4 +176,19 @@ class MonteCarlo:
                 f"samples for design(s) {few[:10].tolist()}: pf ± z·pf_se is unreliable (0 "
                 "failures give pf_se = 0); use pf_ci (Clopper-Pearson) or more samples",
                 EstimatorWarning, stacklevel=2)
+        warn_outside(est.diagnostics["n_outside_domain"], y.shape[1], "crude Monte Carlo")
         return est
+
+
+def warn_outside(n_outside: np.ndarray, n: int, what: str) -> None:
+    """Raise an :class:`~._tail.EstimatorWarning` when sample points fell outside the model's
+    physical domain (the moments are then conditional on the domain, P_f excludes them)."""
+    n_outside = np.asarray(n_outside)
+    bad = np.flatnonzero(n_outside > 0)
+    if bad.size:
+        warnings.warn(
+            f"{what}: {int(n_outside[bad].max())} of {n} sample points lie outside the model's "
+            f"physical domain for design(s) {bad[:10].tolist()}: they are not counted as "
+            "failures and the moments of y are those inside the domain (biased where that "
+            "mass matters); consider inputs with positive support (stiffness_factors(..., "
+            "distribution='lognormal'))", EstimatorWarning, stacklevel=3)

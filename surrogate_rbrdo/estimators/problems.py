@@ -208,11 +208,64 @@ def nonlinear_oscillator() -> Problem:
                    source="Echard et al. (2011); reference by crude MC, 2e8 samples")
 
 
+def two_sided_linear(dim: int = 10, beta: float = 5.0) -> Problem:
+    """Two linear components on opposite sides of the mean: failure ``|a·u| > β`` (``‖a‖ = 1``),
+    a series system with two design points ``±β a`` at the same distance.
+
+    Exact: ``P_f = 2Φ(−β)``. A search from the mean finds one design point; IS at it sees half
+    of P_f (the case Der Kiureghian & Dakessian 1998 motivate their search with).
+    """
+    a = np.ones(dim) / np.sqrt(dim)
+    return Problem(f"two_sided_linear_{dim}d_b{beta:g}",
+                   lambda x, t: np.abs(t @ a)[None, :] + 0 * _shift(x),
+                   MultivariateNormal(np.zeros(dim), cov=np.eye(dim)), LimitState(beta),
+                   np.zeros((1, 0)), np.array([2.0 * special.ndtr(-beta)]),
+                   source="two symmetric linear components; closed form 2Φ(−β)")
+
+
+def exponential_sum(dim: int = 10, pf: float = 3e-7) -> Problem:
+    """``y = Σ X_i`` of ``dim`` independent ``Exp(1)`` variables, failure ``y > c`` with ``c``
+    the ``(1 − pf)``-quantile of ``Gamma(dim, 1)``.
+
+    Exact: ``P_f = Gamma(dim).sf(c)``. In standard space ``X_i = −ln Φ(−u_i)``, so the limit
+    state is strongly non-linear and bends back towards the mean (about ``u_i²/2`` per
+    coordinate): the sum of exponentials of the rare-event literature (Rubinstein & Kroese
+    2017, *Simulation and the Monte Carlo Method*, 3rd ed.).
+    """
+    c = float(stats.gamma(dim).isf(pf))
+    return Problem(f"exponential_sum_{dim}d",
+                   lambda x, t: np.sum(-special.log_ndtr(-t), axis=1)[None, :] + 0 * _shift(x),
+                   MultivariateNormal(np.zeros(dim), cov=np.eye(dim)), LimitState(c),
+                   np.zeros((1, 0)), np.array([float(stats.gamma(dim).sf(c))]),
+                   source="sum of exponentials; closed form (Gamma tail)")
+
+
+def convex_waarts() -> Problem:
+    """Convex limit state ``g = 0.1(u₁ − u₂)² − (u₁ + u₂)/√2 + 2.5`` (Borri & Speranzini 1997;
+    Waarts 2000), failure ``g < 0``.
+
+    Exact by 1-D quadrature in ``s = (u₁+u₂)/√2``, ``t = (u₁−u₂)/√2``:
+    ``P_f = ∫ φ(t) Φ(−2.5 − 0.2 t²) dt`` = 4.2073e-3.
+    """
+    def resp(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+        u1, u2 = t[:, 0], t[:, 1]
+        return -(0.1 * (u1 - u2) ** 2 - (u1 + u2) / np.sqrt(2.0) + 2.5)[None, :] + 0 * _shift(x)
+
+    pf, _ = integrate.quad(lambda t: stats.norm.pdf(t) * special.ndtr(-2.5 - 0.2 * t * t),
+                           -np.inf, np.inf, epsabs=1e-16, epsrel=1e-12)
+    return Problem("convex_waarts", resp, MultivariateNormal(np.zeros(2), cov=np.eye(2)),
+                   LimitState(0.0), np.zeros((1, 0)), np.array([pf]),
+                   source="Borri & Speranzini (1997); Waarts (2000); exact by 1-D quadrature")
+
+
 def benchmark_problems() -> list[Problem]:
     """The published reliability problems of ``benchmarks/bench_coverage.py`` (first design of
     each): linear in 2-D, 10-D (P_f = 2.9e-7) and 100-D, correlated normal, Nataf lognormals, the
-    sum of two uniforms, Breitung's paraboloid, the four-branch series system (k = 6, 7), the
-    two-design-point parabola, the non-linear oscillator and a failing mean point (β = −1).
+    sum of two uniforms, Breitung's paraboloid (5-D; 10-D convex at 1e-7 and concave at 3e-4),
+    the four-branch series system (k = 6, 7), the two-design-point parabola, the convex
+    limit state of Borri & Speranzini, two-sided linear limit states (two design points, 5-D and
+    10-D), the sum of ten exponentials at 3e-7, the non-linear oscillator and a failing mean
+    point (β = −1).
 
     >>> [p.name for p in benchmark_problems()][:3]
     ['linear_2d_beta3', 'linear_10d_beta5', 'linear_100d_beta3.5']
@@ -223,6 +276,10 @@ def benchmark_problems() -> list[Problem]:
     return [
         linear_standard(beta=3.0, dim=2), linear_standard(beta=5.0, dim=10),
         linear_standard(beta=3.5, dim=100), cn, lognormal_nataf(), uniform_sum(),
-        paraboloid(beta=3.0, kappa=0.3, dim=5), series_four_branch(6.0), series_four_branch(7.0),
-        two_design_points(), nonlinear_oscillator(), linear_standard(beta=-1.0, dim=2),
+        paraboloid(beta=3.0, kappa=0.3, dim=5), paraboloid(beta=5.0, kappa=0.05, dim=10),
+        paraboloid(beta=4.0, kappa=-0.1, dim=10), series_four_branch(6.0),
+        series_four_branch(7.0), two_design_points(), convex_waarts(),
+        two_sided_linear(dim=5, beta=3.5), two_sided_linear(dim=10, beta=5.0),
+        exponential_sum(dim=10, pf=3e-7), nonlinear_oscillator(),
+        linear_standard(beta=-1.0, dim=2),
     ]

@@ -12,7 +12,8 @@ limit state bends away from the origin) and
 For ``β < 0`` the formula is applied to the safe set: ``P_f = 1 − Φ(β) Π (1 + β κ_i)^{−1/2}``
 (``κ`` and ``β`` both change sign). A factor ``1 + ψκ ≤ 0`` (a very concave limit state) makes the
 asymptotic formula meaningless: ``ModelError`` or NaN, as FORM's ``on_failure`` says. When FORM
-finds the limit state not reached, its bound is reported (``status``, ``pf_bound`` as FORM).
+finds the limit state not reached, its first-order value is reported (``status``,
+``pf_bound`` as FORM).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate, nan_p
-from surrogate_rbrdo.estimators.form import FORM, bound_interval
+from surrogate_rbrdo.estimators.form import FORM, bound_labels
 from surrogate_rbrdo.estimators.importance import check_form
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
@@ -152,7 +153,7 @@ class SORM:
         with np.errstate(divide="ignore"):
             beta_sorm = -special.ndtri(pf)
         status = status.astype(str)
-        bound, ci = bound_interval(pf, beta, status)
-        return make_estimate("sorm", calls, p, pf=pf, pf_ci=ci, diagnostics={
+        return make_estimate("sorm", calls, p, pf=pf, diagnostics={
             "beta": beta, "beta_sorm": beta_sorm, "curvatures": kappas, "pf_form": pf_form,
-            "converged": conv, "status": status, "pf_bound": bound, "formula": self.formula})
+            "converged": conv, "status": status, "pf_bound": bound_labels(beta, status),
+            "formula": self.formula})

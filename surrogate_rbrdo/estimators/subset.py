@@ -8,25 +8,27 @@ component-wise conditional-sampling kernel of Papaioannou et al. (2015):
 ``{G ≤ γ_k}``, and free of the dimension problems of random-walk Metropolis). When at least
 ``p0 · N`` points fail, ``P_f = p0^k · (failures / N)``.
 
-The coefficient of variation ``δ`` follows Au & Beck (2001, Eq. 29): per level
-``δ_k² = (1−p_k)/(p_k N) (1+γ_k)`` with the chain correlation factor ``γ_k`` estimated from the
-chains, summed over levels (levels treated as uncorrelated, as in the paper; the fully
-correlated bound ``Σδ_k`` is ``diagnostics["pf_cov_upper"]``). Measured over 300 runs
-(``benchmarks/bench_coverage.py``, N = 1000) the observed scatter is 1.05–1.2 times ``δ``.
-
-**Error bars.** The estimate is a product of level fractions and its distribution is skewed to
-the right (log-normal-like): a run that lands low also reports a small ``P̂ δ``, so
-``P̂ ± 3 P̂δ`` missed the exact value in 3–7 % of runs at ``δ`` = 0.2–0.5. ``pf_se`` is
-therefore the standard error of :func:`lognormal_error`: ``P̂ ± 3 pf_se`` contains the
-log-normal 3σ interval of the estimate (``pf_se ≈ P̂δ(1 + 1.5δ)``; the raw ``δ`` is
-``diagnostics["pf_cov_au_beck"]``), and ``pf_ci`` is the log-normal interval at ``ci_level``.
+**Error bars.** Per level, the variance of the conditional estimate ``p̂_k`` is the batch-means
+variance over *families*: the samples of level ``k`` grouped by the chain of level ``k − 1``
+their seed came from, ``δ_k² = Σ_f (Σ_{i∈f} (1[G_i ≤ γ_k] − p̂_k))² / (N p̂_k)²`` (level 0: each
+sample its own family, the binomial ``(1 − p)/(N p)``). Au & Beck's (2001, Eq. 29) factor
+``γ_k`` accounts for the correlation along one Markov chain only; chains grown from seeds of
+one chain of the level before are correlated too (they share an ancestor), and ignoring that
+left ``δ`` 15–20 % too small (``diagnostics["pf_cov_au_beck"]``: 0.44 reported against 0.53
+observed at P_f = 3e-7 in 10-D). ``δ² = Σ_k δ_k²`` (levels treated as uncorrelated: measured
+over 770 runs on the 10-D linear case, the per-level errors of ``ln p̂_k`` — known exactly
+there — have the spread ``δ_k`` predicts and small negative correlations between levels).
+``pf_se = P̂ δ`` is a standard error; ``pf_ci`` is the log-normal interval
+``P̂ exp(s²/2 ± z s)``, ``s² = ln(1 + δ²)``: the estimate is a product of level fractions and
+skewed to the right (``docs/estimators.md`` gives its measured coverage). The fully
+correlated bound ``Σ_k δ_k`` is ``diagnostics["pf_cov_upper"]``.
 
 **Designs that never fail.** When the thresholds stop decreasing or ``max_levels`` is spent,
 the product so far estimates ``P(G ≤ γ_last)`` with ``γ_last > 0``, which contains the failure
 domain: with ``on_failure="bound"`` (default) it is reported as an upper bound
 (``status = "not_reached"``, ``pf_ci = [0, …]``); ``"nan"`` and ``"raise"`` give NaN or a
-``ModelError``. Points outside the model's physical domain count as failures
-(:mod:`._common`). ``mean``/``std`` of ``y`` come from level 0.
+``ModelError``. Points outside the model's physical domain are not failures: a chain never
+moves there (:mod:`._common`). ``mean``/``std`` of ``y`` come from level 0.
 """
 
 from __future__ import annotations
@@ -116,33 +118,30 @@ class SubsetSimulation:
         nc = max(n // ns, 1)
         g = G(v)
         y0 = G.last_y.copy()
-        pf, delta2, delta_sum = 1.0, 0.0, 0.0
+        pf, var = 1.0, _Variance()
         chains = None      # (nc, ns) values of G along the chains of the previous level
+        family = own = np.arange(n)   # family (parent chain) and own chain of every sample
         stall = StallGuard()
         s = np.sqrt(1.0 - self.rho**2)
         for level in range(1, self.max_levels + 1):
             nf = int(np.count_nonzero(g < 0))
             final = nf >= nc
             if final:
-                p_k, gam = nf / g.size, 0.0
+                p_k, gam, ind = nf / g.size, 0.0, g < 0
             else:
                 order = np.argsort(g, kind="stable")
-                gam = 0.5 * (g[order[nc - 1]] + g[order[nc]])
-                p_k = nc / g.size
+                hi = g[order[nc]] if np.isfinite(g[order[nc]]) else g[order[nc - 1]]
+                gam = 0.5 * (g[order[nc - 1]] + hi)
+                p_k, ind = nc / g.size, g <= gam
                 if stall(gam, level, g):  # thresholds stopped decreasing: no failure in reach
-                    return LevelResult(pf, pf * np.sqrt(delta2), delta_sum, level, False, y0)
-            # chain correlation of the indicator of this level's event (Au & Beck 2001, Eq. 27)
-            corr = 0.0
-            if chains is not None:
-                ind = (chains < 0) if final else (chains <= gam)
-                corr = chain_gamma(ind.astype(float), p_k)
-            d2 = (1 - p_k) / (p_k * g.size) * (1 + corr)
-            delta2 += d2
-            delta_sum += np.sqrt(d2)
+                    return var.result(pf, level, False, y0)
+            chain_ind = None if chains is None else (chains < 0 if final else chains <= gam)
+            var.add(ind, family, p_k, chain_ind)
             pf *= p_k
             if final:
-                return LevelResult(pf, pf * np.sqrt(delta2), delta_sum, level, True, y0)
-            cur_v, cur_g = v[order[:nc]], g[order[:nc]]
+                return var.result(pf, level, True, y0)
+            seeds = order[:nc]
+            cur_v, cur_g = v[seeds], g[seeds]
             chain_v, chain_g = [cur_v], [cur_g]
             for _ in range(ns - 1):
                 cand = self.rho * cur_v + s * rng.standard_normal(cur_v.shape)
@@ -155,8 +154,9 @@ class SubsetSimulation:
             v = np.concatenate(chain_v)                   # (ns*nc, m), step-major
             g = np.concatenate(chain_g)
             chains = np.stack(chain_g, axis=1)            # (nc, ns)
+            family, own = np.tile(own[seeds], ns), np.tile(np.arange(nc), ns)
         # max_levels spent: pf estimates P(G <= γ_last), an upper bound of P_f
-        return LevelResult(pf, pf * np.sqrt(delta2), delta_sum, self.max_levels, False, y0)
+        return var.result(pf, self.max_levels, False, y0)
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
@@ -169,34 +169,59 @@ class SubsetSimulation:
         mc = r.moments
         with np.errstate(divide="ignore", invalid="ignore"):
             cov = np.where(r.pf > 0, r.se / r.pf, np.nan)
-        se, ci = lognormal_error(r.pf, cov, self.ci_level)
+        ci = lognormal_interval(r.pf, cov, self.ci_level)
         ci[r.status == "not_reached", 0] = 0.0
         return make_estimate(
             "subset", r.calls, r.pf.size, mean=mc.mean, std=mc.std, mean_se=mc.mean_se,
-            std_se=mc.std_se, pf=r.pf, pf_se=se, pf_ci=ci,
+            std_se=mc.std_se, pf=r.pf, pf_se=r.se, pf_ci=ci,
             diagnostics={"ci_level": self.ci_level, "ci_method": "lognormal",
                          "levels": r.levels, "converged": r.status == "converged",
-                         "status": r.status, "pf_cov_au_beck": cov, "pf_cov_upper": r.extra,
+                         "status": r.status, "pf_cov": cov,
+                         "pf_cov_au_beck": r.extra[:, 0], "pf_cov_upper": r.extra[:, 1],
                          "n_outside_domain": r.n_outside},
         )
 
 
-def lognormal_error(pf: np.ndarray, cov: np.ndarray, level: float, k: float = 3.0
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Standard error and interval of a right-skewed product estimator with CoV ``cov``.
+class _Variance:
+    """Per-level variance bookkeeping of one subset run: the family batch-means ``δ_k²`` (used),
+    Au & Beck's ``δ_k²`` with the chain factor ``γ_k`` and ``δ_k`` for the fully correlated
+    bound (diagnostics)."""
+
+    def __init__(self) -> None:
+        self.d2, self.d2_ab, self.d_sum = 0.0, 0.0, 0.0
+
+    def add(self, ind: np.ndarray, family: np.ndarray, p_k: float,
+            chain_ind: np.ndarray | None) -> None:
+        """Add level ``k``: indicators ``ind`` of its event, the ``family`` of every sample,
+        ``p̂_k`` and the indicators along the chains ``(n_chains, chain_len)`` (None at level
+        0)."""
+        n = ind.size
+        res = np.bincount(family, weights=ind - p_k)
+        self.d2 += float(res @ res) / (n * p_k) ** 2
+        corr = 0.0
+        if chain_ind is not None:   # Au & Beck (2001), Eqs. 27-29
+            corr = chain_gamma(chain_ind.astype(float), p_k)
+        d2_ab = (1 - p_k) / (p_k * n) * (1 + corr)
+        self.d2_ab += d2_ab
+        self.d_sum += np.sqrt(d2_ab)
+
+    def result(self, pf: float, level: int, reached: bool, y0: np.ndarray) -> LevelResult:
+        extra = np.array([np.sqrt(self.d2_ab), self.d_sum])
+        return LevelResult(pf, pf * np.sqrt(self.d2), extra, level, reached, y0)
+
+
+def lognormal_interval(pf: np.ndarray, cov: np.ndarray, level: float) -> np.ndarray:
+    """Two-sided ``level`` interval of a right-skewed product estimator with CoV ``cov``.
 
     ``ln P̂`` is modelled as normal with ``s² = ln(1 + δ²)`` and mean ``ln P − s²/2`` (``P̂``
-    unbiased). The returned ``se = P̂ (exp(k s + s²/2) − 1) / k`` makes ``P̂ ± k·se`` contain the
-    log-normal ``k``-sigma interval ``[P̂ e^{s²/2 − ks}, P̂ e^{s²/2 + ks}]`` (it equals ``P̂ δ`` to
-    first order: +8 % at δ = 0.05, +41 % at δ = 0.2); the interval at ``level`` is the
-    log-normal one. NaN where ``pf`` or ``cov`` is.
+    unbiased): ``[P̂ e^{s²/2 − z s}, P̂ e^{s²/2 + z s}]``, clipped to ``[0, 1]``. NaN where
+    ``pf`` or ``cov`` is.
 
-    >>> se, ci = lognormal_error(np.array([1e-3]), np.array([0.2]), 0.95)
-    >>> round(float(se[0] / 1e-3), 3), np.round(ci[0] / 1e-3, 3).tolist()
-    (0.282, [0.692, 1.503])
+    >>> np.round(lognormal_interval(np.array([1e-3]), np.array([0.2]), 0.95)[0] / 1e-3,
+    ...          3).tolist()
+    [0.692, 1.503]
     """
     s = np.sqrt(np.log1p(cov**2))
-    se = pf * np.expm1(k * s + 0.5 * s**2) / k
     z = z_of(level)
     ci = np.column_stack([pf * np.exp(0.5 * s**2 - z * s), pf * np.exp(0.5 * s**2 + z * s)])
-    return se, np.clip(ci, 0.0, 1.0)
+    return np.clip(ci, 0.0, 1.0)

@@ -14,8 +14,10 @@ Constraint columns, all feasible where ``<= 0``, in this order:
 2. deterministic: ``g_det`` from :class:`~.deterministic.DeterministicConstraints`;
 3. generic design constraints ``g(x) <= 0`` (:class:`~.constraints.DesignConstraint`).
 
-Points outside the model's physical domain (``OutsideDomainError``) count as failures in the
-common-sample estimate (:func:`~surrogate_rbrdo.estimators.mc_with_outside`).
+Points outside the model's physical domain (``OutsideDomainError``) are not failures, and μ_y,
+σ_y are those of the points inside (:func:`~surrogate_rbrdo.estimators.mc_with_outside`, the
+meaning every estimator uses); an :class:`~surrogate_rbrdo.estimators.EstimatorWarning` says
+when the common sample has any.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from surrogate_rbrdo.core.protocols import Estimate, LimitState, Response
 from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.estimators import evaluate_in_domain, get_estimator, mc_with_outside
+from surrogate_rbrdo.estimators.mc import warn_outside
 from surrogate_rbrdo.formulations.constraints import DesignConstraint, constraint_matrix
 from surrogate_rbrdo.formulations.deterministic import DeterministicConstraints
 from surrogate_rbrdo.formulations.options import FormulationOptions
@@ -157,6 +160,8 @@ class Formulation:
         if self.estimator is None or no_limit:  # values on the CRN sample (no P_f needed)
             values, _, _ = evaluate_in_domain(response, x, self.theta)
             est = mc_with_outside(values, limit, ci_level=self.options.ci_level)
+            warn_outside(est.diagnostics["n_outside_domain"], values.shape[1],
+                         f"formulation {self.name!r}")
         else:
             est = self.estimator.estimate(
                 response, self.inputs, limit, x,
@@ -189,6 +194,8 @@ class Formulation:
             # the CRN sample and keep the estimator's P_f
             y, _, _ = evaluate_in_domain(self.response, x, self.theta)
             mc = mc_with_outside(y, _NO_FAILURE, ci_level=self.options.ci_level)
+            warn_outside(mc.diagnostics["n_outside_domain"], y.shape[1],
+                         f"formulation {self.name!r}")
             n_sur += int(mc.n_calls)
             est = replace(est, mean=mc.mean, std=mc.std, mean_se=mc.mean_se, std_se=mc.std_se,
                           diagnostics={**est.diagnostics, "moments_from": "mc"})

@@ -85,9 +85,10 @@ def reliability_column(measure: str, pf_bound: str, est: Estimate, values: np.nd
         if k < 1:
             raise ValueError(f"n_theta = {n} is too small for P_target = {p_target} with "
                              f"pf_bound = {pf_bound!r}: fewer than one failure allowed")
-        g = np.where(np.isnan(values), -np.inf, limit.g(np.nan_to_num(values)))
+        # a point outside the model's physical domain (NaN) is not a failure: g = +inf
+        g = np.where(np.isnan(values), np.inf, limit.g(np.nan_to_num(values)))
         scale = abs(limit.threshold) if limit.threshold != 0 else 1.0
-        return -harrell_davis(np.maximum(g, -1e300), k / n) / scale
+        return -harrell_davis(np.clip(g, -1e300, 1e300), k / n) / scale
     p = probability_of(est, pf_bound)
     if measure == "probability":
         return p / p_target - 1.0

@@ -42,6 +42,7 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import qmc
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.optimization.evaluator import RecordingEvaluator
@@ -98,18 +99,63 @@ class _Cached:
         # central differences where both sides fit, one-sided at a bound
         up = np.where(z + h <= 1.0, h, -h)
         both = (self.o.fd_scheme == "central") & (z + h <= 1.0) & (z - h >= 0.0)
-        pts = [z] + [z + up[i] * eye[i] for i in range(d)]
-        pts += [z - h * eye[i] for i in np.flatnonzero(both)]
-        F, G = self.ev(self.lo + self.span * np.array(pts))
-        f, g = F[:, 0], -G          # scipy: inequality constraints are c(z) >= 0
-        df = (f[1:d + 1] - f[0]) / up
-        dg = (g[1:d + 1] - g[0]) / up[:, None]
         idx = np.flatnonzero(both)
-        df[idx] = (f[1 + idx] - f[d + 1:]) / (2 * h)
-        dg[idx] = (g[1 + idx] - g[d + 1:]) / (2 * h)
+        pts = np.array([z] + [z + up[i] * eye[i] for i in range(d)]
+                       + [z - h * eye[i] for i in idx])
+        F, G = self._evaluate(pts)
+        f, g = F[:, 0], -G          # scipy: inequality constraints are c(z) >= 0
+        plus_f, plus_g = f[1:d + 1], g[1:d + 1]
+        minus_f, minus_g = np.full(d, np.nan), np.full((d, g.shape[1]), np.nan)
+        minus_f[idx], minus_g[idx] = f[d + 1:], g[d + 1:]
+        df, dg = _differences(f[0], g[0], plus_f, plus_g, minus_f, minus_g, up, h, z)
         self.df, self.dg = df, dg.T
         self.f, self.g, self.key = float(f[0]), g[0], z.tobytes()
         return self
+
+    def _evaluate(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One batched evaluation; when the model fails somewhere in the batch, each point
+        alone (a failed difference point is NaN, the iterate itself must succeed)."""
+        x = self.lo + self.span * pts
+        try:
+            return self.ev(x)
+        except ModelError:
+            pass
+        F0, G0 = self.ev(x[:1])           # the iterate: its failure is the caller's error
+        F = np.full((len(x), F0.shape[1]), np.nan)
+        G = np.full((len(x), G0.shape[1]), np.nan)
+        F[0], G[0] = F0[0], G0[0]
+        for k in range(1, len(x)):
+            try:
+                F[k], G[k] = (a[0] for a in self.ev(x[k:k + 1]))
+            except ModelError:
+                continue
+        return F, G
+
+
+def _differences(f0: float, g0: np.ndarray, plus_f: np.ndarray, plus_g: np.ndarray,
+                 minus_f: np.ndarray, minus_g: np.ndarray, up: np.ndarray, h: float,
+                 z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Finite differences per variable: central where both sides were evaluated, one-sided
+    where the model failed on one side (NaN), ``ModelError`` where it failed on both.
+
+    >>> df, dg = _differences(1.0, np.zeros(1), np.array([1.1, np.nan]), np.zeros((2, 1)),
+    ...                       np.array([0.9, 0.8]), np.zeros((2, 1)), np.full(2, 0.1), 0.1,
+    ...                       np.zeros(2))
+    >>> np.round(df, 6).tolist()
+    [1.0, 2.0]
+    """
+    fwd_f, fwd_g = (plus_f - f0) / up, (plus_g - g0) / up[:, None]
+    bwd_f, bwd_g = (f0 - minus_f) / h, (g0 - minus_g) / h
+    ctr_f = (plus_f - minus_f) / (up + h)
+    ctr_g = (plus_g - minus_g) / (up + h)[:, None]
+    has_p, has_m = np.isfinite(plus_f), np.isfinite(minus_f)
+    if np.any(~has_p & ~has_m):
+        i = int(np.flatnonzero(~has_p & ~has_m)[0])
+        raise ModelError(f"SLSQP: the model failed on both sides of variable {i} at the "
+                         f"scaled point z = {z.tolist()}: no finite-difference gradient")
+    df = np.where(has_p & has_m, ctr_f, np.where(has_p, fwd_f, bwd_f))
+    dg = np.where((has_p & has_m)[:, None], ctr_g, np.where(has_p[:, None], fwd_g, bwd_g))
+    return df, dg
 
 
 def _starts(lo, hi, options: SLSQPOptions, rng: np.random.Generator) -> np.ndarray:

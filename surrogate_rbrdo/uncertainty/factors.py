@@ -4,7 +4,8 @@ deviation and correlation, with a choice of support.
 A stiffness factor is physically positive. A normal model (the paper's Table 4 CoVs ≈ 6 %)
 puts a mass ``Φ(−1/CoV)`` ≈ 1e-61 below zero: negligible for sampling, but a FORM search or a
 subset chain can step there, where the FE model raises ``OutsideDomainError`` (the estimators
-then count the point as a failure and report bounds, ``docs/estimators.md``). The lognormal
+then treat the point as not a failure — P_f is that of failure inside the domain — and say how
+many points fell outside, ``docs/estimators.md``). The lognormal
 option has the same mean, standard deviation and (Nataf) Pearson correlation and positive
 support, so θ ≤ 0 never arises; its upper tail is heavier (skewness ``3 CoV + CoV³``, 0.18 at
 CoV 6 %), its lower tail lighter: for a response that fails when a bearing *softens* it gives a

@@ -78,7 +78,25 @@ def test_form_limit_state_never_reached_gives_a_bound_not_an_error():
     assert d["status"][0] == "not_reached" and d["pf_bound"][0] == "upper"
     assert not d["converged"][0] and "not reached" in d["message"][0]
     assert est.pf[0] == pytest.approx(special.ndtr(-FORM().beta_max))
-    np.testing.assert_array_equal(est.pf_ci[0], [0.0, est.pf[0]])
+    assert np.isnan(est.pf_ci[0]).all()      # a first-order value, not a rigorous interval
+
+
+@pytest.mark.known_answer
+def test_form_converges_next_to_its_limit_state():
+    """Regression (review of issue 13): a design 1e-10 from its limit state, ``G(0)`` at the
+    round-off of ``y ≈ 1.3``, stalled ("line search stalled", β = 6.5e-10, G = 2e-16) because
+    convergence was judged relative to ``|G(0)|``. Independent reference: at that distance the
+    linearisation is exact, β = 1e-10 / ‖∇_u y(0)‖ with ∇_u y = 0.1·(θ₁, θ₀, 0.6 θ₂) at θ = 1;
+    FORM converges within its distance tolerance ``tol_g`` (1e-8 in standard space)."""
+    inputs = MultivariateNormal(np.ones(3), cov=0.01 * np.eye(3))
+
+    def resp(x, t):
+        return (t[:, 0] * t[:, 1] + 0.3 * t[:, 2] ** 2)[None, :]
+
+    est = FORM().estimate(resp, inputs, LimitState(1.3 + 1e-10), np.zeros((1, 0)), rng=RNG)
+    assert est.diagnostics["converged"][0]
+    beta_ref = 1e-10 / np.linalg.norm([0.1, 0.1, 0.06])
+    assert est.diagnostics["beta"][0] == pytest.approx(beta_ref, abs=FORM().tol_g)
 
 
 def test_form_non_convergence_raises_or_returns_nan():

@@ -8,7 +8,7 @@ parabolic limit state (Breitung 1984) and the four-branch series system (Waarts 
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.estimators import EstimatorWarning, get_estimator
+from surrogate_rbrdo.estimators import get_estimator
 from surrogate_rbrdo.estimators.problems import (
     correlated_normal,
     linear_standard,
@@ -49,38 +49,61 @@ def test_is_and_ais_within_4_se(name, prob):
     assert np.all(est.pf_cov < 0.2)
 
 
-def test_is_target_10d_3e7():
-    """Issue 13 target: CoV <= 5 % at P_f = 2.9e-7 in 10-D with <= 1 500 calls incl. FORM
-    (OpenTURNS' post-FORM IS needs ~2 300, benchmarks/bench_is_small_pf.py), over 20 seeds."""
+def test_is_exact_on_the_linear_anchor_within_1500_calls():
+    """The linear 10-D anchor at P_f = 2.9e-7: the half-space control variate makes IS exact
+    *by construction* (the target of issue 13 is judged on the curved case below)."""
     prob = linear_standard(beta=5.0, dim=10)
-    runs = [run("is", prob, seed=s, n_samples=1478) for s in range(20)]
+    runs = [run("is", prob, seed=s, n_samples=1388) for s in range(3)]
+    assert all(r.n_calls <= 1500 for r in runs)
+    assert all(abs(r.pf[0] / prob.pf_exact[0] - 1) < 1e-6 for r in runs)
+
+
+CURVED_10D = paraboloid(beta=5.0, kappa=0.05, dim=10)      # P_f = 9.97e-8 by quadrature
+
+
+def test_is_target_on_a_curved_10d_limit_state_reported():
+    """Issue 13 target on a curved limit state (the paraboloid, where the hyperplane is a poor
+    control): every run reports CoV <= 5 % with <= 1 500 model calls (FORM and the searches
+    for further design points included) and covers the exact value within 3 SE."""
+    runs = [run("is", CURVED_10D, seed=s, n_samples=1388) for s in range(6)]
+    assert all(r.n_calls <= 1500 for r in runs)
+    assert all(r.pf_cov[0] <= 0.05 and within(r, CURVED_10D, k=3.0) for r in runs)
+
+
+@pytest.mark.slow
+def test_is_target_on_a_curved_10d_limit_state_empirical():
+    """The same over 20 seeds, judged by the run-to-run scatter: CoV <= 5 % at <= 1 500 calls
+    (plain post-FORM IS at N(u*, I), as OpenTURNS does it, scatters by 6.3 % at that budget:
+    benchmarks/bench_is_small_pf.py)."""
+    runs = [run("is", CURVED_10D, seed=s, n_samples=1388) for s in range(20)]
     pf = np.array([r.pf[0] for r in runs])
     assert all(r.n_calls <= 1500 for r in runs)
-    assert pf.std(ddof=1) / prob.pf_exact[0] <= 0.05
-    assert all(r.pf_cov[0] <= 0.05 and within(r, prob, k=3.0) for r in runs)
+    assert pf.std(ddof=1) / CURVED_10D.pf_exact[0] <= 0.05
+    assert abs(pf.mean() / CURVED_10D.pf_exact[0] - 1) <= 3 * 0.05 / np.sqrt(20)
 
 
 @pytest.mark.parametrize("prob", [series_four_branch(6.0), two_design_points()],
                          ids=lambda p: p.name)
-def test_is_says_so_on_several_design_points_and_ais_copes(prob):
-    """IS at one design point of several: its shell samples find the other regions, it warns,
-    and its (wider) error still covers; ais needs no warning."""
+def test_is_finds_several_design_points_and_ais_copes(prob):
+    """Several design points: the searches (and the first stage's tail samples) find them all
+    — four on the series system, two on the parabola — and IS covers without a warning; ais
+    needs no design point."""
+    expected = 4 if prob.name.startswith("series") else 2
     for seed in range(3):
-        with pytest.warns(EstimatorWarning, match="other regions"):
-            est = run("is", prob, seed=seed)
+        est = run("is", prob, seed=seed)
+        assert est.diagnostics["n_design_points"][0] == expected
         assert within(est, prob, k=3.0)
-        assert est.diagnostics["other_share"][0] > 0.2
         assert within(run("ais", prob, seed=seed), prob)
 
 
-@pytest.mark.parametrize("k", [6.0, 7.0])
-def test_ais_unbiased_on_series_system(k):
-    """Mean of 20 independent runs within 4 standard errors of the mean, and honest SEs."""
-    prob = series_four_branch(k)
-    res = [run("ais", prob, seed=s) for s in range(20)]
+def test_ais_unbiased_on_series_system():
+    """Mean of 8 independent runs within 4 standard errors of the mean, and honest SEs (the
+    k = 7 system: its weaker branch pair carries 21 % of P_f)."""
+    prob = series_four_branch(7.0)
+    res = [run("ais", prob, seed=s) for s in range(8)]
     pf = np.array([r.pf[0] for r in res])
     se = np.array([r.pf_se[0] for r in res])
-    assert abs(pf.mean() - prob.pf_exact[0]) <= 4 * pf.std(ddof=1) / np.sqrt(20)
+    assert abs(pf.mean() - prob.pf_exact[0]) <= 4 * pf.std(ddof=1) / np.sqrt(8)
     assert np.all(np.abs(pf - prob.pf_exact[0]) <= 4 * se)
     assert 0.5 < pf.std(ddof=1) / se.mean() < 2.0        # reported SE matches the scatter
 
@@ -115,12 +138,13 @@ def test_subset_unbiased_at_1e6():
     res = [run("subset", PF_1E6, seed=s) for s in range(25)]
     pf = np.array([r.pf[0] for r in res])
     assert abs(pf.mean() - PF_1E6.pf_exact[0]) <= 4 * pf.std(ddof=1) / 5
-    cov = np.array([r.diagnostics["pf_cov_au_beck"][0] for r in res])
-    assert 0.1 < cov.mean() < 0.8
-    # the fully-correlated bound is an upper bound of the uncorrelated CoV by construction
-    assert all(r.diagnostics["pf_cov_upper"][0] >= c for r, c in zip(res, cov, strict=True))
-    # the reported error is the log-normal one, wider than P̂δ (right-skewed estimate)
-    assert all(r.pf_cov[0] > c for r, c in zip(res, cov, strict=True))
+    cov = np.array([r.pf_cov[0] for r in res])
+    # the reported CoV is that of the scatter (not inflated): within a factor 1.5 of the
+    # run-to-run CoV (its own sampling error over 25 runs is about ±20 %)
+    assert 1 / 1.5 < cov.mean() / (pf.std(ddof=1) / PF_1E6.pf_exact[0]) < 1.5
+    # pf_se is P̂·δ and the log-normal interval contains the estimate
+    assert all(r.pf_se[0] == pytest.approx(r.pf[0] * c) for r, c in zip(res, cov, strict=True))
+    assert all(r.pf_ci[0, 0] < r.pf[0] < r.pf_ci[0, 1] for r in res)
 
 
 def test_ais_and_subset_moments_from_first_level():

@@ -7,6 +7,7 @@ from scipy import special, stats
 
 from surrogate_rbrdo.core import LimitState
 from surrogate_rbrdo.core.errors import OutsideDomainError
+from surrogate_rbrdo.estimators import EstimatorWarning
 from surrogate_rbrdo.formulations import (
     DesignConstraint,
     DeterministicOptions,
@@ -162,8 +163,11 @@ def test_too_small_sample_for_the_quantile_fails_clearly():
         form.evaluate(np.zeros((1, 1)))
 
 
-def test_points_outside_the_physical_domain_count_as_failures():
-    """A response that raises OutsideDomainError for θ < −1 (about 16 % of the sample)."""
+@pytest.mark.parametrize("measure", ["probability", "quantile"])
+def test_points_outside_the_physical_domain_are_not_failures(measure):
+    """A response that raises OutsideDomainError for θ < −1 (about 16 % of the sample): those
+    points are not failures (the meaning every estimator uses), μ_y is that of the points
+    inside, and a warning says so."""
     def resp(x, t):
         bad = np.flatnonzero(t[:, 0] < -1.0)
         if bad.size:
@@ -171,11 +175,18 @@ def test_points_outside_the_physical_domain_count_as_failures():
         return x[:, :1] + t[:, :1].T
 
     form = make_formulation("rbdo", response=resp, inputs=MultivariateNormal([0.0], std=[1.0]),
-                            limit=LimitState(3.0), rng=np.random.default_rng(0),
-                            options=FormulationOptions(n_theta=20_000, deterministic=NO_DET))
-    ev = form.evaluate(np.zeros((1, 1)))
+                            limit=LimitState(1.0), rng=np.random.default_rng(0),
+                            options=FormulationOptions(n_theta=20_000, p_target=0.2,
+                                                       reliability_measure=measure,
+                                                       deterministic=NO_DET))
+    with pytest.warns(EstimatorWarning, match="outside the model's physical domain"):
+        ev = form.evaluate(np.zeros((1, 1)))
+    theta = form.theta[:, 0]
     out = ev.estimate.diagnostics["n_outside_domain"][0]
-    assert out == np.sum(form.theta[:, 0] < -1.0)
-    expected = (out + np.sum(form.theta[:, 0] > 3.0)) / 20_000
-    assert ev.estimate.pf[0] == pytest.approx(expected)
+    assert out == np.sum(theta < -1.0)
+    assert ev.estimate.pf[0] == pytest.approx(np.sum(theta > 1.0) / 20_000)
+    assert ev.estimate.mean[0] == pytest.approx(theta[theta >= -1.0].mean())
+    if measure == "quantile":   # the 20 % quantile of g = 1 − θ over the sample, outside = +inf
+        g = np.where(theta < -1.0, np.inf, 1.0 - theta)
+        assert -ev.G[0, 0] == pytest.approx(np.sort(g)[4000], abs=0.01)
     assert np.isfinite(ev.F).all()
