@@ -31,8 +31,8 @@ from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
 from surrogate_rbrdo.spindle.harmonic import unbalance_response
 from surrogate_rbrdo.spindle.modal import modal_analysis
 
-#: ramps: matrices frozen over 10 ms, modes below 20 kHz + static shapes (docs/rig.md)
-RAMP_OPTIONS = IntegratorOptions(segment_s=0.01, f_cut_hz=20_000.0)
+#: ramps: error-controlled segments, Ritz basis below 10 kHz (docs/rig.md)
+RAMP_OPTIONS = IntegratorOptions()
 
 
 @dataclass(frozen=True)
