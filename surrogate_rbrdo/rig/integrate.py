@@ -75,13 +75,15 @@ class IntegratorOptions:
 @dataclass(frozen=True)
 class Simulation:
     """Displacements ``q`` (T, n_out) at the requested DOFs, sample times and shaft angle;
-    ``segments``: how many frozen-matrix segments the ramp took."""
+    ``segments``: how many frozen-matrix segments the ramp took; ``acc`` (T, n_acc): the
+    accelerations at ``acc_dofs`` if asked for."""
 
     t_s: np.ndarray
     q: np.ndarray
     angle_rad: np.ndarray
     speed_rpm: np.ndarray
     segments: int = 1
+    acc: np.ndarray | None = None
 
 
 def unbalance_pattern(model: SpindleModel, n: int) -> np.ndarray:
@@ -96,9 +98,9 @@ def unbalance_pattern(model: SpindleModel, n: int) -> np.ndarray:
 class _System:
     """First-order forms and modes of one model on one reduction basis, cached by speed."""
 
-    def __init__(self, model, theta, profile, red, out_dofs, P, correct_below_hz):
+    def __init__(self, model, theta, profile, red, out_dofs, acc_dofs, P, correct_below_hz):
         self.model, self.theta, self.profile, self.red = model, theta, profile, red
-        self.out, self.P = np.asarray(out_dofs), P
+        self.out, self.acc, self.P = np.asarray(out_dofs), np.asarray(acc_dofs, int), P
         self.w_corr = 2 * np.pi * correct_below_hz
         self._fo: dict[float, object] = {}
 
@@ -116,8 +118,8 @@ class _System:
         if correction is not None:
             A1, A2 = correction
             D = np.vstack([modes.W @ A1 @ modes.V, modes.W @ A2 @ modes.V])
-        return Segment(modes.lam, modes.W @ fo.B, fo.Cq[self.out] @ modes.V, self.P, D,
-                       self.w_corr, t_mid)
+        C = np.vstack([fo.Cq[self.out], fo.Ca[self.acc]])
+        return Segment(modes.lam, modes.W @ fo.B, C @ modes.V, self.P, D, self.w_corr, t_mid)
 
     def modes(self, t: float) -> Modes:
         w = float(self.profile.omega(np.array([t]))[0])
@@ -127,8 +129,8 @@ class _System:
 def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_dofs: np.ndarray,
              *, theta: np.ndarray | None = None, unbalance: bool = True,
              force_dofs: np.ndarray | None = None, force: np.ndarray | None = None,
-             t0_s: float | None = None, options: IntegratorOptions = IntegratorOptions()
-             ) -> Simulation:
+             t0_s: float | None = None, options: IntegratorOptions = IntegratorOptions(),
+             acc_dofs: np.ndarray | None = None) -> Simulation:
     """Integrate from rest at ``t0_s`` (default ``t_s[0]``) and return ``q`` at ``t_s``.
 
     Parameters
@@ -145,7 +147,10 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
     t0_s : float
         Start from rest this early (≤ ``t_s[0]``, constant speed until ``t_s[0]``); that
         interval is one exact jump.
+    acc_dofs : ndarray of int, optional
+        DOFs whose acceleration to return too (``Simulation.acc``), e.g. for accelerometers.
     """
+    acc_dofs = np.zeros(0, int) if acc_dofs is None else np.asarray(acc_dofs, int)
     t_s = np.asarray(t_s, float)
     if t_s.ndim != 1 or t_s.size < 2:
         raise ValueError(f"t_s has shape {t_s.shape}: must hold at least two times")
@@ -176,13 +181,13 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
     constant = profile.constant_between(t0, tf[-1])
     red = reduction(model, theta, _basis_speeds(profile, tf, options.basis_speeds), loads,
                     None if constant else options.f_cut_hz)
-    sys = _System(model, theta, profile, red, out_dofs, P,
+    sys = _System(model, theta, profile, red, out_dofs, acc_dofs, P,
                   options.correct_below_hz or 0.25 / h)
     modes = sys.modes(tf[0])
     eta = advance_constant(np.zeros(modes.lam.size, complex), sys.segment(tf[0], modes),
                            profile, t0, tf[0])
     z = modes.V @ eta
-    out = np.empty((tf.size, len(out_dofs)))
+    out = np.empty((tf.size, len(out_dofs) + acc_dofs.size))
     ctl = _Segmenter(sys, tf, options, constant)
     a = n_seg = 0
     while a < tf.size - 1:
@@ -203,7 +208,25 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
         z = modes.V @ eta
         a, n_seg = b, n_seg + 1
     q = out[:: options.oversample]
-    return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM, n_seg)
+    acc = None
+    if acc_dofs.size:                       # feedthrough of the force and the unbalance
+        acc = q[:, len(out_dofs):] + _acc_feedthrough(sys, profile, t_s, force_dofs, force)
+        q = q[:, :len(out_dofs)]
+    return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM, n_seg, acc)
+
+
+def _acc_feedthrough(sys: _System, profile: SpeedProfile, t: np.ndarray, force_dofs,
+                     force) -> np.ndarray:
+    """``Da f(t)`` at the acceleration outputs (matrices of the first sample's speed: the
+    feedthrough is the mass matrix's, speed-independent without massless DOFs)."""
+    Da = sys.form(t[0]).Da[sys.acc]
+    f = np.zeros((t.size, Da.shape[1]))
+    if force_dofs is not None:
+        f[:, np.asarray(force_dofs)] += force
+    if np.any(sys.P != 0):
+        env = profile.omega(t) ** 2 - 1j * profile.alpha(t)
+        f += (sys.P[None, :] * (env * np.exp(1j * profile.angle(t)))[:, None]).real
+    return f @ Da.T
 
 
 def _basis_speeds(profile: SpeedProfile, tf: np.ndarray, k: int) -> np.ndarray:

@@ -121,11 +121,14 @@ def _ritz_vectors(model, theta, omega, Ms, s, m, loads, f_cut_hz) -> np.ndarray:
 
 @dataclass(frozen=True)
 class FirstOrder:
-    """``z' = A z + B f`` (``f`` the physical force, n), ``q = Cq z`` (physical displacement)."""
+    """``z' = A z + B f`` (``f`` the physical force, n), ``q = Cq z`` (physical displacement),
+    ``q'' = Ca z + Da f`` (physical acceleration of the DOFs with mass)."""
 
     A: np.ndarray
     B: np.ndarray
     Cq: np.ndarray
+    Ca: np.ndarray
+    Da: np.ndarray
 
 
 def first_order(model: SpindleModel, theta: np.ndarray | None, omega: float,
@@ -137,7 +140,8 @@ def first_order(model: SpindleModel, theta: np.ndarray | None, omega: float,
         Mi = np.linalg.inv(M)
         A = np.block([[np.zeros((p, p)), np.eye(p)], [-Mi @ K, -Mi @ C]])
         B = np.vstack([np.zeros((p, red.T.shape[0])), Mi @ red.T.T])
-        return FirstOrder(A, B, np.hstack([red.T, np.zeros_like(red.T)]))
+        return FirstOrder(A, B, np.hstack([red.T, np.zeros_like(red.T)]), red.T @ A[p:],
+                          red.T @ B[p:])
     ml = np.arange(p - red.n_massless, p)
     tol = 1e-12 * max(np.abs(C).max(), 1e-300)
     undamped = ml[~np.any(np.abs(C[ml]) > tol, axis=1) & ~np.any(np.abs(C[:, ml]) > tol,
@@ -175,7 +179,7 @@ def first_order(model: SpindleModel, theta: np.ndarray | None, omega: float,
     Q = red.T @ S                                    # x_r -> physical displacement
     Cq = np.zeros((Q.shape[0], N))
     Cq[:, :ns], Cq[:, 2 * ns:] = Q[:, s], Q[:, d]
-    return FirstOrder(A, B, Cq)
+    return FirstOrder(A, B, Cq, Q[:, s] @ A[ns:2 * ns], Q[:, s] @ B[ns:2 * ns])
 
 
 @dataclass(frozen=True)
