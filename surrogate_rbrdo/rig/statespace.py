@@ -203,3 +203,14 @@ def decompose(A: np.ndarray, omega: float) -> Modes:
         raise ModelError(f"integrate: unstable or undamped mode at {omega / RPM:.6g} rpm "
                          f"(max Re λ = {lam.real.max():.3g})")
     return Modes(lam, V, W)
+
+
+def growth_rates(model: SpindleModel, theta: np.ndarray | None, speeds_rpm: np.ndarray,
+                 red: Reduction) -> np.ndarray:
+    """Largest real part of the eigenvalues (1/s) at each speed, of the system projected on
+    ``red`` (a Ritz basis is enough: the lowest modes, those that go unstable, are resolved to
+    ~1e-6 of their frequency): > 0 means no steady state exists at that speed."""
+    out = np.empty(len(speeds_rpm))
+    for i, s in enumerate(np.asarray(speeds_rpm, float)):
+        out[i] = np.linalg.eigvals(first_order(model, theta, s * RPM, red).A).real.max()
+    return out
