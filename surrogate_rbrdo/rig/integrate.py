@@ -158,17 +158,8 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
     if not (dt > 0 and np.allclose(np.diff(t_s), dt, rtol=1e-9, atol=0)):
         raise ValueError("t_s must be uniformly spaced and increasing")
     h = dt / options.oversample
-    n = model.system_matrices(0.0, theta)[0].shape[0]
-    P = unbalance_pattern(model, n) if unbalance else np.zeros(n, complex)
-    loads, fine_force = P[:, None], None
-    if force_dofs is not None:
-        force = np.asarray(force, float)
-        if force.shape != (t_s.size, len(force_dofs)):
-            raise ValueError(f"force has shape {force.shape}: must be ({t_s.size}, "
-                             f"{len(force_dofs)})")
-        Fd = np.zeros((n, len(force_dofs)))
-        Fd[np.asarray(force_dofs), np.arange(len(force_dofs))] = 1.0
-        loads = np.column_stack([loads, Fd])
+    P, loads, force = _loads(model, theta, t_s.size, unbalance, force_dofs, force)
+    fine_force = None
     t0 = t_s[0] if t0_s is None else float(t0_s)
     if t0 > t_s[0]:
         raise ValueError(f"t0_s = {t0} is after the first output time {t_s[0]}")
@@ -213,6 +204,22 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
         acc = q[:, len(out_dofs):] + _acc_feedthrough(sys, profile, t_s, force_dofs, force)
         q = q[:, :len(out_dofs)]
     return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM, n_seg, acc)
+
+
+def _loads(model, theta, n_t: int, unbalance: bool, force_dofs, force):
+    """The unbalance pattern, the load vectors the Ritz basis must span, the checked force."""
+    n = model.system_matrices(0.0, theta)[0].shape[0]
+    P = unbalance_pattern(model, n) if unbalance else np.zeros(n, complex)
+    loads = P[:, None]
+    if force_dofs is not None:
+        force = np.asarray(force, float)
+        if force.shape != (n_t, len(force_dofs)):
+            raise ValueError(f"force has shape {force.shape}: must be ({n_t}, "
+                             f"{len(force_dofs)})")
+        Fd = np.zeros((n, len(force_dofs)))
+        Fd[np.asarray(force_dofs), np.arange(len(force_dofs))] = 1.0
+        loads = np.column_stack([loads, Fd])
+    return P, loads, force
 
 
 def _acc_feedthrough(sys: _System, profile: SpeedProfile, t: np.ndarray, force_dofs,
