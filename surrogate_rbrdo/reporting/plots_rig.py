@@ -145,13 +145,14 @@ def plot_frf(est, fit, path: Path) -> Path:
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True,
                                  gridspec_kw={"height_ratios": [3, 1]})
     band = (est.freq_hz > 5) & (est.freq_hz < est.freq_hz[-1] * 0.8)
+    Hr = est.receptance()
     for j, ch in enumerate(est.responses):
-        a1.semilogy(est.freq_hz[band], np.abs(est.H[j, band]), lw=0.9, label=ch)
+        a1.semilogy(est.freq_hz[band], np.abs(Hr[j, band]), lw=0.9, label=ch)
         a2.plot(est.freq_hz[band], est.coherence[j, band], lw=0.8)
     for f, z in zip(fit.frequency_hz, fit.damping_ratio, strict=True):
         a1.axvline(f, color="k", lw=0.5, ls=":")
         a1.annotate(f"{f:.0f} Hz\nζ={z:.2%}", (f, a1.get_ylim()[1]), fontsize=7, va="top")
-    a1.set_ylabel("|H1| (m/N)")
+    a1.set_ylabel("|H1| as receptance (m/N)")
     a2.set_ylabel("coherence")
     a2.set_xlabel("frequency (Hz)")
     a1.legend(fontsize=8)
@@ -223,7 +224,8 @@ def write_rig_report(result: CampaignResult, truth: Truth, out_dir: str | Path
         figs.append(plot_campbell_runup(cb, measured, fig_dir / "campbell_runup.png"))
     hits = [ds.load(rid) for rid in result.impacts if "_hit_x" in rid]
     if hits:
-        est = h1_frf(hits, channels[:2])
+        acc = [c.name for c in hits[0].find("acceleration", "tool", "x")]
+        est = h1_frf(hits, acc or channels[:2])    # the tool's accelerometer, else probes
         fit = modal_fit(est, (50.0, 0.4 * hits[0].sample_rate_hz))
         summary["impact_modes_hz"] = fit.frequency_hz.tolist()
         summary["impact_damping_ratios"] = fit.damping_ratio.tolist()

@@ -29,10 +29,11 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.rig.demod import demodulate
-from surrogate_rbrdo.rig.integrate import SpeedProfile
+from surrogate_rbrdo.rig.integrate import SpeedProfile, unbalance_pattern
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.simulate import (
@@ -41,8 +42,10 @@ from surrogate_rbrdo.rig.simulate import (
     runup_record,
     steady_records,
 )
+from surrogate_rbrdo.rig.statespace import Reduction, first_order, growth_rates, reduction
 from surrogate_rbrdo.rig.store import DatasetWriter, read_record
 from surrogate_rbrdo.rig.truth import Truth, _child
+from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.geometry import Unbalance
 
 Progress = Callable[[int, int, str], None]
@@ -171,7 +174,7 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     require_rng(rng)
     t_start = time.perf_counter()
     out = Path(out_dir)
-    root_ss = rng.bit_generator.seed_seq
+    root_ss = _root_seed(rng)
     sens = options.sensors
     inst = sens.install(np.random.default_rng(_child(root_ss, 9)))
     writer = DatasetWriter(out / "dataset", {
@@ -189,8 +192,10 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
         for tl in range(options.tools_per_build):
             st0 = truth.state(root_ss, build=b, tool=tl, run=0)
             check_stable(st0.model(), st0.theta, stability_speeds(options))
+            red = _precheck(st0, options)
             for r in range(options.repeats):
                 st = truth.state(root_ss, build=b, tool=tl, run=r)
+                _check_run(st, options, red, b, tl, r)
                 for trial in (False, True) if options.trial_unbalance else (False,):
                     ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" + ("_trial" if trial else "")
                            for i in range(len(options.speeds_rpm))]
@@ -227,6 +232,39 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return CampaignResult(out, writer.root, table, count, written, secs, tuple(ramps),
                           tuple(impacts))
+
+
+def _root_seed(rng: np.random.Generator) -> np.random.SeedSequence:
+    """The campaign's root seed: a child spawned from ``rng`` (so the generator's state
+    matters: the same generator passed twice gives two campaigns; a fresh
+    ``default_rng(seed)`` gives the same one again, which is how a campaign resumes)."""
+    try:
+        return rng.spawn(1)[0].bit_generator.seed_seq
+    except (TypeError, AttributeError) as exc:
+        raise ValueError(f"rng = {rng!r} is not allowed: its bit generator has no seed "
+                         "sequence to spawn from; pass numpy.random.default_rng(seed)") from exc
+
+
+def _precheck(st, o: CampaignOptions) -> Reduction:
+    """Before any record: the truth's time-domain model builds (massless DOFs, joints) and is
+    stable where the ramps go; returns the Ritz basis the per-run checks use."""
+    model = st.model()
+    n = model.system_matrices(0.0, st.theta)[0].shape[0]
+    loads = unbalance_pattern(model, n)[:, None]
+    sp = np.asarray(stability_speeds(o))
+    red = reduction(model, st.theta, np.array([sp.min(), sp.max()]) * RPM, loads, 5_000.0)
+    first_order(model, st.theta, 0.0, red)              # standstill (impacts) builds too
+    return red
+
+
+def _check_run(st, o: CampaignOptions, red: Reduction, b: int, tl: int, r: int) -> None:
+    """Each run's own truth (its thermal draw) must be stable at the campaign's speeds."""
+    g = growth_rates(st.model(), st.theta, np.asarray(o.speeds_rpm), red)
+    if np.any(g >= 0):
+        s = np.asarray(o.speeds_rpm)[int(np.argmax(g))]
+        raise ModelError(f"the truth of build {b}, tool {tl}, run {r} is unstable at "
+                         f"{s:.6g} rpm (growth rate {g.max():.3g} 1/s): no steady state to "
+                         "measure (its thermal preload draw; cross-coupling too strong?)")
 
 
 def stability_speeds(o: CampaignOptions) -> np.ndarray:

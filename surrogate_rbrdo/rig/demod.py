@@ -1,15 +1,17 @@
 """1x amplitude and phase by synchronous demodulation with the keyphasor; run-up tracking and
 critical speeds.
 
-The keyphasor's rising edges (threshold at mid-swing, sub-sample by linear interpolation,
-corrected for the channel's known delay) give the shaft angle: at constant speed by a
-least-squares line through all edge times (``t_k = t₀ + k T``), on ramps by interpolating the
-angle linearly between consecutive edges. A channel's samples, taken at their own times
+The keyphasor gives the shaft angle: its counter timestamps (``record.events["keyphasor"]``)
+when the record has them, else the leading edges of the sampled keyphasor channel
+(:func:`~.keyphasor.edges_of`, corrected for the channel's known delay). At (nominally) constant
+speed the angle is a least-squares quadratic through the edges (``2πk`` at edge ``k``): constant
+speed and a slow linear drift are both exact, and the edges' jitter is averaged; on ramps it is
+interpolated between consecutive edges. A channel's samples, taken at their own times
 ``t_n + delay``, are fitted by least squares with ``a₀ + Σ_h Re(X_h e^{ihφ})`` (``h = 1`` and
 optionally higher orders): the fit is exact for a DC offset and the fitted orders, whatever the
 number of samples per revolution (a plain DFT over a non-integer number of samples per
 revolution leaks the probe gap's DC into 1x). The phasor convention is the FE model's:
-``x(t) = Re(X e^{iφ(t)})``, ``φ = 0`` at the keyphasor pulse.
+``x(t) = Re(X e^{iφ(t)})``, ``φ = 0`` at the keyphasor's leading edge.
 
 >>> import numpy as np
 >>> fs, f = 10_000.0, 123.4
@@ -28,72 +30,60 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import find_peaks
 
+from surrogate_rbrdo.rig.keyphasor import edges_of
 from surrogate_rbrdo.rig.records import Record, RecordError
 
 
-def keyphasor_edges(record: Record, channel: str = "keyphasor") -> np.ndarray:
-    """Times (s, on the record's time axis) of the keyphasor's rising edges."""
+def keyphasor_edges(record: Record, channel: str = "keyphasor", *,
+                    source: str | None = None, events: bool = True) -> np.ndarray:
+    """Times (s, on the record's time axis) of the keyphasor's leading edges: the record's
+    ``events[channel]`` if it has them (and ``events``), else from the sampled channel."""
+    src = source or f"record {record.id!r}"
+    if events and channel in record.events:
+        return record.events[channel]
+    if channel not in record.channel_names:
+        raise RecordError(src, f"channel {channel!r}", "missing: no keyphasor channel or "
+                                                       "keyphasor events")
     v = record.values(channel)
     if not np.ptp(v) > 0:
-        raise RecordError(f"record {record.id!r}", f"channel {channel!r}",
-                          "flat keyphasor signal: no pulses")
-    return edges_of(v, record.sample_rate_hz, record.channel(channel).delay_s)
-
-
-def edges_of(v: np.ndarray, fs: float, delay_s: float = 0.0) -> np.ndarray:
-    """Rising-edge times of a pulse train ``v`` sampled at ``fs`` (threshold at mid-swing,
-    cubic interpolation between samples), corrected for a known sampling delay."""
-    lo, hi = np.percentile(v, 1), np.percentile(v, 99)
-    thr = 0.5 * (lo + hi)
-    k = np.nonzero((v[:-1] < thr) & (v[1:] >= thr))[0]
-    frac = (thr - v[k]) / (v[k + 1] - v[k])
-    # refine on the cubic through samples k-1 .. k+2 (Newton from the linear estimate)
-    inner = (k >= 1) & (k + 2 < v.size)
-    kk = k[inner]
-    p = np.stack([v[kk - 1], v[kk], v[kk + 1], v[kk + 2]])
-    x = frac[inner]
-    for _ in range(4):
-        L = [-(x) * (x - 1) * (x - 2) / 6, (x + 1) * (x - 1) * (x - 2) / 2,
-             -(x + 1) * x * (x - 2) / 2, (x + 1) * x * (x - 1) / 6]
-        dL = [-(3 * x**2 - 6 * x + 2) / 6, (3 * x**2 - 4 * x - 1) / 2,
-              -(3 * x**2 - 2 * x - 2) / 2, (3 * x**2 - 1) / 6]
-        f = sum(Li * pi for Li, pi in zip(L, p, strict=True)) - thr
-        df = sum(Li * pi for Li, pi in zip(dL, p, strict=True))
-        x = np.clip(x - f / np.where(df > 0, df, np.inf), 0.0, 1.0)
-    frac[inner] = x
-    return (k + frac) / fs + delay_s
+        raise RecordError(src, f"channel {channel!r}", "flat keyphasor signal: no pulses")
+    spec = record.channel(channel)
+    try:
+        return edges_of(v, record.sample_rate_hz, spec.delay_s, spec.info.get("polarity"))
+    except ValueError as exc:
+        raise RecordError(src, f"channel {channel!r}", str(exc)) from None
 
 
 @dataclass(frozen=True)
 class ShaftAngle:
-    """Shaft angle from the keyphasor: edge times, mean speed, and the angle at any time."""
+    """Shaft angle from the keyphasor: edge times and the angle at any time (a quadratic fit
+    through the edges at constant speed, else interpolation between them)."""
 
     edges_s: np.ndarray
     constant_speed: bool
 
     @property
     def speed_rpm(self) -> float:
-        """Mean speed (rpm): least-squares slope of the edges (constant speed) or count."""
-        if self.constant_speed:
-            k = np.arange(self.edges_s.size)
-            T = np.polyfit(k, self.edges_s, 1)[0]
-            return 60.0 / T
+        """Mean speed (rpm) between the first and the last edge."""
         return 60.0 * (self.edges_s.size - 1) / (self.edges_s[-1] - self.edges_s[0])
 
     def angle(self, t: np.ndarray) -> np.ndarray:
         """Shaft angle (rad) at times ``t``, ``2πk`` at edge ``k``."""
         k = np.arange(self.edges_s.size)
         if self.constant_speed:
-            T, t0 = np.polyfit(k, self.edges_s, 1)
-            return 2 * np.pi * (t - t0) / T
+            e0, span = self.edges_s[0], self.edges_s[-1] - self.edges_s[0]
+            deg = 2 if k.size > 3 else 1
+            c = np.polyfit((self.edges_s - e0) / span, k, deg)
+            return 2 * np.pi * np.polyval(c, (np.asarray(t) - e0) / span)
         return 2 * np.pi * np.interp(t, self.edges_s, k, left=np.nan, right=np.nan)
 
 
-def shaft_angle(record: Record, *, constant_speed: bool | None = None) -> ShaftAngle:
+def shaft_angle(record: Record, *, constant_speed: bool | None = None,
+                source: str | None = None) -> ShaftAngle:
     """The shaft angle of ``record`` (constant speed for ``steady`` records by default)."""
-    e = keyphasor_edges(record)
+    e = keyphasor_edges(record, source=source)
     if e.size < 3:
-        raise RecordError(f"record {record.id!r}", "keyphasor",
+        raise RecordError(source or f"record {record.id!r}", "keyphasor",
                           f"only {e.size} pulses: need at least 3 revolutions")
     cs = record.kind == "steady" if constant_speed is None else constant_speed
     return ShaftAngle(e, cs)

@@ -1,34 +1,29 @@
-"""Time integration of the spindle model: exact at constant speed, exponential midpoint on ramps.
+"""Time integration of the spindle model: exact at constant speed, error-controlled on ramps.
 
-The model ``M q'' + (C(Ω) + Ω G) q' + K(Ω) q = f(t)`` (bearings, gyroscopics and housing stages
-as :meth:`SpindleModel.system_matrices` gives them) is written in first-order form
-``z' = A z + B f`` and diagonalised, ``A = V Λ V⁻¹``. In modal coordinates ``η = V⁻¹ z`` each
-mode obeys ``η' = λ η + p(t)``, whose step over ``[t, t + h]`` is *exact* for an input of the
-form ``e^{ντ} (c₀ + c₁ τ/h)``:
+The model ``M q'' + (C(Ω) + Ω G) q' + K(Ω) q = f(t)`` (bearings, gyroscopics, housing stages —
+massless ones too — as :meth:`SpindleModel.system_matrices` gives them) is put in first-order
+form (:mod:`~.statespace`) and stepped exactly per mode (:mod:`~.stepping`).
 
-    η(t + h) = e^{λh} η(t) + h e^{λh} [φ₁(μh) c₀ + (φ₁(μh) − φ₂(μh)) c₁],   μ = ν − λ,
-
-with ``φ₁(x) = (eˣ − 1)/x`` and ``φ₂(x) = (eˣ − 1 − x)/x²``. The rotating unbalance force
-``Re(P (φ'² − iφ'') e^{iφ(t)})`` is such an input with ``ν = ±iΩ`` and a slowly varying
-envelope taken linear over the step; a sampled force (hammer) is ``ν = 0`` with linear
-interpolation between samples (first-order hold).
-
-* **Constant speed** (one segment, full basis): exact for the linear model — the response
-  converges to the FE harmonic solution (``spindle.harmonic``) to round-off, tested ≤ 1e-6.
-* **Speed ramps**: ``A(Ω)`` is frozen at the mid-segment speed over segments of
-  ``segment_s`` (exponential midpoint rule, second order in ``segment_s``), the modal state is
-  carried across segments by ``η ← V_{s+1}⁻¹ V_s η``. The rotor is projected on a Ritz basis
-  (undamped modes below ``f_cut_hz`` plus the static shapes of the loads, which keep the
-  quasi-static part of the truncated modes); ``f_cut_hz=None`` keeps every DOF.
-  Convergence in ``segment_s`` and ``f_cut_hz`` is tested.
-
-Massless DOFs (a housing stage without mass) have no first-order form here: give them a mass.
+* **Constant speed**: one segment, every DOF kept (whatever ``f_cut_hz``): exact for the linear
+  model; the response from rest converges to the FE harmonic solution (``spindle.harmonic``)
+  to round-off (tested ≤ 1e-6, measured ≤ 2e-10).
+* **Speed ramps**: segments with the matrices of the segment's middle, plus the correction
+  ``W δA(τ) V η`` for their variation inside the segment (quadratic in time); the state is
+  carried across segments in physical coordinates. Segment lengths come from an **error
+  estimate**: the part of ``A(t)`` the quadratic misses, measured a quarter into the segment
+  (``e = H ‖W (A(t_q) − Q(t_q)) V‖_F``, ∝ H⁴), is kept below ``tol``; breakpoints of the speed
+  profile are segment ends. The rotor is projected on a Ritz basis (modes below ``f_cut_hz``
+  plus the static shapes of the loads; ``None``: all DOFs). Checked against an independent
+  solution with time-varying matrices (``solve_ivp``) in ``tests/rig/test_integrate.py``.
 
 >>> import numpy as np
->>> from surrogate_rbrdo.rig.integrate import SpeedProfile
->>> p = SpeedProfile.ramp(1000.0, 2000.0, 1.0)
->>> round(float(p.angle(np.array([1.0]))[0] / (2 * np.pi)), 6)   # revolutions in the ramp
-25.0
+>>> from surrogate_rbrdo.spindle import reference_spindle, unbalance_response
+>>> m = reference_spindle().model(reference_spindle().baseline)
+>>> t = 5.0 + np.arange(50) / 10_000.0        # 5 s after rest: the transient is gone
+>>> s = simulate(m, SpeedProfile.constant(12000.0), t, np.array([4 * m.tool_node]), t0_s=0.0)
+>>> X = unbalance_response(m, np.array([12000.0]))[0, 0, m.tool_node, 0]
+>>> bool(np.max(np.abs(s.q[:, 0] - (X * np.exp(1j * s.angle_rad)).real)) < 1e-9 * abs(X))
+True
 """
 
 from __future__ import annotations
@@ -36,103 +31,59 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.validate import check_int, check_positive
+from surrogate_rbrdo.rig.profile import SpeedProfile
+from surrogate_rbrdo.rig.statespace import Modes, decompose, first_order, reduction
+from surrogate_rbrdo.rig.stepping import Segment, advance_constant, run_segment
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
 
-
-@dataclass(frozen=True)
-class SpeedProfile:
-    """Spin speed linear between breakpoints ``(times_s, speeds_rpm)``; constant outside.
-
-    The shaft angle ``φ(t) = phase0_rad + ∫Ω`` is integrated exactly (quadratic per piece).
-    """
-
-    times_s: tuple[float, ...]
-    speeds_rpm: tuple[float, ...]
-    phase0_rad: float = 0.0
-
-    def __post_init__(self) -> None:
-        t = np.asarray(self.times_s, float)
-        s = np.asarray(self.speeds_rpm, float)
-        if t.ndim != 1 or t.size < 1 or t.shape != s.shape or np.any(np.diff(t) <= 0):
-            raise ValueError(f"SpeedProfile: times_s = {self.times_s} and speeds_rpm = "
-                             f"{self.speeds_rpm} must be equal-length, times increasing")
-        if not (np.all(np.isfinite(s)) and np.all(s >= 0)):
-            raise ValueError(f"SpeedProfile.speeds_rpm = {self.speeds_rpm}: must be >= 0")
-        object.__setattr__(self, "times_s", tuple(map(float, t)))
-        object.__setattr__(self, "speeds_rpm", tuple(map(float, s)))
-
-    @classmethod
-    def constant(cls, speed_rpm: float, phase0_rad: float = 0.0) -> SpeedProfile:
-        return cls((0.0,), (speed_rpm,), phase0_rad)
-
-    @classmethod
-    def ramp(cls, start_rpm: float, end_rpm: float, duration_s: float,
-             phase0_rad: float = 0.0) -> SpeedProfile:
-        check_positive("duration_s", duration_s)
-        return cls((0.0, duration_s), (start_rpm, end_rpm), phase0_rad)
-
-    @property
-    def is_constant(self) -> bool:
-        return len(set(self.speeds_rpm)) == 1
-
-    def omega(self, t: np.ndarray) -> np.ndarray:
-        """Spin speed (rad/s) at times ``t``."""
-        return np.interp(t, self.times_s, self.speeds_rpm) * RPM
-
-    def alpha(self, t: np.ndarray) -> np.ndarray:
-        """Angular acceleration (rad/s²) at times ``t`` (piecewise constant)."""
-        tb, sb = np.asarray(self.times_s), np.asarray(self.speeds_rpm) * RPM
-        if tb.size == 1:
-            return np.zeros_like(np.asarray(t, float))
-        slope = np.diff(sb) / np.diff(tb)
-        i = np.clip(np.searchsorted(tb, t, side="right") - 1, 0, slope.size - 1)
-        inside = (t >= tb[0]) & (t < tb[-1])
-        return np.where(inside, slope[i], 0.0)
-
-    def angle(self, t: np.ndarray) -> np.ndarray:
-        """Shaft angle (rad) at times ``t``: exact integral of the piecewise-linear speed."""
-        t = np.asarray(t, float)
-        tb, wb = np.asarray(self.times_s), np.asarray(self.speeds_rpm) * RPM
-        cum = np.concatenate([[0.0], np.cumsum(0.5 * (wb[1:] + wb[:-1]) * np.diff(tb))])
-        i = np.clip(np.searchsorted(tb, t, side="right") - 1, 0, tb.size - 1)
-        dt = t - tb[i]
-        w0 = wb[i]
-        acc = np.where((i < tb.size - 1) & (t >= tb[0]), self.alpha(t), 0.0)
-        before = t < tb[0]
-        val = cum[i] + w0 * dt + 0.5 * acc * dt**2
-        val = np.where(before, wb[0] * (t - tb[0]), val)
-        return self.phase0_rad + val
+__all__ = ["IntegratorOptions", "Simulation", "SpeedProfile", "simulate", "unbalance_pattern"]
 
 
 @dataclass(frozen=True)
 class IntegratorOptions:
-    """``segment_s``: length over which the speed-dependent matrices are frozen (ramps);
-    ``f_cut_hz``: modes kept in the Ritz basis (``None``: all DOFs, exact);
-    ``oversample``: integrator steps per output sample."""
+    """Options of :func:`simulate` on ramps (constant speed is always exact).
 
-    segment_s: float = 0.005
-    f_cut_hz: float | None = 20_000.0
+    ``segment_s``: a fixed segment length; ``None`` (default) chooses each segment by the error
+    estimate, up to ``max_segment_s``, keeping it below ``tol``; ``f_cut_hz``: modes kept in
+    the Ritz basis (``None``: all DOFs); ``oversample``: integrator steps per output sample.
+    """
+
+    segment_s: float | None = None
+    f_cut_hz: float | None = 10_000.0
     oversample: int = 1
+    tol: float = 1e-5
+    max_segment_s: float = 0.1
+    basis_speeds: int = 3
+    correct_below_hz: float | None = None
 
     def __post_init__(self) -> None:
-        check_positive("segment_s", self.segment_s)
+        if self.segment_s is not None:
+            check_positive("segment_s", self.segment_s)
         if self.f_cut_hz is not None:
             check_positive("f_cut_hz", self.f_cut_hz)
         check_int("oversample", self.oversample, minimum=1)
+        check_positive("tol", self.tol)
+        check_positive("max_segment_s", self.max_segment_s)
+        check_int("basis_speeds", self.basis_speeds, minimum=1)
+        if self.correct_below_hz is not None:
+            check_positive("correct_below_hz", self.correct_below_hz)
 
 
 @dataclass(frozen=True)
 class Simulation:
-    """Displacements ``q`` (T, n_out) at the requested DOFs, sample times and shaft angle."""
+    """Displacements ``q`` (T, n_out) at the requested DOFs, sample times and shaft angle;
+    ``segments``: how many frozen-matrix segments the ramp took; ``acc`` (T, n_acc): the
+    accelerations at ``acc_dofs`` if asked for."""
 
     t_s: np.ndarray
     q: np.ndarray
     angle_rad: np.ndarray
     speed_rpm: np.ndarray
+    segments: int = 1
+    acc: np.ndarray | None = None
 
 
 def unbalance_pattern(model: SpindleModel, n: int) -> np.ndarray:
@@ -144,78 +95,49 @@ def unbalance_pattern(model: SpindleModel, n: int) -> np.ndarray:
     return P
 
 
-def _phi12(lam_h: np.ndarray, nu_h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``e^{λh} φ₁(x)`` and ``e^{λh} (φ₁ − φ₂)(x)`` with ``x = (ν − λ)h``, where
-    ``φ₁(x) = (eˣ − 1)/x`` and ``φ₂(x) = (eˣ − 1 − x)/x²``: Taylor series near ``x = 0``, else
-    ``(e^{νh} − e^{λh})/x`` and ``(x e^{νh} − e^{νh} + e^{λh})/x²`` (no overflow for stiff
-    modes, ``Re λ ≪ 0``)."""
-    x = nu_h - lam_h
-    el, en = np.exp(lam_h), np.exp(nu_h)
-    small = np.abs(x) < 1e-2
-    xs = np.where(small, 1.0, x)
-    p1 = np.where(small, el * (1 + x / 2 + x**2 / 6 + x**3 / 24 + x**4 / 120),
-                  (en - el) / xs)
-    p12 = np.where(small, el * (0.5 + x / 3 + x**2 / 8 + x**3 / 30 + x**4 / 144),
-                   (xs * en - en + el) / xs**2)
-    return p1, p12
+class _System:
+    """First-order forms and modes of one model on one reduction basis, cached by speed."""
 
+    def __init__(self, model, theta, profile, red, out_dofs, acc_dofs, P, correct_below_hz):
+        self.model, self.theta, self.profile, self.red = model, theta, profile, red
+        self.out, self.acc, self.P = np.asarray(out_dofs), np.asarray(acc_dofs, int), P
+        self.w_corr = 2 * np.pi * correct_below_hz
+        self._fo: dict[float, object] = {}
 
-def ritz_basis(model: SpindleModel, theta: np.ndarray | None, omega: float,
-               loads: np.ndarray, f_cut_hz: float | None) -> np.ndarray:
-    """Real basis ``Φ`` (n, r): undamped modes below ``f_cut_hz`` at speed ``omega`` plus the
-    static shapes ``K⁻¹ loads`` (mass-orthonormalised); identity when ``f_cut_hz`` is None."""
-    M, _, K = model.system_matrices(omega, theta)
-    n = M.shape[0]
-    if f_cut_hz is None:
-        return np.eye(n)
-    Ks = 0.5 * (K + K.T)
-    try:
-        w2, modes = sla.eigh(Ks, M, subset_by_value=(-np.inf, (2 * np.pi * f_cut_hz) ** 2))
-        static = np.linalg.solve(Ks, np.column_stack([loads.real, loads.imag]))
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("ritz_basis: singular mass or stiffness (massless DOFs?)") from exc
-    Phi = np.column_stack([modes, static])
-    # mass-orthonormalise and drop dependent vectors
-    m_r = Phi.T @ M @ Phi
-    lam, U = np.linalg.eigh(0.5 * (m_r + m_r.T))
-    keep = lam > 1e-12 * lam.max()
-    return Phi @ (U[:, keep] / np.sqrt(lam[keep]))
+    def form(self, t: float):
+        w = float(self.profile.omega(np.array([t]))[0])
+        if w not in self._fo:
+            if len(self._fo) > 64:
+                self._fo.clear()
+            self._fo[w] = first_order(self.model, self.theta, w, self.red)
+        return self._fo[w]
 
+    def segment(self, t_mid: float, modes: Modes, correction=None) -> Segment:
+        fo = self.form(t_mid)
+        D = None
+        if correction is not None:
+            A1, A2 = correction
+            D = np.vstack([modes.W @ A1 @ modes.V, modes.W @ A2 @ modes.V])
+        C = np.vstack([fo.Cq[self.out], fo.Ca[self.acc]])
+        return Segment(modes.lam, modes.W @ fo.B, C @ modes.V, self.P, D, self.w_corr, t_mid)
 
-def _modal(model, theta, omega, Phi):
-    """Eigenvalues, ``V`` and ``V⁻¹`` of the projected first-order system at speed ``omega``."""
-    M, C, K = model.system_matrices(omega, theta)
-    Mr, Cr, Kr = (Phi.T @ X @ Phi for X in (M, C, K))
-    r = Mr.shape[0]
-    try:
-        Minv = np.linalg.inv(Mr)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("integrate: singular mass matrix (massless DOFs need a mass)") from exc
-    A = np.block([[np.zeros((r, r)), np.eye(r)], [-Minv @ Kr, -Minv @ Cr]])
-    lam, V = np.linalg.eig(A)
-    try:
-        W = np.linalg.inv(V)
-    except np.linalg.LinAlgError as exc:
-        raise ModelError(f"integrate: defective system at {omega / RPM:.6g} rpm") from exc
-    if np.any(lam.real >= 0):
-        raise ModelError(f"integrate: unstable or undamped mode at {omega / RPM:.6g} rpm "
-                         f"(max Re λ = {lam.real.max():.3g})")
-    Bin = np.vstack([np.zeros((r, r)), Minv]) @ Phi.T  # (2r, n): physical force -> state
-    return lam, V, W @ Bin
+    def modes(self, t: float) -> Modes:
+        w = float(self.profile.omega(np.array([t]))[0])
+        return decompose(self.form(t).A, w)
 
 
 def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_dofs: np.ndarray,
              *, theta: np.ndarray | None = None, unbalance: bool = True,
              force_dofs: np.ndarray | None = None, force: np.ndarray | None = None,
-             t0_s: float | None = None, options: IntegratorOptions = IntegratorOptions()
-             ) -> Simulation:
+             t0_s: float | None = None, options: IntegratorOptions = IntegratorOptions(),
+             acc_dofs: np.ndarray | None = None) -> Simulation:
     """Integrate from rest at ``t0_s`` (default ``t_s[0]``) and return ``q`` at ``t_s``.
 
     Parameters
     ----------
     model, profile : the rotor and its speed (constant or ramps).
     t_s : ndarray (T,)
-        Uniformly spaced output times.
+        Uniformly spaced output times (at least two).
     out_dofs : ndarray of int
         DOF indices (of ``system_matrices``) to return.
     unbalance : bool
@@ -223,140 +145,157 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
     force_dofs, force : int array (k,), ndarray (T, k)
         A sampled external force (N) at ``force_dofs``, linear between output samples.
     t0_s : float
-        Start from rest this early (≤ ``t_s[0]``); the interval before ``t_s[0]`` is stepped
-        exactly in one jump when the speed is constant there.
+        Start from rest this early (≤ ``t_s[0]``, constant speed until ``t_s[0]``); that
+        interval is one exact jump.
+    acc_dofs : ndarray of int, optional
+        DOFs whose acceleration to return too (``Simulation.acc``), e.g. for accelerometers.
     """
+    acc_dofs = np.zeros(0, int) if acc_dofs is None else np.asarray(acc_dofs, int)
     t_s = np.asarray(t_s, float)
+    if t_s.ndim != 1 or t_s.size < 2:
+        raise ValueError(f"t_s has shape {t_s.shape}: must hold at least two times")
     dt = float(t_s[1] - t_s[0])
-    if t_s.size < 2 or not np.allclose(np.diff(t_s), dt, rtol=1e-9, atol=0):
-        raise ValueError("t_s must hold at least two uniformly spaced times")
+    if not (dt > 0 and np.allclose(np.diff(t_s), dt, rtol=1e-9, atol=0)):
+        raise ValueError("t_s must be uniformly spaced and increasing")
     h = dt / options.oversample
+    P, loads, force = _loads(model, theta, t_s.size, unbalance, force_dofs, force)
+    fine_force = None
+    t0 = t_s[0] if t0_s is None else float(t0_s)
+    if t0 > t_s[0]:
+        raise ValueError(f"t0_s = {t0} is after the first output time {t_s[0]}")
+    if not profile.constant_between(t0, t_s[0]):
+        raise ValueError(f"t0_s = {t0}: the speed must be constant between t0_s and the "
+                         f"first output time {t_s[0]}")
+    tf = np.arange(t_s.size * options.oversample) * h + t_s[0]          # fine grid
+    if force is not None:
+        fine_force = np.column_stack([np.interp(tf, t_s, f) for f in force.T])
+    constant = profile.constant_between(t0, tf[-1])
+    red = reduction(model, theta, _basis_speeds(profile, tf, options.basis_speeds), loads,
+                    None if constant else options.f_cut_hz)
+    sys = _System(model, theta, profile, red, out_dofs, acc_dofs, P,
+                  options.correct_below_hz or 0.25 / h)
+    modes = sys.modes(tf[0])
+    eta = advance_constant(np.zeros(modes.lam.size, complex), sys.segment(tf[0], modes),
+                           profile, t0, tf[0])
+    z = modes.V @ eta
+    out = np.empty((tf.size, len(out_dofs) + acc_dofs.size))
+    ctl = _Segmenter(sys, tf, options, constant)
+    a = n_seg = 0
+    while a < tf.size - 1:
+        b = ctl.propose(a, modes)
+        grid = tf[a:b + 1]
+        t_mid = 0.5 * (grid[0] + grid[-1])
+        modes = sys.modes(t_mid)
+        corr = None if profile.constant_between(grid[0], grid[-1]) else _quadratic(
+            sys, grid[0], t_mid, grid[-1])
+        y, eta, sweeps = run_segment(modes.W @ z, sys.segment(t_mid, modes, corr), profile,
+                                     grid, None if fine_force is None else fine_force[a:b + 1],
+                                     force_dofs, tol=options.tol)
+        if sweeps < 0:
+            ctl.reject(a, b, grid)
+            continue
+        ctl.accept(a, b, sweeps)
+        out[a:b + 1] = y
+        z = modes.V @ eta
+        a, n_seg = b, n_seg + 1
+    q = out[:: options.oversample]
+    acc = None
+    if acc_dofs.size:                       # feedthrough of the force and the unbalance
+        acc = q[:, len(out_dofs):] + _acc_feedthrough(sys, profile, t_s, force_dofs, force)
+        q = q[:, :len(out_dofs)]
+    return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM, n_seg, acc)
+
+
+def _loads(model, theta, n_t: int, unbalance: bool, force_dofs, force):
+    """The unbalance pattern, the load vectors the Ritz basis must span, the checked force."""
     n = model.system_matrices(0.0, theta)[0].shape[0]
     P = unbalance_pattern(model, n) if unbalance else np.zeros(n, complex)
     loads = P[:, None]
     if force_dofs is not None:
+        force = np.asarray(force, float)
+        if force.shape != (n_t, len(force_dofs)):
+            raise ValueError(f"force has shape {force.shape}: must be ({n_t}, "
+                             f"{len(force_dofs)})")
         Fd = np.zeros((n, len(force_dofs)))
         Fd[np.asarray(force_dofs), np.arange(len(force_dofs))] = 1.0
         loads = np.column_stack([loads, Fd])
-        force = np.asarray(force, float)
-        if force.shape != (t_s.size, len(force_dofs)):
-            raise ValueError(f"force has shape {force.shape}: must be ({t_s.size}, "
-                             f"{len(force_dofs)})")
-    t0 = t_s[0] if t0_s is None else float(t0_s)
-    if t0 > t_s[0]:
-        raise ValueError(f"t0_s = {t0} is after the first output time {t_s[0]}")
-    omega_mean = float(np.mean(profile.omega(t_s)))
-    Phi = ritz_basis(model, theta, omega_mean, loads, options.f_cut_hz)
-    tf = np.arange(t_s.size * options.oversample) * h + t_s[0]   # fine grid
-    segs = _segments(profile, t0, tf, options.segment_s)
-    eta = None
-    V_prev = None
-    out = np.empty((tf.size, len(out_dofs)))
-    fine_force = None if force is None else np.column_stack(
-        [np.interp(tf, t_s, f) for f in force.T])
-    for a, b in segs:
-        w_mid = float(profile.omega(np.array([0.5 * (tf[max(a - 1, 0)] + tf[b - 1])]))[0])
-        lam, V, Wb = _modal(model, theta, w_mid, Phi)
-        if eta is None:  # from rest at t0, exactly to the first sample (constant speed there)
-            eta = _advance(np.zeros(lam.size, complex), lam, Wb, P, profile, t0, tf[0])
-            lo = 0
-        else:            # carry the state across the change of modal basis
-            eta = np.linalg.solve(V, V_prev @ eta)
-            lo = a - 1
-        grid = tf[lo:b]
-        fseg = None if fine_force is None else fine_force[lo:b]
-        Cv = Phi[np.asarray(out_dofs)] @ V[: Phi.shape[1]]
-        y, eta = _run(eta, lam, Wb, P, profile, grid, fseg, force_dofs, Cv)
-        out[a:b] = y[a - lo:]
-        V_prev = V
-    q = out[:: options.oversample]
-    return Simulation(t_s, q, profile.angle(t_s), profile.omega(t_s) / RPM)
+    return P, loads, force
 
 
-def _segments(profile: SpeedProfile, t0: float, tf: np.ndarray, seg: float
-              ) -> list[tuple[int, int]]:
-    """Index ranges ``[a, b)`` of the fine grid over which the matrices are frozen; one range
-    when the speed is constant over ``[t0, tf[-1]]``. Raises if the speed is not constant
-    between ``t0`` and the first sample (the start is jumped over in one exact step)."""
-    w = profile.omega(np.array([t0, tf[0]]))
-    if w[0] != w[1] or any(t0 < t < tf[0] for t in profile.times_s):
-        raise ValueError(f"t0_s = {t0}: the speed must be constant between t0_s and the "
-                         f"first output time {tf[0]}")
-    tb = profile.times_s
-    if profile.is_constant or t0 >= tb[-1] or tf[-1] <= tb[0]:
-        return [(0, tf.size)]
-    n = max(1, int(round(seg / (tf[1] - tf[0]))))
-    idx = list(range(0, tf.size, n)) + [tf.size]
-    return [(a, b) for a, b in zip(idx[:-1], idx[1:], strict=True)]
+def _acc_feedthrough(sys: _System, profile: SpeedProfile, t: np.ndarray, force_dofs,
+                     force) -> np.ndarray:
+    """``Da f(t)`` at the acceleration outputs (matrices of the first sample's speed: the
+    feedthrough is the mass matrix's, speed-independent without massless DOFs)."""
+    Da = sys.form(t[0]).Da[sys.acc]
+    f = np.zeros((t.size, Da.shape[1]))
+    if force_dofs is not None:
+        f[:, np.asarray(force_dofs)] += force
+    if np.any(sys.P != 0):
+        env = profile.omega(t) ** 2 - 1j * profile.alpha(t)
+        f += (sys.P[None, :] * (env * np.exp(1j * profile.angle(t)))[:, None]).real
+    return f @ Da.T
 
 
-def _envelope(profile: SpeedProfile, t: np.ndarray) -> np.ndarray:
-    """``φ'² − iφ''`` at ``t``."""
-    return profile.omega(t) ** 2 - 1j * profile.alpha(t)
+def _basis_speeds(profile: SpeedProfile, tf: np.ndarray, k: int) -> np.ndarray:
+    """``k`` speeds (rad/s) spread over the range the grid passes through."""
+    w = profile.omega(np.concatenate([tf[[0, -1]], profile.breakpoints_between(tf[0], tf[-1])]))
+    return np.linspace(w.min(), w.max(), k) if k > 1 else np.array([w.mean()])
 
 
-def _advance(eta, lam, Wb, P, profile, ta, tb):
-    """Exact jump over a constant-speed interval ``[ta, tb]`` (unbalance only)."""
-    w = float(profile.omega(np.array([ta]))[0])
-    hh = tb - ta
-    ph = float(profile.angle(np.array([ta]))[0])
-    bP = Wb @ P
-    bPc = Wb @ P.conj()
-    c = w**2 * np.exp(1j * ph)
-    acc = np.zeros_like(eta)
-    for nu, coef in ((1j * w, 0.5 * c * bP), (-1j * w, 0.5 * np.conj(c) * bPc)):
-        p1, _ = _phi12(lam * hh, nu * hh)
-        acc += hh * p1 * coef
-    return np.exp(lam * hh) * eta + acc
+def _quadratic(sys: _System, ta: float, tm: float, tb: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``A₁, A₂`` of ``A(t) ≈ A(t_m) + τ A₁ + τ² A₂`` through the segment's ends and middle."""
+    Aa, Am, Ab = (sys.form(t).A for t in (ta, tm, tb))
+    H = tb - ta
+    return (Ab - Aa) / H, 2.0 * (Aa + Ab - 2.0 * Am) / H**2
 
 
-def _run(eta0, lam, Wb, P, profile, grid, fseg, force_dofs, Cv, chunk=4096):
-    """Outputs ``Re(Cv η)`` at every time of ``grid`` (constant matrices) and the final modal
-    state; worked in chunks of ``chunk`` steps so memory stays bounded.
+class _Segmenter:
+    """Segment lengths on the fine grid: one segment at constant speed; a fixed ``segment_s``;
+    or (default) the longest segment, up to ``max_segment_s``, whose error estimates are below
+    ``tol``: the cubic remainder of ``A(t)`` a quarter into the segment (the quadratic model's
+    error, ``H ‖W ΔA V‖_F``, ∝ H⁴) before stepping, and the Picard iteration settling the
+    outputs to ``tol`` while stepping (else the segment is halved and stepped again)."""
 
-    The unbalance input over a step is ``e^{iφ_k} e^{iΩ_s τ} g(τ)`` with ``Ω_s`` the segment's
-    mid speed and ``g`` (the envelope ``φ'² − iφ''`` times the residual phase) linear over the
-    step: exact at constant speed, ``O(h²)`` in the envelope's curvature on a ramp."""
-    T = grid.size
-    out = np.empty((T, Cv.shape[0]))
-    out[0] = (Cv @ eta0).real
-    if T == 1:
-        return out, eta0
-    h = float(grid[1] - grid[0])
-    a = np.exp(lam * h)
-    ws = float(profile.omega(np.array([0.5 * (grid[0] + grid[-1])]))[0])
-    coef = []
-    if np.any(P != 0):
-        for sgn, b in ((1.0, Wb @ P), (-1.0, Wb @ P.conj())):
-            p1, p12 = _phi12(lam * h, np.full_like(lam, sgn * 1j * ws * h))
-            coef.append((sgn, 0.5 * h * p1 * b, 0.5 * h * p12 * b))
-    if fseg is not None:
-        p1, p12 = _phi12(lam * h, np.zeros_like(lam))
-        bF = Wb[:, np.asarray(force_dofs)]                   # (2r, k)
-    eta = eta0
-    for c0 in range(0, T - 1, chunk):
-        c1 = min(c0 + chunk, T - 1)
-        if not coef and (fseg is None or not np.any(fseg[c0:c1 + 1])):
-            # free response: η_k = e^{λ h k} η_0 in closed form (no loop)
-            etas = eta[None, :] * np.exp(np.outer(np.arange(1, c1 - c0 + 1) * h, lam))
-            out[c0 + 1:c1 + 1] = (etas @ Cv.T).real
-            eta = etas[-1]
-            continue
-        t = grid[c0:c1 + 1]
-        ph = profile.angle(t)
-        env = _envelope(profile, t)
-        g0 = env[:-1] * np.exp(1j * ph[:-1])
-        g1 = env[1:] * np.exp(1j * (ph[1:] - ws * h))
-        r = np.zeros((c1 - c0, lam.size), complex)
-        for sgn, B0, B1 in coef:
-            G0, G1 = (g0, g1) if sgn > 0 else (g0.conj(), g1.conj())
-            r += G0[:, None] * B0 + (G1 - G0)[:, None] * B1
-        if fseg is not None:
-            F0, F1 = fseg[c0:c1] @ bF.T, fseg[c0 + 1:c1 + 1] @ bF.T     # (n, 2r)
-            r += h * (p1 * F0 + p12 * (F1 - F0))
-        etas = np.empty((c1 - c0, lam.size), complex)
-        for k in range(c1 - c0):  # the diagonal recurrence: a loop over steps, vector over modes
-            eta = a * eta + r[k]
-            etas[k] = eta
-        out[c0 + 1:c1 + 1] = (etas @ Cv.T).real
-    return out, eta
+    def __init__(self, sys: _System, tf: np.ndarray, o: IntegratorOptions, constant: bool):
+        self.sys, self.tf, self.o, self.constant = sys, tf, o, constant
+        self.h = float(tf[1] - tf[0])
+        bp = sys.profile.breakpoints_between(tf[0], tf[-1])
+        self.stops = sorted({int(round((t - tf[0]) / self.h)) for t in bp} - {0}
+                            | {tf.size - 1})
+        self.n_max = max(1, int(round((o.segment_s or o.max_segment_s) / self.h)))
+        self.n = self.n_max if o.segment_s is not None else max(1, self.n_max // 8)
+
+    def propose(self, a: int, modes: Modes) -> int:
+        stop = next(s for s in self.stops if s > a)
+        if self.constant:
+            return self.tf.size - 1
+        self.n = min(self.n, stop - a)
+        if self.o.segment_s is None:
+            while self.n > 1:
+                e = self._estimate(a, self.n, modes)
+                if e <= self.o.tol:
+                    break
+                self.n = max(1, int(self.n * max(0.2, 0.9 * (self.o.tol / e) ** 0.25)))
+        return a + self.n
+
+    def _estimate(self, a: int, n: int, modes: Modes) -> float:
+        ta, tb = self.tf[a], self.tf[a + n]
+        H, tm = tb - ta, 0.5 * (ta + tb)
+        A1, A2 = _quadratic(self.sys, ta, tm, tb)
+        Aq = self.sys.form(tm).A - H / 4 * A1 + H**2 / 16 * A2
+        return float(H * np.linalg.norm(modes.W @ (self.sys.form(ta + H / 4).A - Aq)
+                                        @ modes.V))
+
+    def reject(self, a: int, b: int, grid: np.ndarray) -> None:
+        if b - a == 1:
+            raise ModelError(f"integrate: the ramp correction does not converge at t = "
+                             f"{grid[0]:.6g} s even over one step")
+        self.n = (b - a) // 2
+
+    def accept(self, a: int, b: int, sweeps: int) -> None:
+        if self.o.segment_s is None:
+            grow = 1.5 if sweeps <= 4 else 1.0 if sweeps <= 7 else 0.7
+            self.n = int(min(self.n_max, max(1, (b - a) * grow)))
+        else:
+            self.n = self.n_max

@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate_rbrdo.rig.demod import edges_of
+from surrogate_rbrdo.rig.demod import ShaftAngle
+from surrogate_rbrdo.rig.keyphasor import edges_of
 from surrogate_rbrdo.rig.sensors import Installation, SensorSet
-from surrogate_rbrdo.rig.simulate import ProbeLayout, keyphasor_volts
+from surrogate_rbrdo.rig.simulate import ProbeLayout, keyphasor_channel, keyphasor_events
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
 from surrogate_rbrdo.spindle.harmonic import unbalance_response
 
@@ -76,7 +77,7 @@ def sample_phasors(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarra
     mean = expected_phasors(model, theta, speeds_rpm, sensors, inst)
     if not sensors.noise:
         return np.broadcast_to(mean, (n_repeats,) + mean.shape).copy()
-    lsb_m = sensors.daq.lsb_V / sensors.probe.sensitivity_V_per_m
+    lsb_m = sensors.daq.lsb_V / sensors.probe.sensitivity_V_per_m if sensors.quantised else 0.0
     N = samples_in_revolutions(speeds_rpm, duration_s, sensors.daq.sample_rate_hz)
     sd = np.array([phasor_noise_sd(sensors.probe.noise_rms_m, lsb_m, n) for n in N])
     shape = (n_repeats,) + mean.shape
@@ -91,24 +92,30 @@ def keyphasor_phase_errors(sensors: SensorSet, inst: Installation, speeds_rpm: n
                            rng: np.random.Generator, *, n_repeats: int = 1,
                            duration_s: float = 1.0) -> np.ndarray:
     """Phase error ``δ = φ̂ − φ`` (rad, ``(n_repeats, S)``) of the keyphasor-derived shaft
-    angle at the middle of a record, each record with a random initial angle, keyphasor noise
-    and the channel's skew, edges found and fitted as :func:`rig.demod.demodulate` does."""
+    angle at the middle of a record, each record with a random initial angle: the counter
+    timestamps (skew, trigger jitter, timebase) or the sampled channel (noise, skew, edges
+    found as :func:`rig.demod.demodulate` does), fitted as the demodulation fits them."""
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
     t = np.arange(n) / fs
     names = sensors.channel_names("steady")
     delay = names.index("keyphasor") * sensors.daq.interchannel_delay_s
     tau = delay + inst.skew_s["keyphasor"]
+    kp = sensors.keyphasor
     out = np.empty((n_repeats, len(speeds_rpm)))
     for j, s in enumerate(np.asarray(speeds_rpm, float)):
         w = s * RPM
         for r in range(n_repeats):
             phi0 = rng.uniform(0, 2 * np.pi)
-            v = keyphasor_volts(sensors, phi0 + w * (t + tau))
-            if sensors.noise:
-                v = v + rng.normal(0, sensors.keyphasor.noise_V, n)
-            e = edges_of(v, fs, delay)
-            T, t0 = np.polyfit(np.arange(e.size), e, 1)
+            if kp.timing == "counter":
+                k = np.arange(np.ceil(phi0 / (2 * np.pi)),
+                              np.ceil((phi0 + w * t[-1]) / (2 * np.pi)))
+                e = keyphasor_events(sensors, inst, (2 * np.pi * k - phi0) / w,
+                                     np.full(k.size, w), rng)["keyphasor"]
+            else:
+                v = keyphasor_channel(sensors, phi0 + w * (t + tau), rng)
+                e = edges_of(v, fs, delay, kp.polarity)
             tm = 0.5 * (e[0] + e[-1])
-            out[r, j] = np.angle(np.exp(1j * (2 * np.pi * (tm - t0) / T - (phi0 + w * tm))))
+            est = ShaftAngle(e, True).angle(np.array([tm]))[0]
+            out[r, j] = np.angle(np.exp(1j * (est - (phi0 + w * tm))))
     return out

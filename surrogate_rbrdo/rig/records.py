@@ -137,6 +137,10 @@ class Record:
         ``[time_s, speed_rpm]`` breakpoints of a ramp (linear in between).
     provenance : mapping
         JSON-able: source, truth effects and parameters, seeds, sensor draws ...
+    events : mapping of str to ndarray, optional
+        Event channels: increasing times (s, on the record's time axis) of discrete events,
+        e.g. ``events["keyphasor"]``, the leading edges of the once-per-revolution pulse
+        timestamped by a counter (readers prefer it to the sampled keyphasor channel).
     """
 
     id: str
@@ -147,9 +151,11 @@ class Record:
     speed_rpm: float = math.nan
     speed_profile: np.ndarray | None = None
     provenance: Mapping[str, Any] = field(default_factory=dict)
+    events: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "channels", tuple(self.channels))
+        object.__setattr__(self, "events", _check_events(self.id, self.events))
         check_choice(f"record {self.id!r}.kind", self.kind, KINDS)
         check_positive(f"record {self.id!r}.sample_rate_hz", self.sample_rate_hz)
         data = np.asarray(self.data)
@@ -171,7 +177,11 @@ class Record:
                                  "[time_s, speed_rpm] with increasing times")
             object.__setattr__(self, "speed_profile", prof)
         object.__setattr__(self, "data", data)
-        object.__setattr__(self, "provenance", json.loads(json.dumps(dict(self.provenance))))
+        try:
+            prov = json.loads(json.dumps(dict(self.provenance), default=_plain))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"record {self.id!r}.provenance is not JSON-able: {exc}") from None
+        object.__setattr__(self, "provenance", prov)
 
     # ------------------------------------------------------------------ access
     @property
@@ -232,7 +242,33 @@ class Record:
             else self.speed_profile.tolist(),
             "channels": [channel_to_dict(c) for c in self.channels],
             "provenance": dict(self.provenance),
+            "events": {k: v.tolist() for k, v in self.events.items()},
         }
+
+
+def _plain(x: Any) -> Any:
+    """JSON for numpy scalars and arrays in provenance (else a TypeError naming the type)."""
+    if isinstance(x, (np.generic, np.ndarray)):
+        return x.tolist()
+    raise TypeError(f"{type(x).__name__} {x!r} is not JSON-able")
+
+
+def _check_events(rid: str, events: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    if not isinstance(events, Mapping):
+        raise ValueError(f"record {rid!r}.events = {events!r} is not allowed: a mapping of "
+                         "event names to increasing times (s)")
+    out = {}
+    for name, times in events.items():
+        try:
+            t = np.asarray(times, dtype=float)
+        except (TypeError, ValueError):
+            t = np.array([np.nan])
+        if not isinstance(name, str) or t.ndim != 1 or not np.all(np.isfinite(t)) or np.any(
+                np.diff(t) <= 0):
+            raise ValueError(f"record {rid!r}.events[{name!r}] is not allowed: a list of "
+                             "finite, increasing times (s)")
+        out[name] = t
+    return out
 
 
 def channel_to_dict(c: ChannelSpec) -> dict[str, Any]:
@@ -247,26 +283,42 @@ def channel_to_dict(c: ChannelSpec) -> dict[str, Any]:
             "delay_s": c.delay_s, "info": dict(c.info)}
 
 
-def channel_from_dict(d: Mapping[str, Any], source: str) -> ChannelSpec:
+def channel_from_dict(d: Mapping[str, Any], source: str, index: int = 0) -> ChannelSpec:
     """Inverse of :func:`channel_to_dict`; a missing or bad field raises :class:`RecordError`."""
-    name = d.get("name", "?")
+    if not isinstance(d, Mapping):
+        raise RecordError(source, f"channels[{index}]", f"= {d!r} is not allowed: an object "
+                                                        "with name, quantity, location ...")
+    name = d.get("name")
+    if not isinstance(name, str) or not name:
+        raise RecordError(source, f"channels[{index}].name", f"= {name!r}: missing or not a "
+                                                             "non-empty string")
     where = f"channels[{name!r}]"
     try:
-        loc = dict(d.get("location") or {})
+        loc = d.get("location") or {}
+        cal = d.get("calibration") or {}
+        for part, val in (("location", loc), ("calibration", cal), ("info", d.get("info") or {})):
+            if not isinstance(val, Mapping):
+                raise ValueError(f"{part} = {val!r} is not allowed: an object")
         pos = loc.get("position_mm")
-        cal = dict(d.get("calibration") or {})
         return ChannelSpec(
-            name=d["name"], quantity=d["quantity"],
+            name=name, quantity=d["quantity"],
             unit=d.get("unit", QUANTITIES.get(d["quantity"], "?")),
             location=SensorLocation(loc.get("target", ""), loc.get("direction", ""),
-                                    math.nan if pos is None else float(pos)),
-            calibration=Calibration(float(cal.get("scale", 1.0)), float(cal.get("offset", 0.0)),
+                                    math.nan if pos is None else _number(pos, "position_mm")),
+            calibration=Calibration(_number(cal.get("scale", 1.0), "calibration.scale"),
+                                    _number(cal.get("offset", 0.0), "calibration.offset"),
                                     cal.get("counts_min"), cal.get("counts_max")),
-            delay_s=float(d.get("delay_s", 0.0)), info=dict(d.get("info") or {}))
+            delay_s=_number(d.get("delay_s", 0.0), "delay_s"), info=dict(d.get("info") or {}))
     except KeyError as exc:
         raise RecordError(source, f"{where}.{exc.args[0]}", "missing") from None
     except (ValueError, TypeError) as exc:
         raise RecordError(source, where, str(exc)) from None
+
+
+def _number(x: Any, name: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} = {x!r} is not allowed: a number")
+    return float(x)
 
 
 def record_from_metadata(meta: Mapping[str, Any], data: np.ndarray, source: str) -> Record:
@@ -274,22 +326,35 @@ def record_from_metadata(meta: Mapping[str, Any], data: np.ndarray, source: str)
 
     Every missing or malformed field raises :class:`RecordError` naming ``source`` and the field.
     """
+    if not isinstance(meta, Mapping):
+        raise RecordError(source, "metadata", f"is a {type(meta).__name__}: must be an object "
+                                              "with the record's fields (id, kind, ...)")
     for key in ("id", "kind", "channels"):
-        if key not in meta:
+        if meta.get(key) is None:
             raise RecordError(source, key, "missing")
+    if not isinstance(meta["channels"], list):
+        raise RecordError(source, "channels", f"is a {type(meta['channels']).__name__}: must "
+                                              "be a list of channel objects")
     fs = meta.get("sample_rate_hz")
     if fs is None:
         raise RecordError(source, "sample_rate_hz", "missing: the sample rate must be given")
-    if not isinstance(fs, (int, float)) or not math.isfinite(fs) or fs <= 0:
+    if isinstance(fs, bool) or not isinstance(fs, (int, float)) or not math.isfinite(fs) \
+            or fs <= 0:
         raise RecordError(source, "sample_rate_hz", f"= {fs!r} is not allowed: a number > 0")
-    channels = tuple(channel_from_dict(c, source) for c in meta["channels"])
+    channels = tuple(channel_from_dict(c, source, i) for i, c in enumerate(meta["channels"]))
     sp = meta.get("speed_rpm")
     try:
+        speed = math.nan if sp is None else _number(sp, "speed_rpm")
+        prof = meta.get("speed_profile")
+        if prof is not None:
+            try:
+                prof = np.asarray(prof, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"speed_profile = {prof!r} is not allowed: [[t_s...], "
+                                 "[rpm...]] of equal lengths") from None
         return Record(
             id=str(meta["id"]), kind=meta["kind"], sample_rate_hz=float(fs), channels=channels,
-            data=data, speed_rpm=math.nan if sp is None else float(sp),
-            speed_profile=None if meta.get("speed_profile") is None
-            else np.asarray(meta["speed_profile"], dtype=float),
-            provenance=meta.get("provenance") or {})
-    except ValueError as exc:
+            data=data, speed_rpm=speed, speed_profile=prof,
+            provenance=meta.get("provenance") or {}, events=meta.get("events") or {})
+    except (ValueError, TypeError) as exc:
         raise RecordError(source, "record", str(exc)) from None

@@ -1,9 +1,10 @@
 """Sensors and the acquisition chain of the virtual rig (sources of every figure: docs/rig.md).
 
 Six eddy-current displacement probes (x and y at the front bearing, the rear bearing and the tool
-tip), a once-per-revolution keyphasor and an impact-hammer force channel, digitised by one
-multiplexed ADC. Per *installation* (a campaign) each channel draws its true gain error,
-probe bandwidth and timing skew (:meth:`SensorSet.install`); per *record* the noise is drawn.
+tip), a once-per-revolution keyphasor, and for impact tests an impact-hammer force channel and
+two accelerometers (x, y) on the tool, digitised by one multiplexed ADC. Per *installation* (a
+campaign) each channel draws its true gain error, probe bandwidth and timing skew
+(:meth:`SensorSet.install`); per *record* the noise is drawn.
 
 A probe maps the displacement ``x(t)`` to volts ``S (1 + ε) (g + x)`` through a first-order
 low-pass (its driver's bandwidth), adds white noise, and the ADC samples it at
@@ -82,19 +83,29 @@ class DAQModel:
 
 @dataclass(frozen=True)
 class KeyphasorModel:
-    """Once-per-revolution pulse: ``high_V`` while the notch passes (``notch_deg`` wide),
-    raised-cosine edges ``edge_deg`` wide, centred on the shaft's angular reference."""
+    """Once-per-revolution pulse: ``high_V`` while the mark passes (``notch_deg`` wide),
+    raised-cosine edges ``edge_deg`` wide, the leading edge centred on the shaft's angular
+    reference; ``polarity``: ``positive`` (a key: the voltage rises) or ``negative`` (a notch:
+    it falls). ``timing``: ``counter`` — the leading edges are also timestamped by a counter
+    with a ``counter_clock_hz`` timebase (``Record.events["keyphasor"]``) — or ``sampled``
+    (the analog channel only). ``rig.keyphasor`` has the sources."""
 
     high_V: float = 5.0
     notch_deg: float = 30.0
     edge_deg: float = 10.0
     noise_V: float = 0.01
+    polarity: str = "positive"
+    timing: str = "counter"
+    counter_clock_hz: float = 80e6             # NI USB-621x counter timebase
 
     def __post_init__(self) -> None:
         check_positive("keyphasor.high_V", self.high_V)
         check_range("keyphasor.notch_deg", self.notch_deg, 1.0, 180.0)
         check_range("keyphasor.edge_deg", self.edge_deg, 0.0, self.notch_deg)
         check_positive("keyphasor.noise_V", self.noise_V, allow_zero=True)
+        check_choice("keyphasor.polarity", self.polarity, ("positive", "negative"))
+        check_choice("keyphasor.timing", self.timing, ("counter", "sampled"))
+        check_positive("keyphasor.counter_clock_hz", self.counter_clock_hz)
 
 
 @dataclass(frozen=True)
@@ -106,12 +117,29 @@ class HammerModel:
     peak_sd: float = 0.2
     pulse_ms: float = 0.4                        # hard (steel) tip
     noise_N: float = 0.2
+    gain_error_sd: float = 0.01                  # calibration certificate uncertainty
 
     def __post_init__(self) -> None:
         for n in ("sensitivity_V_per_N", "peak_N", "pulse_ms"):
             check_positive(f"hammer.{n}", getattr(self, n))
-        check_positive("hammer.peak_sd", self.peak_sd, allow_zero=True)
-        check_positive("hammer.noise_N", self.noise_N, allow_zero=True)
+        for n in ("peak_sd", "noise_N", "gain_error_sd"):
+            check_positive(f"hammer.{n}", getattr(self, n), allow_zero=True)
+
+
+@dataclass(frozen=True)
+class AccelerometerModel:
+    """A modal accelerometer on the tool for impact tests (defaults: PCB Piezotronics 352C33
+    data sheet — 100 mV/g, ±50 g, broadband resolution 0.00015 g rms over 1 Hz–10 kHz,
+    flat ±5 % over 0.5 Hz–10 kHz, mounted resonance ≥ 50 kHz: no dynamics modelled)."""
+
+    sensitivity_V_per_ms2: float = 0.1 / 9.80665
+    noise_rms_ms2: float = 0.00015 * 9.80665
+    gain_error_sd: float = 0.01                  # calibration certificate uncertainty
+
+    def __post_init__(self) -> None:
+        check_positive("accelerometer.sensitivity_V_per_ms2", self.sensitivity_V_per_ms2)
+        check_positive("accelerometer.noise_rms_ms2", self.noise_rms_ms2, allow_zero=True)
+        check_positive("accelerometer.gain_error_sd", self.gain_error_sd, allow_zero=True)
 
 
 @dataclass(frozen=True)
@@ -130,74 +158,114 @@ class Installation:
 
 @dataclass(frozen=True)
 class SensorSet:
-    """All sensors of the rig and the acquisition chain; ``noise=False`` switches every random
-    error off (noise, gain/bandwidth/skew/gap scatter) but keeps quantisation and clipping."""
+    """All sensors of the rig and the acquisition chain.
+
+    ``noise=False`` switches every random error off (noise, gain/bandwidth/skew/gap scatter,
+    trigger jitter). ``quantise``: round samples to the ADC's counts (and counter timestamps to
+    its timebase); ``None`` (default) follows ``noise`` — so with the noise off the records are
+    the FE answer through the sensors' deterministic dynamics (driver low-pass, known delays)
+    and clipping, stored as float counts. Quantisation alone is not negligible: an LSB of the
+    default 16-bit converter is 38.8 nm, more than the bearings' whole 1x at low speed (0.24 nm
+    at 1 000 rpm on the reference spindle); without noise to dither it, the rounding error does
+    not average out over a record.
+    """
 
     probe: ProbeModel = ProbeModel()
     daq: DAQModel = DAQModel()
     keyphasor: KeyphasorModel = KeyphasorModel()
     hammer: HammerModel = HammerModel()
+    accelerometer: AccelerometerModel = AccelerometerModel()
     targets: tuple[str, ...] = PROBE_TARGETS
+    accelerometers: bool = True
     noise: bool = True
+    quantise: bool | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "targets", tuple(self.targets))
         for t in self.targets:
             check_choice("sensors.targets[]", t, PROBE_TARGETS)
+        if self.quantise is not None and not isinstance(self.quantise, bool):
+            raise ValueError(f"sensors.quantise = {self.quantise!r} is not allowed: true, "
+                             "false or null (follow noise)")
+
+    @property
+    def quantised(self) -> bool:
+        """Whether samples are rounded to counts (``quantise``, else ``noise``)."""
+        return self.noise if self.quantise is None else self.quantise
 
     @property
     def probe_channels(self) -> tuple[str, ...]:
         return tuple(f"{t}_{d}" for t in self.targets for d in ("x", "y"))
 
+    @property
+    def accel_channels(self) -> tuple[str, ...]:
+        """Accelerometers of impact tests (``tool_ax``, ``tool_ay``), if ``accelerometers``."""
+        return ("tool_ax", "tool_ay") if self.accelerometers else ()
+
     def channel_names(self, kind: str) -> tuple[str, ...]:
-        """Channel order of a record: probes, keyphasor (rotating tests) or hammer (impact)."""
-        return self.probe_channels + (("hammer",) if kind == "impact" else ("keyphasor",))
+        """Channel order of a record: probes, then the keyphasor (rotating tests) or the
+        accelerometers and the hammer (impact)."""
+        if kind == "impact":
+            return self.probe_channels + self.accel_channels + ("hammer",)
+        return self.probe_channels + ("keyphasor",)
 
     def install(self, rng: np.random.Generator) -> Installation:
         """Draw each channel's gain error, bandwidth, timing skew and gap."""
         p, d = self.probe, self.daq
-        names = self.probe_channels + ("keyphasor", "hammer")
+        names = self.probe_channels + ("keyphasor", "hammer") + self.accel_channels
         on = 1.0 if self.noise else 0.0
-        gain = {n: float(1 + on * rng.normal(0, p.gain_error_sd)) for n in names}
+        sd = {"hammer": self.hammer.gain_error_sd, "keyphasor": 0.0,
+              **{a: self.accelerometer.gain_error_sd for a in self.accel_channels}}
+        gain = {n: float(1 + on * rng.normal(0, sd.get(n, p.gain_error_sd))) for n in names}
         bw = {n: float(p.bandwidth_hz * (1 + on * rng.normal(0, p.bandwidth_sd))) for n in names}
         skew = {n: float(on * rng.normal(0, d.skew_sd_s)) for n in names}
         gap = {n: float(p.gap_m + on * rng.normal(0, p.gap_sd_m)) for n in names}
-        gain["keyphasor"] = 1.0
         return Installation(gain, bw, skew, gap)
 
     def channel_specs(self, kind: str, positions_mm: dict[str, float]) -> tuple[ChannelSpec, ...]:
         """Channel specs (nominal calibration, known delays) of a record of ``kind``."""
         lo, hi = self.daq.counts_limits
+        lsb, adc = self.daq.lsb_V, {"adc_bits": self.daq.bits, "adc_range_V": self.daq.range_V}
         out = []
         for i, name in enumerate(self.channel_names(kind)):
             delay = i * self.daq.interchannel_delay_s
-            if name in ("keyphasor", "hammer"):
-                qty, unit = ("keyphasor", "V") if name == "keyphasor" else ("force", "N")
-                scale = self.daq.lsb_V / (1.0 if name == "keyphasor"
-                                          else self.hammer.sensitivity_V_per_N)
-                loc = SensorLocation("shaft" if name == "keyphasor" else "tool",
-                                     "" if name == "keyphasor" else "x",
-                                     positions_mm.get("tool", np.nan) if name == "hammer"
-                                     else np.nan)
-                out.append(ChannelSpec(name, qty, unit, loc, Calibration(scale, 0.0, lo, hi),
-                                       delay))
-                continue
-            target, direction = name.split("_")
-            cal = Calibration(self.daq.lsb_V / self.probe.sensitivity_V_per_m,
-                              -self.probe.gap_m, lo, hi)
-            out.append(ChannelSpec(
-                name, "displacement", "m", SensorLocation(target, direction,
-                                                          positions_mm[target]),
-                cal, delay, info={"sensor": "eddy-current probe",
-                                  "sensitivity_V_per_m": self.probe.sensitivity_V_per_m,
-                                  "adc_bits": self.daq.bits, "adc_range_V": self.daq.range_V}))
+            tool = positions_mm.get("tool", np.nan)
+            if name == "keyphasor":
+                spec = ("keyphasor", "V", SensorLocation("shaft"), lsb, 0.0, {
+                    "sensor": "keyphasor", "polarity": self.keyphasor.polarity,
+                    "timing": self.keyphasor.timing,
+                    "counter_clock_hz": self.keyphasor.counter_clock_hz})
+            elif name == "hammer":
+                spec = ("force", "N", SensorLocation("tool", "x", tool),
+                        lsb / self.hammer.sensitivity_V_per_N, 0.0, {
+                            "sensor": "impact hammer",
+                            "sensitivity_V_per_N": self.hammer.sensitivity_V_per_N})
+            elif name in self.accel_channels:
+                spec = ("acceleration", "m/s^2", SensorLocation("tool", name[-1], tool),
+                        lsb / self.accelerometer.sensitivity_V_per_ms2, 0.0, {
+                            "sensor": "accelerometer", "sensitivity_V_per_ms2":
+                            self.accelerometer.sensitivity_V_per_ms2})
+            else:
+                target, direction = name.split("_")
+                spec = ("displacement", "m", SensorLocation(target, direction,
+                                                            positions_mm[target]),
+                        lsb / self.probe.sensitivity_V_per_m, -self.probe.gap_m, {
+                            "sensor": "eddy-current probe",
+                            "sensitivity_V_per_m": self.probe.sensitivity_V_per_m})
+            qty, unit, loc, scale, offset, info = spec
+            out.append(ChannelSpec(name, qty, unit, loc, Calibration(scale, offset, lo, hi),
+                                   delay, {**info, **adc}))
         return tuple(out)
 
     def digitise(self, volts: np.ndarray) -> np.ndarray:
-        """Round volts to counts of the ADC and clip at its limits (any shape)."""
+        """Volts to ADC counts, clipped at the converter's limits (any shape): rounded to
+        integers when :attr:`quantised`, else float64 counts."""
         lo, hi = self.daq.counts_limits
-        return np.clip(np.rint(volts / self.daq.lsb_V), lo, hi).astype(self.daq.dtype)
+        counts = volts / self.daq.lsb_V
+        if not self.quantised:
+            return np.clip(counts, lo, hi)
+        return np.clip(np.rint(counts), lo, hi).astype(self.daq.dtype)
 
     def lowpass(self, name: str, inst: Installation, freq_hz: np.ndarray) -> np.ndarray:
         """Complex first-order response of channel ``name``'s driver at ``freq_hz``."""

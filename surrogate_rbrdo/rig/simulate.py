@@ -25,6 +25,8 @@ from scipy.signal import decimate
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.rig.integrate import IntegratorOptions, SpeedProfile, simulate
+from surrogate_rbrdo.rig.keyphasor import angle_crossings, counter_events
+from surrogate_rbrdo.rig.keyphasor import keyphasor_volts as kp_volts
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import Installation, SensorSet
 from surrogate_rbrdo.rig.truth import Truth
@@ -32,8 +34,8 @@ from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel, build_model
 from surrogate_rbrdo.spindle.harmonic import unbalance_response
 from surrogate_rbrdo.spindle.modal import modal_analysis
 
-#: ramps: matrices frozen over 10 ms, modes below 20 kHz + static shapes (docs/rig.md)
-RAMP_OPTIONS = IntegratorOptions(segment_s=0.01, f_cut_hz=20_000.0)
+#: ramps: error-controlled segments, Ritz basis below 10 kHz (docs/rig.md)
+RAMP_OPTIONS = IntegratorOptions()
 
 
 @dataclass(frozen=True)
@@ -79,14 +81,29 @@ def check_nominal_stable(truth: Truth, speeds_rpm: np.ndarray) -> None:
 
 
 def keyphasor_volts(sensors: SensorSet, angle: np.ndarray) -> np.ndarray:
-    """Noise-free keyphasor voltage at shaft angles ``angle``: a pulse rising at angle 0."""
-    kp = sensors.keyphasor
-    a = np.degrees(np.mod(angle + np.radians(kp.edge_deg / 2), 2 * np.pi))  # edge starts here
-    e = max(kp.edge_deg, 1e-9)
-    rise = np.clip(a / e, 0, 1)
-    fall = np.clip((kp.notch_deg + e - a) / e, 0, 1)
-    s = np.minimum(rise, fall)
-    return kp.high_V * 0.5 * (1 - np.cos(np.pi * s))
+    """Noise-free keyphasor voltage at shaft angles ``angle`` (:func:`rig.keyphasor.
+    keyphasor_volts` of ``sensors.keyphasor``)."""
+    return kp_volts(sensors.keyphasor, angle)
+
+
+def keyphasor_channel(sensors: SensorSet, angle: np.ndarray, rng: np.random.Generator
+                      ) -> np.ndarray:
+    """The keyphasor's analog voltage at the shaft angles of its samples, with noise."""
+    v = kp_volts(sensors.keyphasor, angle)
+    if sensors.noise and sensors.keyphasor.noise_V > 0:
+        v = v + rng.normal(0, sensors.keyphasor.noise_V, v.shape)
+    return v
+
+
+def keyphasor_events(sensors: SensorSet, inst: Installation, crossings_s: np.ndarray,
+                     omega: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """``{"keyphasor": counter timestamps}`` of leading edges at true times ``crossings_s``
+    on the record's time axis (nothing for a ``sampled`` keyphasor)."""
+    if sensors.keyphasor.timing != "counter":
+        return {}
+    return {"keyphasor": counter_events(sensors.keyphasor, crossings_s, omega,
+                                        inst.skew_s["keyphasor"],
+                                        rng if sensors.noise else None, sensors.quantised)}
 
 
 def _channel_delays(sensors: SensorSet, inst: Installation, kind: str) -> np.ndarray:
@@ -108,6 +125,7 @@ def steady_records(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarra
     Q = unbalance_response(model, sp, theta)[0]          # (S, nn, 4)
     X = Q.reshape(sp.size, -1)[:, layout.dofs(sensors)]  # (S, n_probe)
     specs = sensors.channel_specs("steady", layout.positions_mm)
+    names = sensors.probe_channels
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
     t = np.arange(n) / fs
@@ -118,29 +136,18 @@ def steady_records(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarra
         w = s * RPM
         phi0 = rng.uniform(0, 2 * np.pi)
         ang = phi0 + w * (t[None, :] + tau[:, None])            # (n_ch, n)
-        volts = _probe_volts(sensors, inst, X[i], w, ang[:-1], rng)
-        kp = keyphasor_volts(sensors, ang[-1])
-        if sensors.noise:
-            kp = kp + rng.normal(0, sensors.keyphasor.noise_V, n)
+        Z = np.array([sensors.lowpass(c, inst, w / (2 * np.pi)) for c in names]) * X[i]
+        x = np.abs(Z)[:, None] * np.cos(ang[:-1] + np.angle(Z)[:, None])   # Re(Z e^{iφ})
+        volts = _volts(sensors, inst, names, x, rng)
+        kp = keyphasor_channel(sensors, ang[-1], rng)
+        k = np.arange(np.ceil(phi0 / (2 * np.pi)), np.ceil((phi0 + w * t[-1]) / (2 * np.pi)))
+        events = keyphasor_events(sensors, inst, (2 * np.pi * k - phi0) / w,
+                                  np.full(k.size, w), rng)
         data = sensors.digitise(np.vstack([volts, kp[None, :]]))
         out.append(Record(ids[i], "steady", fs, specs, data, speed_rpm=float(s),
-                          provenance={**provenance[i], "initial_angle_rad": phi0}))
+                          provenance={**provenance[i], "initial_angle_rad": phi0},
+                          events=events))
     return out
-
-
-def _probe_volts(sensors, inst, X, w, ang, rng):
-    """Probe voltages of a steady 1x response ``X`` (n_probe,) at angles ``ang``."""
-    names = sensors.probe_channels
-    S = sensors.probe.sensitivity_V_per_m
-    gain = np.array([inst.gain[c] for c in names])
-    H = np.array([sensors.lowpass(c, inst, w / (2 * np.pi)) for c in names])
-    gap = np.array([inst.gap_m[c] for c in names])
-    Z = H * X
-    x = np.abs(Z)[:, None] * np.cos(ang + np.angle(Z)[:, None])      # Re(Z e^{iφ})
-    v = S * gain[:, None] * (gap[:, None] + x)
-    if sensors.noise and sensors.probe.noise_rms_m > 0:
-        v += rng.normal(0, S * sensors.probe.noise_rms_m, v.shape)
-    return v
 
 
 def _dynamics(sensors: SensorSet, inst: Installation, names, x: np.ndarray, fs: float,
@@ -150,8 +157,9 @@ def _dynamics(sensors: SensorSet, inst: Installation, names, x: np.ndarray, fs: 
     n = x.shape[1]
     pad = np.concatenate([x, x[:, ::-1]], axis=1)              # even extension: no end jump
     f = np.fft.rfftfreq(2 * n, 1 / fs)
-    H = np.array([sensors.lowpass(c, inst, f) if c != "hammer" else np.ones_like(f)
-                  for c in names]) * np.exp(2j * np.pi * f[None, :] * tau[:, None])
+    H = np.array([sensors.lowpass(c, inst, f) if c in sensors.probe_channels
+                  else np.ones_like(f) for c in names]) * np.exp(2j * np.pi * f[None, :]
+                                                              * tau[:, None])
     return np.fft.irfft(np.fft.rfft(pad, axis=1) * H, 2 * n, axis=1)[:, :n]
 
 
@@ -164,23 +172,27 @@ def runup_record(model: SpindleModel, theta: np.ndarray, profile: SpeedProfile,
     fs = sensors.daq.sample_rate_hz
     T = profile.times_s[-1] - profile.times_s[0]
     t = profile.times_s[0] + np.arange(int(round(T * fs))) / fs
+    if t.size < 2:
+        raise ValueError(f"runup_record: the profile lasts {T} s: shorter than two samples")
     sim = simulate(model, profile, t, layout.dofs(sensors), theta=theta,
                    t0_s=profile.times_s[0] - 5.0, options=options)
     names = sensors.channel_names("runup")
     tau = _channel_delays(sensors, inst, "runup")
     x = _dynamics(sensors, inst, names[:-1], sim.q.T, fs, tau[:-1])
     volts = _volts(sensors, inst, names[:-1], x, rng)
-    kp = keyphasor_volts(sensors, profile.angle(t + tau[-1]))
-    if sensors.noise:
-        kp = kp + rng.normal(0, sensors.keyphasor.noise_V, t.size)
+    kp = keyphasor_channel(sensors, profile.angle(t + tau[-1]), rng)
+    cross = angle_crossings(profile.angle, profile.omega, t[0], t[-1] + 1.0 / fs)
+    events = keyphasor_events(sensors, inst, cross - t[0], profile.omega(cross), rng)
     kind = "runup" if profile.speeds_rpm[-1] >= profile.speeds_rpm[0] else "rundown"
     specs = sensors.channel_specs(kind, layout.positions_mm)
     prof = np.array([np.asarray(profile.times_s) - profile.times_s[0], profile.speeds_rpm])
     return Record(rid, kind, fs, specs, sensors.digitise(np.vstack([volts, kp])),
-                  speed_profile=prof, provenance=provenance)
+                  speed_profile=prof, provenance=provenance, events=events)
 
 
 def _volts(sensors, inst, names, x, rng):
+    """Probe voltages ``S (1 + ε) (gap + x)`` plus the probe noise, for true displacements
+    ``x`` (n_ch, n) of channels ``names``."""
     S = sensors.probe.sensitivity_V_per_m
     gain = np.array([inst.gain[c] for c in names])[:, None]
     gap = np.array([inst.gap_m[c] for c in names])[:, None]
@@ -204,7 +216,8 @@ def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
                   inst: Installation, rng: np.random.Generator, *, rid: str,
                   provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
                   t_hit_s: float = 0.05, oversample: int = 4) -> Record:
-    """A hammer hit at the tool tip in ``direction`` at standstill, all probes and the force."""
+    """A hammer hit at the tool tip in ``direction`` at standstill: all probes, the tool's
+    accelerometers and the force."""
     layout = ProbeLayout.of(model)
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
@@ -212,23 +225,30 @@ def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
     hm = sensors.hammer
     peak = hm.peak_N * (1 + (rng.normal(0, hm.peak_sd) if sensors.noise else 0.0))
     f = hammer_pulse(tf, t_hit_s, peak, hm.pulse_ms * 1e-3)
-    fdof = np.array([4 * layout.nodes["tool"] + (direction == "y")])
+    tool = 4 * layout.nodes["tool"]
+    fdof = np.array([tool + (direction == "y")])
+    acc_dofs = np.array([tool, tool + 1])[:len(sensors.accel_channels)]
     sim = simulate(model, SpeedProfile.constant(0.0), tf, layout.dofs(sensors), theta=theta,
-                   unbalance=False, force_dofs=fdof, force=f[:, None],
-                   options=IntegratorOptions(f_cut_hz=None))
+                   unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs)
     # anti-aliasing: linear-phase FIR, zero phase (the delay is compensated, as in DSA boards)
-    fine = np.vstack([sim.q.T, f[None, :]])
+    acc_t = np.zeros((0, tf.size)) if sim.acc is None else sim.acc.T
+    fine = np.vstack([sim.q.T, acc_t, f[None, :]])
     coarse = decimate(fine, oversample, ftype="fir", axis=1, zero_phase=True)
     names = sensors.channel_names("impact")
     tau = _channel_delays(sensors, inst, "impact")
     x = _dynamics(sensors, inst, names, coarse, fs, tau)
-    volts = _volts(sensors, inst, names[:-1], x[:-1], rng)
+    n_p, n_a = len(sensors.probe_channels), len(sensors.accel_channels)
+    volts = _volts(sensors, inst, names[:n_p], x[:n_p], rng)
+    acc = sensors.accelerometer
+    av = x[n_p:n_p + n_a] * acc.sensitivity_V_per_ms2 * np.array(
+        [inst.gain[c] for c in sensors.accel_channels])[:, None]
     fv = x[-1] * hm.sensitivity_V_per_N * inst.gain["hammer"]
     if sensors.noise:
+        av = av + rng.normal(0, acc.noise_rms_ms2 * acc.sensitivity_V_per_ms2, av.shape)
         fv = fv + rng.normal(0, hm.noise_N * hm.sensitivity_V_per_N, n)
     specs = sensors.channel_specs("impact", layout.positions_mm)
     specs = specs[:-1] + (_hammer_dir(specs[-1], direction),)
-    return Record(rid, "impact", fs, specs, sensors.digitise(np.vstack([volts, fv])),
+    return Record(rid, "impact", fs, specs, sensors.digitise(np.vstack([volts, av, fv])),
                   speed_rpm=0.0, provenance={**provenance, "peak_N": peak,
                                              "direction": direction})
 

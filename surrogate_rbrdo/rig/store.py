@@ -1,8 +1,10 @@
 """The native on-disk form of measured data: one ``.npz`` file per record in a dataset folder.
 
-A record file holds two arrays: ``data`` (the samples, ``(n_channels, n_samples)``, int16/int32
-counts or float64) and ``meta`` (the record's metadata as a JSON string: channels, calibration,
-sample rate, speed, provenance; see ``docs/measured-data.md``). A dataset is a folder::
+A record file holds ``data`` (the samples, ``(n_channels, n_samples)``, int16/int32 counts or
+float64), ``meta`` (the record's metadata as a JSON string: channels, calibration, sample rate,
+speed, provenance, the names of its event channels; see ``docs/measured-data.md``) and one
+float64 array ``event:<name>`` per event channel (e.g. the keyphasor's counter timestamps).
+A dataset is a folder::
 
     dataset.json        what the dataset is (written last: its presence marks it complete)
     index.jsonl         one line per record written so far (id, kind, speed, file, labels)
@@ -50,8 +52,11 @@ def write_record(record: Record, path: str | Path) -> Path:
     """Write one record to ``path`` (``.npz``) atomically; returns the path."""
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
+    meta = record.metadata()
+    meta["events"] = sorted(record.events)       # names; the times are binary arrays
+    arrays = {f"event:{k}": v for k, v in record.events.items()}
     with open(tmp, "wb") as fh:
-        np.savez(fh, data=record.data, meta=np.array(json.dumps(record.metadata())))
+        np.savez(fh, data=record.data, meta=np.array(json.dumps(meta)), **arrays)
     os.replace(tmp, path)
     return path
 
@@ -68,6 +73,12 @@ def read_record(path: str | Path) -> Record:
                 raise RecordError(src, "arrays", f"need 'data' and 'meta', found {list(z)}")
             data = z["data"]
             meta = json.loads(str(z["meta"]))
+            names = meta.get("events") or []
+            if isinstance(names, list):
+                missing = [n for n in names if f"event:{n}" not in z]
+                if missing:
+                    raise RecordError(src, "events", f"{missing} listed but not stored")
+                meta["events"] = {n: z[f"event:{n}"] for n in names}
     except (OSError, ValueError) as exc:
         if isinstance(exc, RecordError):
             raise

@@ -57,6 +57,20 @@ def _mesh(geometry: SpindleGeometry, joints: Sequence[Joint] = ()
     return z * MM, sec
 
 
+def _check_joints(geometry: SpindleGeometry, joints: Sequence[Joint]) -> None:
+    """A joint splits the shaft with mass on both sides: ``0 ≤ z < L`` (the rotor's length),
+    and at ``z = 0`` a disk on its node (the items at a joint sit on its left node)."""
+    length = sum(s.length_mm for s in geometry.sections)
+    for j in joints:
+        on_disk = any(abs(d.position_mm - j.position_mm) < 1e-3 for d in geometry.disks)
+        if not (-1e-3 < j.position_mm < length - 1e-3) or (j.position_mm < 1e-3
+                                                           and not on_disk):
+            raise ValueError(
+                f"effects: a joint at position_mm = {j.position_mm} is not allowed: it must "
+                f"lie on the shaft, 0 <= position_mm < {length:g}, with mass on both sides "
+                "(at 0 a disk there)")
+
+
 def _node_of(z: np.ndarray, position_mm: float) -> int:
     return int(np.argmin(np.abs(z - position_mm * MM)))
 
@@ -382,6 +396,7 @@ def build_model(
     joints = [j for e in effects if (j := e.joint()) is not None]
     if len({j.position_mm for j in joints}) != len(joints):
         raise ValueError("effects: two joints at one position")
+    _check_joints(geometry, joints)
     z, sec_idx = _mesh(geometry, joints)
     nn = z.size
     n = 4 * nn

@@ -111,13 +111,14 @@ def test_trial_pairs_isolate_the_trial_mass(tmp_path, model):
 
 @pytest.mark.known_answer
 def test_keyphasor_refinement_at_a_whole_number_of_samples_per_revolution(tmp_path):
-    """10 kHz at 24 000 rpm is 25 samples per revolution: with the rig's default keyphasor
-    (10° edges) the edge-interpolated phase is off by up to ~3° and does not average. Refined on
-    the pulse's shape learnt from the other speeds, every record's phase is within 1e-4 rad or
-    within 3 of its own reported standard errors (a record whose samples miss the edges gets a
-    large one)."""
+    """10 kHz at 24 000 rpm is 25 samples per revolution: with a *sampled* keyphasor channel
+    (10° edges; the rig's default is a counter timestamp) the edge-interpolated phase is off by
+    up to ~3° and does not average. Refined on the pulse's shape learnt from the other speeds,
+    every record's phase is within 1e-4 rad or within 3 of its own reported standard errors (a
+    record whose samples miss the edges gets a large one)."""
     truth = reference_truth(variability=Variability.none())
-    sens = SensorSet(noise=False, daq=DAQModel(bits=31))
+    sens = SensorSet(noise=False, daq=DAQModel(bits=31),
+                     keyphasor=KeyphasorModel(timing="sampled"))
     speeds = (7100.0, 9300.0, 11100.0, 13300.0, 24000.0)
     ds = _campaign(tmp_path, truth, speeds, 2, sens, seed=5)
     st = record_state(truth, ds.load(ds.index[0]).provenance)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from surrogate_rbrdo.rig.sensors import DAQModel, KeyphasorModel, SensorSet
 from surrogate_rbrdo.spindle.assembly import build_model
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
@@ -37,13 +36,6 @@ def jeffcott_response(model, omega):
     M = model.rotor_mass_kg
     k, c, U = 2 * JEFFCOTT["k"], 2 * JEFFCOTT["c"], JEFFCOTT["U"]
     return U * omega**2 / (k - M * omega**2 + 1j * c * omega)
-
-
-def ideal_sensors(**kw) -> SensorSet:
-    """Noise off, a 31-bit converter (LSB ~1e-12 m) and slow keyphasor edges: what is left is
-    the demodulation itself."""
-    return SensorSet(noise=False, daq=DAQModel(bits=31, interchannel_delay_s=4e-6),
-                     keyphasor=KeyphasorModel(notch_deg=120.0, edge_deg=60.0), **kw)
 
 
 def seeds(n, base=0):

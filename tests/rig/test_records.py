@@ -94,3 +94,14 @@ def test_dataset_streams_and_resumes(tmp_path):
     ds = open_dataset(tmp_path / "ds")
     assert [r["id"] for r in ds.select(kind="steady", repeat=1)] == ["r1"]
     assert [r.id for r in ds] == ["r0", "r1", "r2"]
+
+
+def test_events_round_trip_natively_and_are_checked(tmp_path):
+    rec = _record()
+    ev = Record(rec.id, rec.kind, rec.sample_rate_hz, rec.channels, rec.data,
+                speed_rpm=rec.speed_rpm, events={"keyphasor": [0.001, 0.011, 0.021]})
+    back = read_record(write_record(ev, tmp_path / "e.npz"))
+    np.testing.assert_array_equal(back.events["keyphasor"], ev.events["keyphasor"])
+    assert back.metadata() == ev.metadata()
+    with pytest.raises(ValueError, match=r"events\['keyphasor'\]"):
+        Record("r", "steady", 1e4, rec.channels, rec.data, events={"keyphasor": [0.2, 0.1]})

@@ -61,3 +61,13 @@ def test_compliant_interface_raises_the_tool_response_not_the_bearings():
     rear = base.bearing_nodes[1]
     assert abs(q1[soft.bearing_nodes[1], 0] / q0[rear, 0] - 1) < 0.05
     np.testing.assert_allclose(q2[stiff.tool_node], q0[base.tool_node], rtol=1e-4)
+
+
+@pytest.mark.parametrize("pos", [-20.0, 1000.0, 680.0])
+def test_joint_must_split_the_shaft_with_mass_on_both_sides(pos):
+    """Outside the shaft a joint would silently extend it; at its far end it leaves a massless
+    free node."""
+    sp = reference_spindle()
+    with pytest.raises(ValueError, match=f"position_mm = {pos} is not allowed"):
+        sp.model(sp.baseline, sp.effects + (ToolInterface(position_mm=pos, k_t_N_per_m=3e8,
+                                                          k_r_Nm_per_rad=5e6),))
