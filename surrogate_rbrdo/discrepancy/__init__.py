@@ -12,9 +12,10 @@ See ``docs/discrepancy.md`` for the method and its blind-test rates.
 """
 
 from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY, Candidate, candidate, library
-from surrogate_rbrdo.discrepancy.forward import Channel, ForwardModel, Sweep
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, RealBlock
-from surrogate_rbrdo.discrepancy.problem import NuisanceOptions
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import (
     VERDICTS,

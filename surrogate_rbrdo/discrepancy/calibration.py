@@ -13,7 +13,9 @@ then the statistics:
   null: Davies 1987, *Biometrika* 74:33); one-sided where its strength is (``Δ = max(z, 0)²``);
 * ``structure``: a Gaussian-process likelihood ratio on the residuals along speed (or frequency),
   maximised over a grid of length scales and variances — the Kennedy–O'Hagan discrepancy
-  (2001, *J. R. Stat. Soc. B* 63:425) used as a test: it detects structure, it cannot name it.
+  (2001, *J. R. Stat. Soc. B* 63:425) used as a test: it detects structure, it cannot name it;
+* ``generic``: the residual's squared projection on the leading generic local sensitivities
+  (:mod:`.generic`) — a lack-of-fit test aimed at structural misfit.
 
 So the thresholds account for the finite number of repeats, the fitted nuisance, the maximisation
 over scopes and shapes and, through the minimum p-value over candidates, for the number of
@@ -32,7 +34,12 @@ from scipy.stats import chi2
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import FD_STEP, Fit
+from surrogate_rbrdo.discrepancy.generic import generic_columns
+from surrogate_rbrdo.discrepancy.nuisance import Rows
 from surrogate_rbrdo.discrepancy.problem import Problem
+
+#: generic local-sensitivity directions used by the ``generic`` lack-of-fit statistic
+GENERIC_RANK = 20
 
 #: GP length scales (fraction of the speed or frequency span) and variances of the structure test
 GP_LENGTHS = (0.03, 0.08, 0.2, 0.5)
@@ -55,6 +62,7 @@ class Linearisation:
     nuisance: np.ndarray                        # (n_obs, p)
     candidates: tuple[tuple[Candidate, tuple[Variant, ...]], ...]
     absorbed: tuple[str, ...]                   # candidates the nuisance absorbs entirely
+    generic: np.ndarray                         # (n_obs, r) leading generic directions
 
 
 def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
@@ -67,20 +75,14 @@ def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
 def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) -> Linearisation:
     """Jacobians of the unwhitened observables at ``base`` (unbalance held at its fit)."""
     par, x = base.par, base.x
-    u = base.evaluation.unbalance
-    theta, ds, extras = par.rows(x[None])
-    base_extra = extras[0]
+    u = tuple(v[0] for v in base.evaluation.unbalance)
     # nuisance outer columns
     h = FD_STEP * np.maximum(np.abs(x), par.scales())
     lo, hi = par.bounds()
     h = np.where(x + h > hi, -h, h)
-    rows = np.vstack([x[None], x[None] + np.diag(h)])
-    th, dd, ex = par.rows(rows)
-    raw = problem.responses(th, dd, ex)
-    f = problem.model_vector(raw, tuple(v[0] for v in u))
+    f = problem.model_vector(par, np.vstack([x[None], x[None] + np.diag(h)]), u)
     J = ((f[1:] - f[0]) / h[:, None]).T
-    A = problem.unbalance_design([r[:1] for r in raw])
-    nuis = np.hstack([J, A])
+    nuis = np.hstack([J, problem.unbalance_design(par, x)])
     # candidate columns: one batch of rows, each its own extra effect
     specs, ex_rows = [], []
     for c in candidates:
@@ -94,12 +96,16 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
                     vals = {p: o_j for p, o_j in zip(c.strength, c.off, strict=True)}
                     vals[c.strength[i]] = o + step
                     vals.update(dict(shape))
-                    ex_rows.append(base_extra + (c.effect(scope, vals),))
+                    ex_rows.append(par.rows(x[None]).extras[0] + (c.effect(scope, vals),))
                     steps.append(step)
                 specs.append((c, scope, shape, np.array(steps)))
     nrow = len(ex_rows)
-    raw_c = problem.responses(np.repeat(theta, nrow, 0), np.repeat(ds, nrow, 0), ex_rows)
-    fc = problem.model_vector(raw_c, tuple(v[0] for v in u))
+    fc = np.zeros((0, f.shape[1]))
+    if nrow:
+        rb = par.rows(x[None])
+        rows = Rows(*(np.repeat(a, nrow, 0) for a in (rb.theta, rb.damping, rb.mass, rb.gain,
+                                                        rb.tau)), ex_rows)
+        fc = np.hstack([problem.data_vector(rows, u), np.zeros((nrow, problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0
     for c, scope, shape, steps in specs:
@@ -112,21 +118,37 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     for c in candidates:
         vs = _distinct(out[c.name], W, Q)
         (kept.append((c, tuple(vs))) if vs else absorbed.append(c.name))
-    return Linearisation(nuis, tuple(kept), tuple(absorbed))
+    return Linearisation(nuis, tuple(kept), tuple(absorbed), _generic_basis(problem, base, W, Q))
+
+
+def _generic_basis(problem: Problem, base: Fit, W, Q) -> np.ndarray:
+    """The ``GENERIC_RANK`` leading directions of the generic sensitivities (whitened, nuisance
+    projected out), as combinations of the unwhitened columns."""
+    G = generic_columns(problem, base)
+    Gw = _apply(W, G)
+    Gw = Gw - Q @ (Q.T @ Gw)
+    Gw /= np.maximum(np.linalg.norm(Gw, axis=0), 1e-300)
+    _, s, Vt = np.linalg.svd(Gw, full_matrices=False)
+    r = int(min(GENERIC_RANK, np.sum(s > 1e-6 * s[0]))) if s.size and s[0] > 0 else 0
+    scale = np.maximum(np.linalg.norm(_apply(W, G) - Q @ (Q.T @ _apply(W, G)), axis=0), 1e-300)
+    return (G / scale) @ Vt[:r].T
 
 
 def _distinct(variants: list[Variant], W, Q) -> list[Variant]:
-    """Drop variants the nuisance absorbs (relative residual < 1e-6) and duplicates (|cos| >
-    0.9999 in the whitened, nuisance-orthogonal metric)."""
+    """Drop strength columns the nuisance absorbs (relative residual < 1e-6), variants left
+    without a column, and duplicates (|cos| > 0.9999 in the whitened, nuisance-orthogonal
+    metric)."""
     keep, dirs = [], []
     for v in variants:
         U = _apply(W, v.columns)
         n0 = np.linalg.norm(U, axis=0)
         U = U - Q @ (Q.T @ U)
-        if np.all(np.linalg.norm(U, axis=0) <= 1e-6 * np.maximum(n0, 1e-300)):
+        live = np.linalg.norm(U, axis=0) > 1e-6 * np.maximum(n0, 1e-300)
+        if not live.any():
             continue
-        d = U[:, 0] / np.linalg.norm(U[:, 0])
-        if U.shape[1] == 1 and any(abs(d @ e) > 0.9999 for e in dirs):
+        v = Variant(v.scope, v.shape, v.columns[:, live])
+        d = U[:, live][:, 0] / np.linalg.norm(U[:, live][:, 0])
+        if live.sum() == 1 and any(abs(d @ e) > 0.9999 for e in dirs):
             continue
         dirs.append(d)
         keep.append(v)
@@ -215,6 +237,7 @@ class NullDistribution:
 
     gof: np.ndarray                  # (n,)
     structure: np.ndarray            # (n,)
+    generic: np.ndarray              # (n,)
     candidates: np.ndarray           # (n, K) Δχ² per candidate
     names: tuple[str, ...]
 
@@ -240,7 +263,8 @@ class NullDistribution:
         return float((1 + np.sum(mp <= p_raw)) / (1 + mp.size))
 
     def p_value(self, stat: str, value: float) -> float:
-        """Upper-tail p-value of the ``gof`` or ``structure`` statistic (moment-matched)."""
+        """Upper-tail p-value of the ``gof``, ``structure`` or ``generic`` statistic (empirical,
+        moment-matched in the far tail)."""
         draws = getattr(self, stat)
         tl = TailModel.from_draws(draws)
         emp = (1 + np.sum(draws >= value)) / (1 + draws.size)
@@ -260,11 +284,13 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
             index.append((c, v.columns.shape[1], off))
             cols.append(v.columns)
             off += v.columns.shape[1]
+    cols.append(lin.generic)
     M = np.hstack(cols)
     p = lin.nuisance.shape[1]
+    ng = lin.generic.shape[1]
     series = problem.series()
     eig = kernel_eigs(series)
-    gof, struct, cand = [], [], []
+    gof, struct, cand, gen = [], [], [], []
     names = tuple(c.name for c, _ in lin.candidates)
     left = n_draws
     while left > 0:
@@ -283,9 +309,12 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
         U = Mw[..., p:] - _project(N, Mw[..., p:])
         gof.append(np.sum(r**2, axis=1))
         struct.append(gp_statistic(r, series, eig))
+        Ug = U[..., U.shape[-1] - ng:]
+        gen.append(np.einsum("bn,bn->b", r, _project(Ug, r)) if ng else np.zeros(B))
+        U = U[..., :U.shape[-1] - ng]
         cand.append(_candidate_stats(r, U, index, lin))
     K = len(names)
-    return NullDistribution(np.concatenate(gof), np.concatenate(struct),
+    return NullDistribution(np.concatenate(gof), np.concatenate(struct), np.concatenate(gen),
                             np.concatenate(cand) if K else np.zeros((n_draws, 0)), names)
 
 
@@ -311,17 +340,27 @@ def linear_statistics(problem: Problem, lin: Linearisation, r: np.ndarray) -> np
     return out
 
 
+def generic_statistic(problem: Problem, lin: Linearisation, r: np.ndarray) -> float:
+    """The residual's squared projection on the generic directions (data whitening), after the
+    nuisance columns are projected out of both."""
+    if lin.generic.shape[1] == 0:
+        return 0.0
+    W = _data_whitening(problem)
+    N = _apply(W, lin.nuisance)[None]
+    rr = r[None] - _project(N, r[None])
+    U = _apply(W, lin.generic)[None]
+    U = U - _project(N, U)
+    return float(rr[0] @ _project(U, rr)[0])
+
+
 def _project(N: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """Batched orthogonal projection of ``Y`` (B, n[, k]) on the columns of ``N`` (B, n, p):
-    normal equations of the unit-norm columns (cheaper than a QR per draw; the columns are
-    scaled, so the Gram matrix's condition is that of their correlations)."""
+    """Batched orthogonal projection of ``Y`` (B, n[, k]) on the columns of ``N`` (B, n, p),
+    by Householder QR (the nuisance columns are far from orthogonal — channel gains against
+    the unbalance — so normal equations would lose the digits the test needs)."""
     vec = Y.ndim == 2
     Y = Y[..., None] if vec else Y
-    s = np.linalg.norm(N, axis=1, keepdims=True)
-    Ns = N / np.where(s > 0, s, 1.0)
-    G = np.swapaxes(Ns, 1, 2) @ Ns
-    coef = np.linalg.solve(G, np.swapaxes(Ns, 1, 2) @ Y)
-    out = Ns @ coef
+    Q, _ = np.linalg.qr(N)
+    out = Q @ (np.swapaxes(Q, -1, -2) @ Y)
     return out[..., 0] if vec else out
 
 

@@ -11,7 +11,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import norm
 
-from surrogate_rbrdo.discrepancy.problem import Evaluation, Parametrisation, Problem
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
+from surrogate_rbrdo.discrepancy.problem import Evaluation, Problem
 
 #: relative finite-difference step (of a parameter's typical magnitude)
 FD_STEP = 1e-5
@@ -56,13 +57,19 @@ class Fit:
     def dof(self) -> int:
         return self.n_obs - self.n_params
 
-    def covariance(self) -> np.ndarray:
-        """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular)."""
-        return np.linalg.pinv(self.jac.T @ self.jac)
+    def covariance(self, fixed: np.ndarray | None = None) -> np.ndarray:
+        """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular); with
+        ``fixed`` (boolean mask) those parameters are held at their values (zero rows)."""
+        keep = np.ones(self.x.size, dtype=bool) if fixed is None else ~np.asarray(fixed)
+        cov = np.zeros((self.x.size, self.x.size))
+        J = self.jac[:, keep]
+        cov[np.ix_(keep, keep)] = np.linalg.pinv(J.T @ J)
+        return cov
 
-    def wald_ci(self, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-        """Symmetric Wald interval of every outer parameter."""
-        se = np.sqrt(np.clip(np.diag(self.covariance()), 0.0, None))
+    def wald_ci(self, level: float = 0.95, fixed: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Symmetric Wald interval of every outer parameter (conditional on ``fixed``)."""
+        se = np.sqrt(np.clip(np.diag(self.covariance(fixed)), 0.0, None))
         z = norm.ppf(0.5 + level / 2)
         return self.x - z * se, self.x + z * se
 

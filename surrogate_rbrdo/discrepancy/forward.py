@@ -1,25 +1,21 @@
 """The model side of the comparison: complex responses at the measured channels, batched.
 
-A *sweep* is a list of operating points, each a spin speed ``Ω`` and a response frequency ``ω``:
-the steady 1x unbalance response has ``ω = Ω`` at every measured speed, an impact test at
-standstill has ``Ω = 0`` and ``ω`` on the FRF's frequency lines. At every point the rotor alone,
-
-    A(Ω, ω) = (1 + iωβ) K + (−ω² + iωα) M + iωΩ g G,
-
-is condensed exactly onto the retained nodes (unbalance planes, bearings, channels, excitation
-points: the dynamic Schur complement of :mod:`surrogate_rbrdo.spindle.substructure`, here with
-separate spin and frequency), and the bearings are coupled by a low-rank (Woodbury) update:
-with ``H = S⁻¹`` and ``P`` picking the bearing DOFs,
+At every operating point of a sweep (:mod:`.sweeps`) the rotor is condensed exactly onto the
+retained nodes (unbalance planes, bearings, channels, excitation points, disks whose mass is
+recalibrated; :mod:`.impedance`), and everything a batch row changes is coupled by a low-rank
+(Woodbury) update: with ``H = S⁻¹`` and ``P`` picking the coupled DOFs,
 
     q_O = H_OF − H_OP (I + Z H_PP)⁻¹ Z H_PF,
 
-``Z`` the bearing dynamic stiffness (housing stage condensed in). The condensed rotor depends
-on the rotor only, so it is computed once per rotor (cached) and every batch row — a bearing
-stiffness factor θ, a damping scale, a candidate effect's parameters — costs one ``2 nb``-square
-solve per point. Nothing is approximated: the tests compare with the dense solve of
+where ``Z`` is block diagonal: each bearing's dynamic stiffness (housing stage condensed in) on
+its node's x, y DOFs, and each recalibrated disk's change of mass and inertia on its node's four
+DOFs. The condensed rotor depends on the rotor only, so it is computed once per rotor (cached)
+and every batch row — a bearing stiffness factor θ, a damping factor, a disk mass factor, a
+candidate effect's parameters — costs one small solve per point. Nothing is approximated: the
+tests compare with the dense solve of
 :meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
 
-Loads are unit loads: a unit unbalance (1 kg m) in each plane for the 1x test (force
+Loads are unit loads: a unit unbalance (1 kg m) in each plane for the 1x sweep (force
 ``Ω² [1, −i]``, :func:`~surrogate_rbrdo.spindle.harmonic.unbalance_load`), a unit force for an
 impact test, so the response to any unbalance is ``G u`` (linear in the plane phasors ``u``).
 """
@@ -29,180 +25,30 @@ from __future__ import annotations
 import hashlib
 from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
-from surrogate_rbrdo.core.validate import check_choice, check_finite
-from surrogate_rbrdo.spindle.assembly import (
-    RPM,
-    SpindleModel,
-    bearing_coefficients,
-    bearing_supports,
-    build_model,
+from surrogate_rbrdo.discrepancy.impedance import (
+    acts_on_rotor,
+    bearing_dynamic_stiffness,
+    condensed_dynamic_stiffness,
 )
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
+from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
 from surrogate_rbrdo.spindle.effects import Effect
-from surrogate_rbrdo.spindle.geometry import SpindleGeometry, Unbalance
-
-DIRECTIONS = ("x", "y")
-
-#: effect hooks that leave the rotor's matrices alone (the loads here are unit loads, so the
-#: unbalance hook does not enter either)
-BEARING_HOOKS = frozenset({"preload", "bearing", "support", "unbalance"})
-_NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off"})
-
-
-def acts_on_rotor(effect: Effect) -> bool:
-    """Whether ``effect`` overrides a hook other than the bearing-level ones (then the rotor
-    must be reassembled with it; otherwise the base rotor is reused).
-
-    >>> from surrogate_rbrdo.spindle.effects import Gyroscopics, SpeedSoftening
-    >>> acts_on_rotor(SpeedSoftening(a=0.1)), acts_on_rotor(Gyroscopics(g=0.1))
-    (False, True)
-    """
-    for name in dir(Effect):
-        if name.startswith("_") or name in _NOT_HOOKS or name in BEARING_HOOKS:
-            continue
-        if callable(getattr(Effect, name)) and getattr(type(effect), name) is not getattr(
-                Effect, name):
-            return True
-    return False
-
-
-@dataclass(frozen=True)
-class Channel:
-    """A measured displacement: a probe at ``position_mm`` (from the tool tip) in ``x`` or ``y``.
-
-    >>> Channel("tool_x", 0.0, "x").dof_offset
-    0
-    """
-
-    name: str
-    position_mm: float
-    direction: str
-
-    def __post_init__(self) -> None:
-        check_finite(f"channels[{self.name}].position_mm", self.position_mm)
-        check_choice(f"channels[{self.name}].direction", self.direction, DIRECTIONS)
-
-    @property
-    def dof_offset(self) -> int:
-        return DIRECTIONS.index(self.direction)
-
-
-@dataclass(frozen=True)
-class Sweep:
-    """Operating points of one kind of test and its unit loads.
-
-    Attributes
-    ----------
-    kind : str
-        ``"unbalance_1x"`` (``ω = Ω``; one unit unbalance per plane) or ``"impact"``
-        (``Ω = 0``; one unit force per excitation channel).
-    spin_rad_s, freq_rad_s : ndarray (X,)
-        Spin speed and response frequency of every point.
-    excitations : tuple of Channel
-        Where a unit force acts (impact tests only).
-    """
-
-    kind: str
-    spin_rad_s: np.ndarray
-    freq_rad_s: np.ndarray
-    excitations: tuple[Channel, ...] = ()
-
-    def __post_init__(self) -> None:
-        check_choice("sweep.kind", self.kind, ("unbalance_1x", "impact"))
-        s = np.asarray(self.spin_rad_s, dtype=float)
-        w = np.asarray(self.freq_rad_s, dtype=float)
-        if s.ndim != 1 or s.shape != w.shape or s.size == 0:
-            raise ValueError(f"sweep.spin_rad_s / freq_rad_s have shapes {s.shape}, {w.shape}: "
-                             "must be equal, one-dimensional and not empty")
-        if not (np.all(np.isfinite(s)) and np.all(np.isfinite(w)) and np.all(w > 0)
-                and np.all(s >= 0)):
-            raise ValueError("sweep.freq_rad_s must be finite and > 0, spin_rad_s finite >= 0")
-        if self.kind == "impact" and not self.excitations:
-            raise ValueError("sweep.excitations = () is not allowed for an impact test: give "
-                             "at least one excitation channel")
-        object.__setattr__(self, "spin_rad_s", s)
-        object.__setattr__(self, "freq_rad_s", w)
-
-    @classmethod
-    def unbalance(cls, speeds_rpm: Sequence[float]) -> Sweep:
-        """Steady-state 1x unbalance response at ``speeds_rpm``.
-
-        >>> Sweep.unbalance([6000.0]).freq_rad_s.round(3).tolist()
-        [628.319]
-        """
-        w = np.asarray(speeds_rpm, dtype=float) * RPM
-        return cls("unbalance_1x", w, w)
-
-    @classmethod
-    def impact(cls, freqs_hz: Sequence[float], excitations: Sequence[Channel]) -> Sweep:
-        """Impact test at standstill, FRF lines ``freqs_hz``, forces at ``excitations``."""
-        w = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
-        return cls("impact", np.zeros_like(w), w, tuple(excitations))
-
-
-def with_nodes_at(geometry: SpindleGeometry, positions_mm: Sequence[float]) -> SpindleGeometry:
-    """The geometry with a mesh node at every position: zero-magnitude unbalances are added
-    (the mesher puts a node at every unbalance position; a zero unbalance loads nothing)."""
-    extra = tuple(Unbalance(float(p), 0.0) for p in positions_mm)
-    return replace(geometry, unbalances=geometry.unbalances + extra)
-
-
-def condensed_dynamic_stiffness(model: SpindleModel, spin: np.ndarray, freq: np.ndarray,
-                                dofs: np.ndarray) -> np.ndarray:
-    """Rotor dynamic stiffness ``A(Ω, ω)`` condensed exactly onto ``dofs``: ``(X, r, r)``.
-
-    With ``ω = Ω`` it equals :func:`~surrogate_rbrdo.spindle.substructure.condensed_rotor`.
-    """
-    spin = np.asarray(spin, dtype=float)[:, None, None]
-    w = np.asarray(freq, dtype=float)[:, None, None]
-    A = ((1 + 1j * w * model.beta) * model.K + (-(w**2) + 1j * w * model.alpha) * model.M
-         + 1j * w * spin * model.gyro_scale * model.G)
-    inner = np.setdiff1d(np.arange(A.shape[-1]), dofs)
-    try:
-        X = np.linalg.solve(A[:, inner[:, None], inner], A[:, inner[:, None], dofs])
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("condensed_dynamic_stiffness: singular rotor interior") from exc
-    return A[:, dofs[:, None], dofs] - A[:, dofs[:, None], inner] @ X
-
-
-def bearing_dynamic_stiffness(geometry: SpindleGeometry, effects: Sequence[Effect],
-                              theta_bearings: Sequence[str], spin: np.ndarray,
-                              freq: np.ndarray, theta: np.ndarray,
-                              damping_scale: np.ndarray) -> np.ndarray:
-    """Bearing impedance ``Z = K(Ω) + iω s C(Ω)`` with its housing stage condensed in.
-
-    As :func:`~surrogate_rbrdo.spindle.assembly.bearing_impedance` but with the response
-    frequency ``ω`` apart from the spin ``Ω`` (an impact test at standstill) and a damping
-    scale ``s`` per bearing. ``spin``, ``freq``: ``(X,)``; ``theta``: ``(B, m)``;
-    ``damping_scale``: ``(B, nb)``. Returns ``(B, X, nb, 2, 2)``.
-    """
-    B = theta.shape[0]
-    sp = np.broadcast_to(spin, (B, spin.size))
-    Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, sp, theta)
-    w = freq[None, :, None, None, None]
-    Z = Kb + 1j * w * Cb * damping_scale[:, None, :, None, None]
-    sups = bearing_supports(geometry, effects)
-    for j, sup in enumerate(sups):
-        if sup is None:
-            continue
-        zh = sup.k_N_per_m + 1j * freq * sup.c_Ns_per_m - freq**2 * sup.m_kg
-        Zj = Z[:, :, j]
-        Z[:, :, j] = Zj - Zj @ np.linalg.solve(Zj + zh[None, :, None, None] * np.eye(2), Zj)
-    return Z
+from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 
 @dataclass(frozen=True)
 class _Condensed:
-    """Per point: the rotor's receptances restricted to outputs O, bearing DOFs P, loads F."""
+    """Per point: the rotor's receptances restricted to outputs O, coupled DOFs P, loads F."""
 
     H_OF: np.ndarray  # (X, nO, nL)
-    H_OP: np.ndarray  # (X, nO, 2nb)
-    H_PP: np.ndarray  # (X, 2nb, 2nb)
-    H_PF: np.ndarray  # (X, 2nb, nL)
+    H_OP: np.ndarray  # (X, nO, nP)
+    H_PP: np.ndarray  # (X, nP, nP)
+    H_PF: np.ndarray  # (X, nP, nL)
 
 
 @dataclass
@@ -212,7 +58,7 @@ class ForwardModel:
     Parameters
     ----------
     geometry : SpindleGeometry
-        The model's geometry (nodes are added at channel, plane and excitation positions).
+        The model's geometry (nodes are added at channel and plane positions).
     effects : tuple of Effect
         The model's own effects; a row's extra effects are appended to them.
     channels : tuple of Channel
@@ -221,9 +67,11 @@ class ForwardModel:
         Unbalance planes (positions, mm) whose phasors are unknown.
     theta_bearings : tuple of str
         Bearings carrying a stiffness factor θ (default all).
+    mass_disks : tuple of str
+        Disks (by name) whose mass and inertias a row may scale.
 
     The instance memoises assembled models (keyed by the effect tuple) and condensed rotors
-    (keyed by the rotor matrices and the test), at most ``cache_size`` each; nothing else
+    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each; nothing else
     changes between calls.
 
     Examples
@@ -242,6 +90,7 @@ class ForwardModel:
     channels: tuple[Channel, ...]
     planes_mm: tuple[float, ...]
     theta_bearings: tuple[str, ...] | None = None
+    mass_disks: tuple[str, ...] = ()
     cache_size: int = 64
     _models: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
@@ -252,6 +101,7 @@ class ForwardModel:
         self.effects = tuple(e for e in self.effects if not e.is_off)
         self.channels = tuple(self.channels)
         self.planes_mm = tuple(float(p) for p in self.planes_mm)
+        self.mass_disks = tuple(self.mass_disks)
         names = [b.name for b in self.geometry.bearings]
         self.theta_bearings = tuple(names if self.theta_bearings is None
                                     else self.theta_bearings)
@@ -259,7 +109,13 @@ class ForwardModel:
             raise ValueError("channels = () is not allowed: give at least one channel")
         if not self.planes_mm:
             raise ValueError("planes_mm = () is not allowed: give at least one unbalance plane")
-        self._positions = sorted({c.position_mm for c in self.channels} | set(self.planes_mm))
+        disks = {d.name: d for d in self.geometry.disks}
+        for d in self.mass_disks:
+            if d not in disks:
+                raise ValueError(f"mass_disks: {d!r} is not a disk; disks are {sorted(disks)}")
+        self._disks = tuple(disks[d] for d in self.mass_disks)
+        self._positions = sorted({c.position_mm for c in self.channels} | set(self.planes_mm)
+                                 | {d.position_mm for d in self._disks})
         self.geometry = with_nodes_at(self.geometry, self._positions)
 
     @property
@@ -280,31 +136,37 @@ class ForwardModel:
                 self._models.popitem(last=False)
         return self._models[key]
 
-    def _node(self, model: SpindleModel, position_mm: float) -> int:
+    def node(self, model: SpindleModel, position_mm: float) -> int:
+        """The mesh node at ``position_mm``."""
         return int(np.argmin(np.abs(model.z - position_mm * 1e-3)))
 
-    def _layout(self, model: SpindleModel, sweep: Sweep):
-        nodes = sorted({self._node(model, p) for p in self._positions}
-                       | {self._node(model, c.position_mm) for c in sweep.excitations}
+    def layout(self, model: SpindleModel, sweep: Sweep
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Retained DOFs (global), the channels' and coupled DOFs' positions among them (bearing
+        x, y, then four per recalibrated disk), and the sweep's unit loads ``(X, r, L)``."""
+        nodes = sorted({self.node(model, p) for p in self._positions}
+                       | {self.node(model, c.position_mm) for c in sweep.excitations}
                        | set(map(int, model.bearing_nodes)))
         dofs = (4 * np.asarray(nodes)[:, None] + np.arange(4)).ravel()
         at = {n: 4 * i for i, n in enumerate(nodes)}
-        out = np.array([at[self._node(model, c.position_mm)] + c.dof_offset
+        out = np.array([at[self.node(model, c.position_mm)] + c.dof_offset
                         for c in self.channels])
-        brg = np.concatenate([[at[int(n)], at[int(n)] + 1] for n in model.bearing_nodes])
+        cpl = [[at[int(n)], at[int(n)] + 1] for n in model.bearing_nodes]
+        cpl += [list(range(at[self.node(model, d.position_mm)],
+                           at[self.node(model, d.position_mm)] + 4)) for d in self._disks]
         r = dofs.size
         if sweep.kind == "unbalance_1x":
             F = np.zeros((sweep.freq_rad_s.size, r, len(self.planes_mm)), dtype=complex)
             w2 = sweep.freq_rad_s**2
             for j, p in enumerate(self.planes_mm):
-                k = at[self._node(model, p)]
+                k = at[self.node(model, p)]
                 F[:, k, j] = w2
                 F[:, k + 1, j] = -1j * w2
         else:
             F = np.zeros((sweep.freq_rad_s.size, r, len(sweep.excitations)), dtype=complex)
             for j, c in enumerate(sweep.excitations):
-                F[:, at[self._node(model, c.position_mm)] + c.dof_offset, j] = 1.0
-        return dofs, out, brg, F
+                F[:, at[self.node(model, c.position_mm)] + c.dof_offset, j] = 1.0
+        return dofs, out, np.concatenate(cpl), F
 
     def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
         h = hashlib.sha1()
@@ -315,22 +177,48 @@ class ForwardModel:
         h.update(repr((model.alpha, model.beta, sweep.kind, sweep.excitations)).encode())
         key = h.hexdigest()
         if key not in self._condensed:
-            dofs, out, brg, F = self._layout(model, sweep)
+            dofs, out, cpl, F = self.layout(model, sweep)
             S = condensed_dynamic_stiffness(model, sweep.spin_rad_s, sweep.freq_rad_s, dofs)
             try:
                 HF = np.linalg.solve(S, F)
-                HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, brg],
-                                                        S.shape[:1] + (dofs.size, brg.size)))
+                HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, cpl],
+                                                        S.shape[:1] + (dofs.size, cpl.size)))
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
-            self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, brg], HF[:, brg])
+            self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
         return self._condensed[key]
 
+    @property
+    def disks(self) -> tuple:
+        """The disks whose mass a row may scale (geometry objects, ``mass_disks`` order)."""
+        return self._disks
+
+    def disk_impedance(self, sweep: Sweep, mass: np.ndarray, model: SpindleModel
+                       ) -> np.ndarray:
+        """Dynamic stiffness of each recalibrated disk's change ``(B, X, nd, 4, 4)``: mass and
+        inertias scaled by ``mass`` (B, nd) factors (mass-proportional damping and gyroscopics
+        included)."""
+        w = sweep.freq_rad_s[None, :, None]
+        s = sweep.spin_rad_s[None, :, None]
+        dm = (mass - 1.0)[:, None, :]                                  # (B, 1, nd)
+        a_m = -(w**2) + 1j * w * model.alpha
+        Z = np.zeros(mass.shape[:1] + (sweep.freq_rad_s.size, len(self._disks), 4, 4),
+                     dtype=complex)
+        for k, d in enumerate(self._disks):
+            m, jd = d.mass_kg * dm[..., k], d.diametral_inertia_kgm2 * dm[..., k]
+            jp = d.polar_inertia_kgm2 * dm[..., k] * model.gyro_scale
+            Z[..., k, 0, 0] = Z[..., k, 1, 1] = a_m[..., 0] * m
+            Z[..., k, 2, 2] = Z[..., k, 3, 3] = a_m[..., 0] * jd
+            Z[..., k, 2, 3] = 1j * w[..., 0] * s[..., 0] * jp
+            Z[..., k, 3, 2] = -1j * w[..., 0] * s[..., 0] * jp
+        return Z
+
     def response(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
-                 extras: Sequence[tuple[Effect, ...]] | None = None) -> np.ndarray:
-        """Channel responses to the test's unit loads, ``(B, X, n_channels, n_loads)``.
+                 extras: Sequence[tuple[Effect, ...]] | None = None,
+                 mass: np.ndarray | None = None) -> np.ndarray:
+        """Channel responses to the sweep's unit loads, ``(B, X, n_channels, n_loads)``.
 
         Parameters
         ----------
@@ -341,29 +229,32 @@ class ForwardModel:
             Factors on each bearing's damping.
         extras : sequence of tuple of Effect, optional
             Per row, effects added to the model's own (default none).
+        mass : ndarray (B, n_mass), optional
+            Factors on the mass and inertias of ``mass_disks`` (default 1).
         """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
         B = theta.shape[0]
         extras = [()] * B if extras is None else [tuple(e) for e in extras]
-        if ds.shape != (B, self.n_bearings) or len(extras) != B:
-            raise ValueError(f"damping_scale has shape {ds.shape} and extras {len(extras)} "
-                             f"rows: must be ({B}, {self.n_bearings}) and {B} rows")
+        mass = np.ones((B, len(self._disks))) if mass is None else np.atleast_2d(mass)
+        if ds.shape != (B, self.n_bearings) or len(extras) != B or mass.shape != (
+                B, len(self._disks)):
+            raise ValueError(f"damping_scale {ds.shape}, extras {len(extras)} rows and mass "
+                             f"{mass.shape}: must be ({B}, {self.n_bearings}), {B} rows and "
+                             f"({B}, {len(self._disks)})")
+        n_load = len(self.planes_mm) if sweep.kind == "unbalance_1x" else len(sweep.excitations)
+        out = np.zeros((B, sweep.freq_rad_s.size, len(self.channels), n_load), dtype=complex)
         groups: dict[tuple[Effect, ...], list[int]] = {}
         for i, e in enumerate(extras):
             groups.setdefault(e, []).append(i)
-        out = None
         for extra, rows in groups.items():
-            rotor = tuple(e for e in extra if acts_on_rotor(e))
-            model = self.model(rotor)
+            model = self.model(tuple(e for e in extra if acts_on_rotor(e)))
             cond = self._rotor(model, sweep)
             Z = bearing_dynamic_stiffness(self.geometry, self.effects + extra,
                                           self.theta_bearings, sweep.spin_rad_s,
                                           sweep.freq_rad_s, theta[rows], ds[rows])
-            q = _couple(cond, Z)
-            if out is None:
-                out = np.empty((B,) + q.shape[1:], dtype=complex)
-            out[rows] = q
+            Zd = self.disk_impedance(sweep, mass[rows], model) if self._disks else None
+            out[rows] = _couple(cond, Z, Zd)
         if not np.all(np.isfinite(out)):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
@@ -375,21 +266,26 @@ class ForwardModel:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
-        rows = []
-        for i, extra in enumerate(extras):
-            rows.append(bearing_dynamic_stiffness(
-                self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
-                sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0])
-        return np.stack(rows)
+        return np.stack([bearing_dynamic_stiffness(
+            self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
+            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0] for i, extra in enumerate(extras)])
 
 
-def _couple(c: _Condensed, Z: np.ndarray) -> np.ndarray:
-    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)."""
+def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
+    and disk changes ``Zd`` (B, X, nd, 4, 4)."""
     B, X, nb = Z.shape[:3]
-    Zf = np.zeros((B, X, 2 * nb, 2 * nb), dtype=complex)
-    for j in range(nb):
-        Zf[:, :, 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[:, :, j]
-    lhs = np.eye(2 * nb) + Zf @ c.H_PP[None]
+    blocks = [Z[:, :, j] for j in range(nb)]
+    if Zd is not None:
+        blocks += [Zd[:, :, k] for k in range(Zd.shape[2])]
+    n = sum(b.shape[-1] for b in blocks)
+    Zf = np.zeros((B, X, n, n), dtype=complex)
+    k = 0
+    for b in blocks:
+        m = b.shape[-1]
+        Zf[:, :, k:k + m, k:k + m] = b
+        k += m
+    lhs = np.eye(n) + Zf @ c.H_PP[None]
     try:
         U = np.linalg.solve(lhs, Zf @ c.H_PF[None])
     except np.linalg.LinAlgError as exc:

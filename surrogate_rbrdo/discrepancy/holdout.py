@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_int, check_range
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
-from surrogate_rbrdo.discrepancy.problem import Parametrisation, Problem, _whitened
+from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ def residuals(problem: Problem, par: Parametrisation, x: np.ndarray,
     """Complex residuals ``data − model`` per block of ``problem`` (its points) with the
     parameters ``x`` and the unbalance fitted elsewhere; ``correction`` is added to the model
     (a GP prediction)."""
-    raw = problem.responses(*par.rows(x[None]))
+    raw = problem.responses(par.rows(x[None]))
     out, k = [], 0
     for i, (b, G) in enumerate(zip(problem.blocks, raw, strict=False)):
         if b.sweep.kind == "unbalance_1x":

@@ -11,8 +11,9 @@ any data are seen):
    in total and worsens on neither the interleaved nor the extrapolated speeds by more than
    ``holdout_tolerance``.
 
-Among the passing candidates, all whose χ² is within ``confound_delta`` of the best are a
-confounded set (the data cannot tell them apart); one alone is named. Candidates whose first-
+Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
+a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
+confounded set. Candidates whose first-
 order statistic is far below the threshold are not refitted (their nonlinear ``Δχ²`` equals
 the first-order one for small effects; this saves the fits when nothing is missing).
 """
@@ -25,6 +26,7 @@ import numpy as np
 
 from surrogate_rbrdo.discrepancy.calibration import (
     NullDistribution,
+    generic_statistic,
     gp_statistic,
     linear_statistics,
     linearise,
@@ -77,11 +79,9 @@ class Stage:
     gof_p: float
     structure: float
     structure_p: float
+    generic: float
+    generic_p: float
     chosen: tuple[str, ...] = field(default=())
-
-    def best(self) -> Assessment | None:
-        ok = [a for a in self.assessments if a.passed]
-        return min(ok, key=lambda a: a.fit.fit.chi2) if ok else None
 
 
 @dataclass(frozen=True)
@@ -132,15 +132,31 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
                         and min(gain.values()) >= -holdout_tolerance),
         }
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks))
+    gen = generic_statistic(problem, lin, r)
     return Stage(base, null, tuple(out), lin.absorbed, null.p_value("gof", base.chi2), struct,
-                 null.p_value("structure", struct))
+                 null.p_value("structure", struct), gen, null.p_value("generic", gen))
 
 
-def confounded_set(stage: Stage, delta: float) -> list[Assessment]:
-    """Passing candidates within ``delta`` of the best χ² (the best first)."""
-    best = stage.best()
-    if best is None:
+def decide(stage: Stage, delta: float) -> list[Assessment]:
+    """The stage's answer: ``[]`` (nothing), one assessment (named) or several (confounded).
+
+    Candidates passing the likelihood-ratio test and inside their physical range, within
+    ``delta`` of the best χ² among them, cannot be told apart by the data. If one of them passes
+    every check, the group is the answer (a confounded set when it has several members; a
+    member that fails significance or the held-out check stays in the set, since the data do
+    not separate it from the rest); if none does, nothing is named at this stage.
+    """
+    lr = [a for a in stage.assessments if a.fit is not None and a.checks["likelihood_ratio"]
+          and a.checks["physical"]]
+    if not lr:
         return []
-    ok = [a for a in stage.assessments if a.passed
-          and a.fit.fit.chi2 - best.fit.fit.chi2 <= delta]
-    return sorted(ok, key=lambda a: a.fit.fit.chi2)
+    best = min(a.fit.fit.chi2 for a in lr)
+    group = sorted((a for a in lr if a.fit.fit.chi2 - best <= delta),
+                   key=lambda a: a.fit.fit.chi2)
+    if not any(a.passed for a in group):
+        return []
+    if len(group) == 1:
+        return group
+    # the model carries the best-fitting member that passes every check
+    first = next(a for a in group if a.passed)
+    return [first] + [a for a in group if a is not first]

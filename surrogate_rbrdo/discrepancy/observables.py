@@ -16,7 +16,7 @@ A :class:`RealBlock` holds real observables with a standard error each (identifi
 stiffness per speed, from an identification run).
 
 >>> import numpy as np
->>> from surrogate_rbrdo.discrepancy.forward import Channel, Sweep
+>>> from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 >>> rng = np.random.default_rng(0)
 >>> rec = 1.0 + 0.1 * (rng.normal(size=(20, 3, 1)) + 1j * rng.normal(size=(20, 3, 1)))
 >>> b = ComplexBlock.from_repeats("unbalance_1x", Sweep.unbalance([1e3, 2e3, 3e3]),
@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_int
-from surrogate_rbrdo.discrepancy.forward import Channel, Sweep
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.spindle.assembly import RPM
 
 

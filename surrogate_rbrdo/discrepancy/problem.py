@@ -1,11 +1,11 @@
 """Whitened residuals of a model against measured data, with the unbalance solved exactly.
 
-The outer parameters are the model's own uncertain parameters (the *nuisance*: a stiffness factor
-θ per bearing, a factor on the bearing damping) and, when a candidate effect is tried, its
-parameters. The unbalance phasors of every 1x test are *inner* parameters: the 1x response is
-linear in them, so for given outer parameters they are the exact weighted least-squares
-solution, and the residual that the outer fit sees is the variable-projection residual
-(Golub & Pereyra 1973, *SIAM J. Numer. Anal.* 10:413). Everything is batched over rows of outer
+The outer parameters are the model's own uncertain parameters (the *nuisance*,
+:mod:`.nuisance`) and, when a candidate effect is tried, its parameters. The unbalance phasors
+of every 1x test are *inner* parameters: the 1x response is linear in them, so for given outer
+parameters they are the exact weighted least-squares solution, and the residual that the outer
+fit sees is the variable-projection residual (Golub & Pereyra 1973, *SIAM J. Numer. Anal.*
+10:413). Everything is batched over rows of outer
 parameters: a finite-difference Jacobian is one call.
 """
 
@@ -15,166 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_choice, check_range
-from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions, Parametrisation, Rows
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, RealBlock
-from surrogate_rbrdo.spindle.effects import Effect
-
-
-@dataclass(frozen=True)
-class NuisanceOptions:
-    """Which of the model's own parameters are recalibrated, and within which range.
-
-    Attributes
-    ----------
-    theta_bounds : (float, float)
-        Range of each bearing's stiffness factor θ (the paper's identification bounds
-        ``[0.5, 1.5] k_catalog``).
-    damping : {"common", "per_bearing", "fixed"}
-        One factor on every bearing's damping, one per bearing, or none.
-    damping_bounds : (float, float)
-        Range of a damping factor (the paper's ``[0.5, 2.0] c_init``, widened to 0.25–4 since
-        damping is the worst-known parameter).
-    """
-
-    theta_bounds: tuple[float, float] = (0.5, 1.5)
-    damping: str = "common"
-    damping_bounds: tuple[float, float] = (0.25, 4.0)
-
-    def __post_init__(self) -> None:
-        check_choice("nuisance.damping", self.damping, ("common", "per_bearing", "fixed"))
-        for name in ("theta_bounds", "damping_bounds"):
-            lo, hi = getattr(self, name)
-            check_range(f"nuisance.{name}[0]", lo, 1e-3, 1.0)
-            check_range(f"nuisance.{name}[1]", hi, 1.0, 1e3)
-
-
-@dataclass(frozen=True)
-class Slot:
-    """A candidate effect in the model at one bearing scope; ``fixed`` shape values are not
-    fitted."""
-
-    candidate: Candidate
-    scope: tuple[str, ...] = ()
-    fixed: tuple[tuple[str, float], ...] = ()
-
-    @property
-    def free(self) -> tuple[str, ...]:
-        fx = dict(self.fixed)
-        return self.candidate.strength + tuple(p for p in self.candidate.shape if p not in fx)
-
-    @property
-    def label(self) -> str:
-        s = f"{self.candidate.name}"
-        return s + (f"[{','.join(self.scope)}]" if self.scope else "")
-
-
-#: typical size of a reciprocal strength parameter (a compliance, m/N): 1/(1 GN/m)
-RECIPROCAL_SCALE = 1e-9
-
-
-@dataclass(frozen=True)
-class Parametrisation:
-    """Outer parameter vector ``x`` ↔ model rows: ``[log θ…, log s…, slot parameters…]``."""
-
-    theta_bearings: tuple[str, ...]
-    bearings: tuple[str, ...]
-    nuisance: NuisanceOptions
-    slots: tuple[Slot, ...] = ()
-
-    @property
-    def n_theta(self) -> int:
-        return len(self.theta_bearings)
-
-    @property
-    def n_damping(self) -> int:
-        return {"common": 1, "per_bearing": len(self.bearings), "fixed": 0}[
-            self.nuisance.damping]
-
-    @property
-    def n_nuisance(self) -> int:
-        return self.n_theta + self.n_damping
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        out = [f"log_theta_{b}" for b in self.theta_bearings]
-        if self.nuisance.damping == "common":
-            out.append("log_damping")
-        elif self.nuisance.damping == "per_bearing":
-            out += [f"log_damping_{b}" for b in self.bearings]
-        for s in self.slots:
-            out += [f"{s.label}.{p}" for p in s.free]
-        return tuple(out)
-
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        lo = [np.log(self.nuisance.theta_bounds[0])] * self.n_theta
-        hi = [np.log(self.nuisance.theta_bounds[1])] * self.n_theta
-        lo += [np.log(self.nuisance.damping_bounds[0])] * self.n_damping
-        hi += [np.log(self.nuisance.damping_bounds[1])] * self.n_damping
-        for s in self.slots:
-            c = s.candidate
-            lo += list(c.lower)
-            hi += list(c.upper)
-            fx = dict(s.fixed)
-            for p, (a, b) in zip(c.shape, c.shape_bounds, strict=True):
-                if p not in fx:
-                    lo.append(a)
-                    hi.append(b)
-        return np.array(lo, dtype=float), np.array(hi, dtype=float)
-
-    def scales(self) -> np.ndarray:
-        """A typical magnitude per parameter (finite-difference steps are relative to it)."""
-        out = [0.05] * self.n_theta + [0.3] * self.n_damping
-        for s in self.slots:
-            c = s.candidate
-            for rec, a, b in zip(c.reciprocal, c.lower, c.upper, strict=True):
-                out.append(RECIPROCAL_SCALE if rec else (b - a) / 50 if np.isfinite(b - a)
-                           else 0.01)
-            fx = dict(s.fixed)
-            for p, (a, b) in zip(c.shape, c.shape_bounds, strict=True):
-                if p not in fx:
-                    out.append(max((b - a) / 100, 1e-3) if np.isfinite(b - a) else 1.0)
-        return np.array(out, dtype=float)
-
-    def x0(self, starts: dict[str, float] | None = None) -> np.ndarray:
-        """Nominal nuisance, every slot off, shapes at their first start (or ``starts``)."""
-        starts = starts or {}
-        x = [0.0] * self.n_nuisance
-        for s in self.slots:
-            c = s.candidate
-            x += [starts.get(f"{s.label}.{p}", o) for p, o in zip(c.strength, c.off,
-                                                                   strict=True)]
-            fx = dict(s.fixed)
-            for p, st in zip(c.shape, c.shape_starts, strict=True):
-                if p not in fx:
-                    x.append(starts.get(f"{s.label}.{p}", st[0]))
-        return np.array(x, dtype=float)
-
-    def slot_values(self, x: np.ndarray) -> list[dict[str, float]]:
-        """Per slot: its parameters (fitting units) including fixed shapes."""
-        k = self.n_nuisance
-        out = []
-        for s in self.slots:
-            vals = dict(s.fixed)
-            for p in s.free:
-                vals[p] = float(x[k])
-                k += 1
-            out.append(vals)
-        return out
-
-    def rows(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[tuple[Effect, ...]]]:
-        """θ (B, m), damping factors (B, nb) and per-row extra effects for outer rows ``X``."""
-        X = np.atleast_2d(X)
-        B = X.shape[0]
-        theta = np.exp(X[:, :self.n_theta])
-        nd = self.n_damping
-        d = np.exp(X[:, self.n_theta:self.n_nuisance]) if nd else np.ones((B, 0))
-        ds = np.ones((B, len(self.bearings))) * (d if nd else 1.0)
-        extras = [tuple(s.candidate.effect(s.scope, v)
-                        for s, v in zip(self.slots, self.slot_values(x), strict=True))
-                  for x in X]
-        return theta, ds, extras
 
 
 @dataclass(frozen=True)
@@ -200,12 +43,19 @@ class Problem:
     data : MeasuredData
     masks : dict, optional
         Block name (or ``"identified"``) → boolean mask of the points used; default all.
+    nuisance : NuisanceOptions, optional
+        What is recalibrated (default :class:`~.nuisance.NuisanceOptions`).
+
+    Residual order: every complex block's cells ``[Re, Im]`` (points × channels), then the
+    identified stiffness, then the priors' pseudo-observations.
     """
 
     def __init__(self, forward: ForwardModel, data: MeasuredData,
-                 masks: dict[str, np.ndarray] | None = None) -> None:
+                 masks: dict[str, np.ndarray] | None = None,
+                 nuisance: NuisanceOptions | None = None) -> None:
         masks = masks or {}
         self.forward = forward
+        self.nuisance = NuisanceOptions() if nuisance is None else nuisance
         self.data = data
         key = {(c.position_mm, c.direction): i for i, c in enumerate(forward.channels)}
         self.blocks: list[ComplexBlock] = []
@@ -230,11 +80,21 @@ class Problem:
             m = masks.get("identified", np.ones(ib.speeds_rpm.size, dtype=bool))
             self.identified = RealBlock(ib.name, ib.speeds_rpm[m], ib.bearings, ib.values[m],
                                         ib.sd[m], ib.dof)
+        self.n_prior = self.parametrisation().n_prior
+
+    def parametrisation(self) -> Parametrisation:
+        """The nuisance-only parametrisation of this problem."""
+        return Parametrisation(self.forward.theta_bearings, self.forward.bearing_names,
+                               self.nuisance, len(self.forward.channels))
+
+    @property
+    def n_data(self) -> int:
+        n = sum(2 * b.mean.size for b in self.blocks)
+        return n + (self.identified.values.size if self.identified is not None else 0)
 
     @property
     def n_obs(self) -> int:
-        n = sum(2 * b.mean.size for b in self.blocks)
-        return n + (self.identified.values.size if self.identified is not None else 0)
+        return self.n_data + self.n_prior
 
     @property
     def n_inner(self) -> int:
@@ -242,13 +102,24 @@ class Problem:
         return sum(2 * len(self.forward.planes_mm) for b in self.blocks
                    if b.sweep.kind == "unbalance_1x")
 
-    def responses(self, theta: np.ndarray, ds: np.ndarray,
-                  extras: list[tuple[Effect, ...]]) -> list[np.ndarray]:
-        """Raw model responses per block for explicit rows: complex unit-load responses
-        ``(B, X, C, L)`` per complex block, then identified stiffness ``(B, X, nb, 2)``."""
+    def responses(self, rows: Rows) -> list[np.ndarray]:
+        """Model responses per block through the measurement chain: complex unit-load
+        responses ``(B, X, C, L)`` per complex block, then identified stiffness
+        ``(B, X, nb, 2)``. Rows equal in their physical parameters are solved once."""
+        theta, ds, extras, mass = rows.physical()
+        keys = [(theta[i].tobytes(), ds[i].tobytes(), mass[i].tobytes(), extras[i])
+                for i in range(theta.shape[0])]
+        uniq = list(dict.fromkeys(keys))
+        at = {k: i for i, k in enumerate(uniq)}
+        u = np.array([keys.index(k) for k in uniq])
+        inv = np.array([at[k] for k in keys])
         out = []
         for b, idx in zip(self.blocks, self.channel_index, strict=True):
-            out.append(self.forward.response(b.sweep, theta, ds, extras)[:, :, idx])
+            G = self.forward.response(b.sweep, theta[u], ds[u], [extras[i] for i in u],
+                                      mass[u])[inv][:, :, idx]
+            w = b.sweep.freq_rad_s[None, :, None]
+            chain = rows.gain[:, None, idx] / (1 + 1j * w * rows.tau[:, None, idx])
+            out.append(G * chain[..., None])
         if self.identified is not None:
             ib = self.identified
             Z = self.forward.bearing_impedance(ib.sweep, theta, ds, extras)
@@ -259,7 +130,8 @@ class Problem:
 
     def evaluate(self, par: Parametrisation, X: np.ndarray) -> Evaluation:
         """Residuals (unbalance solved per row and 1x block) for outer rows ``X`` (B, n)."""
-        raw = self.responses(*par.rows(X))
+        X = np.atleast_2d(X)
+        raw = self.responses(par.rows(X))
         res, preds, unb = [], [], []
         for b, W, G in zip(self.blocks, self.whiten, raw, strict=False):
             if b.sweep.kind == "unbalance_1x":
@@ -275,12 +147,21 @@ class Problem:
             ib, k = self.identified, raw[-1]
             res.append(((ib.values[None] - k) / ib.sd[None]).reshape(k.shape[0], -1))
             preds.append(k)
+        res.append(par.prior_residuals(X))
         return Evaluation(np.concatenate(res, axis=1), tuple(preds), tuple(unb))
 
-    def model_vector(self, raw: list[np.ndarray], unbalance: tuple[np.ndarray, ...]
-                     ) -> np.ndarray:
-        """Unwhitened model observables ``(B, n_obs)`` (residual order) from raw responses and
-        a fixed unbalance per 1x block (each ``(planes,)`` complex)."""
+    def model_vector(self, par: Parametrisation, X: np.ndarray,
+                     unbalance: tuple[np.ndarray, ...]) -> np.ndarray:
+        """Unwhitened model observables ``(B, n_obs)`` (residual order; a prior's row is
+        ``(p − μ)/σ`` against an observation 0 of unit SD) with a fixed unbalance per 1x
+        block (each ``(planes,)`` complex)."""
+        X = np.atleast_2d(X)
+        return np.concatenate([self.data_vector(par.rows(X), unbalance),
+                               -par.prior_residuals(X)], axis=1)
+
+    def data_vector(self, rows: Rows, unbalance: tuple[np.ndarray, ...]) -> np.ndarray:
+        """The data part of :meth:`model_vector` for explicit model rows."""
+        raw = self.responses(rows)
         out, k = [], 0
         for b, G in zip(self.blocks, raw, strict=False):
             if b.sweep.kind == "unbalance_1x":
@@ -293,35 +174,32 @@ class Problem:
             out.append(raw[-1].reshape(raw[-1].shape[0], -1))
         return np.concatenate(out, axis=1)
 
-    def unbalance_design(self, raw: list[np.ndarray]) -> np.ndarray:
-        """Unwhitened real design ``(n_obs, n_inner)`` of the unbalance (row 0 of ``raw``)."""
-        cols, rows = [], []
+    def unbalance_design(self, par: Parametrisation, x: np.ndarray) -> np.ndarray:
+        """Unwhitened real design ``(n_obs, n_inner)`` of the unbalance at ``x``."""
+        raw = self.responses(par.rows(x[None]))
+        A = np.zeros((self.n_obs, self.n_inner))
+        r0, c0 = 0, 0
         for b, G in zip(self.blocks, raw, strict=False):
             n = 2 * G.shape[1] * G.shape[2]
             if b.sweep.kind == "unbalance_1x":
-                cols.append(_real_design(G[0]).reshape(n, -1))
-            rows.append(n)
-        if self.identified is not None:
-            rows.append(self.identified.values.size)
-        A = np.zeros((sum(rows), sum(c.shape[1] for c in cols)))
-        r0, c0, k = 0, 0, 0
-        for b, n in zip(self.blocks, rows, strict=False):
-            if b.sweep.kind == "unbalance_1x":
-                A[r0:r0 + n, c0:c0 + cols[k].shape[1]] = cols[k]
-                c0 += cols[k].shape[1]
-                k += 1
+                D = _real_design(G[0]).reshape(n, -1)
+                A[r0:r0 + n, c0:c0 + D.shape[1]] = D
+                c0 += D.shape[1]
             r0 += n
         return A
 
     def noise_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Noise description in residual order: complex cells' covariances ``(nc, 2, 2)`` and
-        dofs ``(nc,)``, real observables' SDs ``(nr,)`` and dofs ``(nr,)``."""
+        dofs ``(nc,)``, real observables' SDs ``(nr,)`` and dofs ``(nr,)`` (identified
+        stiffness, then the priors with unit SD known exactly)."""
         cov = np.concatenate([b.cov.reshape(-1, 2, 2) for b in self.blocks])
         dof = np.concatenate([np.full(b.mean.size, b.dof) for b in self.blocks])
-        if self.identified is None:
-            return cov, dof, np.zeros(0), np.zeros(0, dtype=int)
-        ib = self.identified
-        return cov, dof, ib.sd.ravel(), np.full(ib.sd.size, ib.dof)
+        sd, dr = [np.ones(self.n_prior)], [np.full(self.n_prior, KNOWN_DOF)]
+        if self.identified is not None:
+            ib = self.identified
+            sd.insert(0, ib.sd.ravel())
+            dr.insert(0, np.full(ib.sd.size, ib.dof))
+        return cov, dof, np.concatenate(sd), np.concatenate(dr)
 
     def series(self) -> list[tuple[int, int, int, np.ndarray]]:
         """Per complex block: residual offset, points X, channels C and the points' coordinate
@@ -334,6 +212,10 @@ class Problem:
             out.append((off, X, C, (c - c.min()) / (span if span > 0 else 1.0)))
             off += 2 * X * C
         return out
+
+
+#: degrees of freedom standing for a variance known exactly (a prior's unit SD)
+KNOWN_DOF = 10**9
 
 
 def _whitened(r: np.ndarray, W: np.ndarray) -> np.ndarray:

@@ -18,7 +18,8 @@ import numpy as np
 
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit, fit
-from surrogate_rbrdo.discrepancy.problem import Parametrisation, Problem, Slot
+from surrogate_rbrdo.discrepancy.nuisance import Slot
+from surrogate_rbrdo.discrepancy.problem import Problem
 
 #: screened strengths per start (geometric from 1e-4 of the range, or 1e-11 m/N, to the bound)
 N_SCREEN = 12
@@ -39,7 +40,8 @@ class CandidateFit:
     parameters : dict
         The effect's parameters (its own units; reciprocals undone; ``bearings``).
     ci : dict
-        95 % Wald intervals of the fitted parameters (own units).
+        95 % Wald intervals of the fitted parameters (own units); a strength's is conditional
+        on the fitted shape parameters.
     at_bound : bool
         A strength parameter sits on its physical bound (not the off state).
     significant : bool
@@ -86,8 +88,7 @@ def screen(problem: Problem, base: Fit, c: Candidate
     for scope in c.scopes:
         for shape in shapes:
             slot = Slot(c, scope)
-            par = Parametrisation(par0.theta_bearings, par0.bearings, par0.nuisance,
-                                  par0.slots + (slot,))
+            par = par0.with_slots(par0.slots + (slot,))
             for v in _screen_values(c):
                 start = {f"{slot.label}.{p}": val for p, val in shape}
                 start[f"{slot.label}.{c.strength[0]}"] = float(v)
@@ -124,8 +125,7 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
     best_slot = None
     par0 = base.par
     for slot, st in starts:
-        par = Parametrisation(par0.theta_bearings, par0.bearings, par0.nuisance,
-                              par0.slots + (slot,))
+        par = par0.with_slots(par0.slots + (slot,))
         x0 = par.x0(st)
         x0[:base.x.size] = base.x
         f = fit(problem, par, x0, max_nfev=max_nfev)
@@ -138,12 +138,19 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
     """Parameters, intervals and plausibility flags of a candidate's fit."""
     k0 = f.x.size - len(slot.free)
     lo_ci, hi_ci = f.wald_ci()
+    # a strength's interval is conditional on the fitted shapes: a shape parameter is profiled
+    # (it is not identified when the strength is small), and its correlation with the strength
+    # would otherwise blow the strength's interval up
+    shape = np.zeros(f.x.size, dtype=bool)
+    shape[k0:] = [p not in c.strength for p in slot.free]
+    lo_s, hi_s = f.wald_ci(fixed=shape)
     vals = f.par.slot_values(f.x)[-1]
     params = c.physical(vals)
     ci, at_bound, significant = {}, False, True
     for i, p in enumerate(slot.free):
         a, b = float(lo_ci[k0 + i]), float(hi_ci[k0 + i])
         if p in c.strength:
+            a, b = float(lo_s[k0 + i]), float(hi_s[k0 + i])
             j = c.strength.index(p)
             off, lo, hi = c.off[j], c.lower[j], c.upper[j]
             x = f.x[k0 + i]

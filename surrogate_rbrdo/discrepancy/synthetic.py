@@ -23,8 +23,9 @@ import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive
-from surrogate_rbrdo.discrepancy.forward import Channel, ForwardModel, Sweep
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, RealBlock
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
@@ -117,6 +118,14 @@ class Truth:
         planes = self.planes_mm or tuple(u.position_mm for u in self.geometry.unbalances)
         return ForwardModel(self.geometry, self.effects, channels, planes, self.theta_bearings)
 
+    def rows(self, assembly: Assembly) -> tuple[np.ndarray, np.ndarray]:
+        """θ and damping factors of ``assembly`` as one model row (a bearing the truth adds,
+        beyond the assembly's, keeps its own damping)."""
+        nb = len(self.geometry.bearings)
+        d = np.ones(nb)
+        d[:min(nb, assembly.damping.size)] = assembly.damping[:nb]
+        return assembly.theta[None], d[None]
+
 
 def measure(truth: Truth, assembly: Assembly, campaign: Campaign, noise: NoiseLevel,
             *, rng: np.random.Generator, channels: tuple[Channel, ...] | None = None
@@ -126,7 +135,7 @@ def measure(truth: Truth, assembly: Assembly, campaign: Campaign, noise: NoiseLe
     rng = require_rng(rng)
     channels = channels or default_channels(truth.geometry)
     fm = truth.forward(channels)
-    th, ds = assembly.theta[None], assembly.damping[None]
+    th, ds = truth.rows(assembly)
     t1 = Sweep.unbalance(campaign.speeds_rpm)
     y = np.einsum("xcl,l->xc", fm.response(t1, th, ds)[0], assembly.unbalance)
     blocks = [ComplexBlock.from_repeats("unbalance_1x", t1, channels,
@@ -153,6 +162,44 @@ def measure(truth: Truth, assembly: Assembly, campaign: Campaign, noise: NoiseLe
         ident = RealBlock("identified_k", np.asarray(campaign.speeds_rpm), tuple(names),
                           rec.mean(axis=0), rec.std(axis=0, ddof=1) / np.sqrt(R), R - 1)
     return MeasuredData(tuple(blocks), ident, dict(truth.provenance))
+
+
+def expected(truth: Truth, assembly: Assembly, campaign: Campaign, noise: NoiseLevel,
+             channels: tuple[Channel, ...] | None = None) -> MeasuredData:
+    """The noise-free means of :func:`measure` with the noise covariance of the means (known,
+    not estimated: ``dof`` is set so large that the whitening is the exact precision). Used to
+    measure how strong an effect is: the whitened distance the recalibration cannot close."""
+    channels = channels or default_channels(truth.geometry)
+    fm = truth.forward(channels)
+    th, ds = truth.rows(assembly)
+    t1 = Sweep.unbalance(campaign.speeds_rpm)
+    y = np.einsum("xcl,l->xc", fm.response(t1, th, ds)[0], assembly.unbalance)
+    blocks = [ComplexBlock("unbalance_1x", t1, channels, y,
+                           _record_cov(y, noise.additive_m, noise) / campaign.repeats, BIG_DOF)]
+    for d in ("x", "y"):
+        tool = next(c for c in channels if c.position_mm == truth.geometry.tool_tip_mm
+                    and c.direction == d)
+        outs = tuple(c for c in channels if c.direction == d)
+        ti = Sweep.impact(campaign.impact_freqs_hz, (tool,))
+        H = fm.response(ti, th, ds)[0][:, [channels.index(c) for c in outs], 0]
+        blocks.append(ComplexBlock(f"impact_tool_{d}", ti, outs, H,
+                                   _record_cov(H, noise.frf_additive, noise)
+                                   / campaign.impact_repeats, BIG_DOF))
+    return MeasuredData(tuple(blocks), None, dict(truth.provenance))
+
+
+#: degrees of freedom standing for a known covariance
+BIG_DOF = 10**9
+
+
+def _record_cov(y: np.ndarray, additive: float, noise: NoiseLevel) -> np.ndarray:
+    """Covariance of ``[Re, Im]`` of one record of :func:`_noisy` (first order in the gain and
+    phase errors): ``a² I + |y|² R_ψ diag(σ_g², σ_φ²) R_ψᵀ``, ``ψ = arg y``."""
+    c, s = np.cos(np.angle(y)), np.sin(np.angle(y))
+    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    D = np.diag([noise.gain**2, noise.phase_rad**2])
+    return additive**2 * np.eye(2) + np.abs(y)[..., None, None] ** 2 * (R @ D @ np.swapaxes(
+        R, -1, -2))
 
 
 def _noisy(y: np.ndarray, R: int, additive: float, noise: NoiseLevel,

@@ -11,7 +11,7 @@ them.
   1994; for motor spindles Abele, Altintas & Brecher, *CIRP Annals* 59, 2010, §3.3). It pulls
   the bending mode down where bearing effects cannot act.
 * ``shaft_stiffness_loss``: a local loss of bending stiffness of the shaft (a transverse crack,
-  a fretted shrink fit) modelled as a short section of reduced diameter (the "equivalent
+  a fretted shrink fit) modelled as one shaft element of reduced diameter (the "equivalent
   reduced section" of Dimarogonas, *Eng. Fract. Mech.* 55, 1996, for an open crack; the
   crack's asymmetry and breathing are left out, so the truth stays linear and isotropic).
 
@@ -21,9 +21,9 @@ them.
 >>> gm = TRUTH_MODIFIERS["magnetic_pull"](g, k_N_per_m=2e7)
 >>> [b.name for b in gm.bearings]
 ['front', 'rear', 'magnetic_pull']
->>> gs = TRUTH_MODIFIERS["shaft_stiffness_loss"](g, position_mm=350.0, depth=0.3)
->>> len(gs.sections) - len(g.sections)
-2
+>>> gs = TRUTH_MODIFIERS["shaft_stiffness_loss"](g, position_mm=250.0, depth=0.3)
+>>> len(gs.sections) - len(g.sections), [round(float(s.outer_diameter_mm), 1) for s in gs.sections]
+(2, [70.0, 65.0, 54.5, 65.0, 50.0])
 """
 
 from __future__ import annotations
@@ -53,28 +53,31 @@ def magnetic_pull(geometry: SpindleGeometry, *, k_N_per_m: float,
 
 
 @TRUTH_MODIFIERS.register("shaft_stiffness_loss")
-def shaft_stiffness_loss(geometry: SpindleGeometry, *, position_mm: float, depth: float,
-                         length_mm: float = 10.0) -> SpindleGeometry:
-    """A ``length_mm`` piece of shaft centred at ``position_mm`` whose outer diameter is
-    reduced by the fraction ``depth`` (bore kept); the section is split to insert it."""
+def shaft_stiffness_loss(geometry: SpindleGeometry, *, position_mm: float, depth: float
+                         ) -> SpindleGeometry:
+    """The shaft element containing ``position_mm`` gets its outer diameter reduced by the
+    fraction ``depth`` of its wall (bore kept). The section is split at that element's ends,
+    keeping every mesh node where it was, so only the element's stiffness and mass change."""
     check_range("shaft_stiffness_loss.depth", depth, 0.0, 0.9)
-    check_positive("shaft_stiffness_loss.length_mm", length_mm)
-    z0 = position_mm - length_mm / 2
-    out, start = [], 0.0
+    out, start, done = [], 0.0, False
     for s in geometry.sections:
         end = start + s.length_mm
-        if start < z0 and z0 + length_mm < end:
+        if not done and start <= position_mm < end:
+            h = s.length_mm / s.elements
+            i = min(int((position_mm - start) // h), s.elements - 1)
             d_new = s.inner_diameter_mm + (1 - depth) * (s.outer_diameter_mm
                                                          - s.inner_diameter_mm)
-            n1 = max(1, round(s.elements * (z0 - start) / s.length_mm))
-            n3 = max(1, round(s.elements * (end - z0 - length_mm) / s.length_mm))
-            out += [replace(s, length_mm=z0 - start, elements=n1),
-                    replace(s, length_mm=length_mm, outer_diameter_mm=d_new, elements=1),
-                    replace(s, length_mm=end - z0 - length_mm, elements=n3)]
+            if i > 0:
+                out.append(replace(s, length_mm=i * h, elements=i))
+            out.append(replace(s, length_mm=h, outer_diameter_mm=d_new, elements=1))
+            if i < s.elements - 1:
+                out.append(replace(s, length_mm=(s.elements - 1 - i) * h,
+                                   elements=s.elements - 1 - i))
+            done = True
         else:
             out.append(s)
         start = end
-    if len(out) == len(geometry.sections):
-        raise ValueError(f"shaft_stiffness_loss.position_mm = {position_mm}: the reduced piece "
-                         "must lie inside one shaft section")
+    if not done:
+        raise ValueError(f"shaft_stiffness_loss.position_mm = {position_mm} is not on the "
+                         f"shaft [0, {geometry.total_length_mm}) mm")
     return replace(geometry, sections=tuple(out))

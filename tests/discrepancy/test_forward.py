@@ -7,13 +7,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.discrepancy.forward import (
-    Channel,
-    ForwardModel,
-    Sweep,
-    acts_on_rotor,
-    with_nodes_at,
-)
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
 from surrogate_rbrdo.spindle.assembly import RPM, build_model
 from surrogate_rbrdo.spindle.effects import CrossCoupling, Gyroscopics, HousingFlexibility
 
