@@ -2,8 +2,8 @@
 
 Under "nothing is missing" the data are the fitted model plus noise. Each draw simulates what
 the workflow computes: noise on every cell from its estimated covariance, a *new covariance
-estimate* from the same number of repeats (a Wishart draw with the cell's degrees of freedom,
-Bartlett's decomposition), the unbiased precision from it, whitening, the recalibration of the
+estimate* from the same number of repeats (with the run-to-run structure of a repeated speed
+sweep, :mod:`.noise`), the unbiased precision from it, whitening, the recalibration of the
 nuisance (projection on the whitened Jacobian of the outer parameters and the unbalance), and
 then the statistics:
 
@@ -35,6 +35,7 @@ from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import FD_STEP, Fit
 from surrogate_rbrdo.discrepancy.generic import generic_columns
+from surrogate_rbrdo.discrepancy.noise import NoiseModel
 from surrogate_rbrdo.discrepancy.nuisance import Rows
 from surrogate_rbrdo.discrepancy.problem import Problem
 
@@ -63,6 +64,7 @@ class Linearisation:
     candidates: tuple[tuple[Candidate, tuple[Variant, ...]], ...]
     absorbed: tuple[str, ...]                   # candidates the nuisance absorbs entirely
     generic: np.ndarray                         # (n_obs, r) leading generic directions
+    n_theta: int = 0                            # nuisance columns of the stiffness factors
 
 
 def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
@@ -118,7 +120,8 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     for c in candidates:
         vs = _distinct(out[c.name], W, Q)
         (kept.append((c, tuple(vs))) if vs else absorbed.append(c.name))
-    return Linearisation(nuis, tuple(kept), tuple(absorbed), _generic_basis(problem, base, W, Q))
+    return Linearisation(nuis, tuple(kept), tuple(absorbed), _generic_basis(problem, base, W, Q),
+                         par.sizes[0])
 
 
 def _generic_basis(problem: Problem, base: Fit, W, Q) -> np.ndarray:
@@ -275,8 +278,7 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
                   rng: np.random.Generator, chunk: int = 25) -> NullDistribution:
     """Draw the statistics ``n_draws`` times under the recalibrated model (see module doc)."""
     rng = require_rng(rng)
-    cov, dof, sd, dof_r = problem.noise_cells()
-    L = np.linalg.cholesky(cov)
+    noise = NoiseModel.of(problem, lin.nuisance[:, :lin.n_theta], _data_whitening(problem)[0])
     cols = [lin.nuisance]
     index, off = [], 0
     for c, vs in lin.candidates:
@@ -296,12 +298,8 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
     while left > 0:
         B = min(chunk, left)
         left -= B
-        e_c = (L @ rng.normal(size=(B, L.shape[0], 2, 1)))[..., 0]
-        W = _wishart_whitening(L, dof, rng, B)
-        s_hat = sd * np.sqrt(rng.chisquare(dof_r, size=(B, sd.size)) / np.maximum(dof_r, 1))
-        e_r = sd * rng.normal(size=(B, sd.size))
-        e = np.concatenate([e_c.reshape(B, -1), e_r], axis=1)
-        Wb = (W, 1.0 / s_hat)
+        e, W, wr = noise.draw(B, rng)
+        Wb = (W, wr)
         ew = _apply(Wb, e[..., None])[..., 0]
         Mw = _apply(Wb, np.broadcast_to(M, (B,) + M.shape))
         N = Mw[..., :p]
@@ -381,20 +379,6 @@ def _candidate_stats(r, U, index, lin) -> np.ndarray:
         k = order[c.name]
         out[:, k] = np.maximum(out[:, k], d)
     return out
-
-
-def _wishart_whitening(L: np.ndarray, dof: np.ndarray, rng: np.random.Generator,
-                       B: int) -> np.ndarray:
-    """Per draw and cell ``W`` with ``WᵀW = (ν − 3) S⁻¹``, ``S ~ Wishart(Σ, ν)`` (Bartlett)."""
-    n = L.shape[0]
-    A = np.zeros((B, n, 2, 2))
-    A[..., 0, 0] = np.sqrt(rng.chisquare(dof, size=(B, n)))
-    A[..., 1, 1] = np.sqrt(rng.chisquare(dof - 1, size=(B, n)))
-    A[..., 1, 0] = rng.normal(size=(B, n))
-    LA = L @ A
-    S = LA @ np.swapaxes(LA, -1, -2)
-    P = np.linalg.inv(S) * (dof - 3)[:, None, None]
-    return np.swapaxes(np.linalg.cholesky(P), -1, -2)
 
 
 def chi2_sf(value: float, dof: int) -> float:

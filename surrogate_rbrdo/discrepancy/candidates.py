@@ -36,11 +36,12 @@ from typing import Any
 
 from surrogate_rbrdo.spindle.effects import EFFECTS, Effect
 
-#: the candidates tried by default (registry names; explicit, so truth-only effects stay out)
+#: the candidates tried by default (registry names; explicit, so truth-only effects stay out);
+#: the tool-holder interface is registered by the rig's spindle effects (issue 14)
 DEFAULT_LIBRARY: tuple[str, ...] = (
     "speed_softening", "thermal_preload", "cross_coupling", "anisotropy", "housing",
     "gyroscopics", "unbalance_error",
-)
+) + (("tool_interface",) if "tool_interface" in tuple(EFFECTS) else ())
 
 #: start values of shape parameters (a fit starts from each; the largest effect shapes first)
 SHAPE_STARTS: dict[str, dict[str, tuple[float, ...]]] = {
@@ -108,11 +109,17 @@ class Candidate:
         return len(self.strength)
 
     def effect(self, scope: tuple[str, ...], values: dict[str, float]) -> Effect:
-        """The effect with ``values`` in fitting units (strength and shape parameters)."""
+        """The effect with ``values`` in fitting units (strength and shape parameters).
+
+        Reciprocal strengths at 0 are off (∞); when some reciprocal strength is on, the others
+        are kept just on (compliance ≥ 1e-18: effectively rigid), since an effect may require
+        its stiffnesses to be all finite or all infinite (a tool interface)."""
         kw: dict[str, Any] = {}
+        on = any(float(values[p]) > 0 for p, rec in zip(self.strength, self.reciprocal,
+                                                        strict=True) if rec)
         for p, rec in zip(self.strength, self.reciprocal, strict=True):
             v = float(values[p])
-            kw[p] = (math.inf if v <= 0 else 1.0 / v) if rec else v
+            kw[p] = (1.0 / max(v, 1e-18) if on else math.inf) if rec else v
         for p in self.shape:
             kw[p] = float(values[p])
         if scope:

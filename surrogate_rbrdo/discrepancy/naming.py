@@ -5,7 +5,7 @@ any data are seen):
 
 1. **likelihood ratio**: its ``Δχ²`` over the current model has a family-wise adjusted p-value
    ``≤ α`` (bootstrap min-p over every candidate tried, :mod:`.calibration`);
-2. **significant**: the 95 % interval of every strength parameter excludes the off state;
+2. **significant**: the 95 % interval of a strength parameter excludes the off state;
 3. **physical**: no strength parameter sits on its physical bound;
 4. **held-out speeds improve**: the held-out χ² (parameters and unbalance from training) falls
    in total and worsens on neither the interleaved nor the extrapolated speeds by more than
@@ -39,7 +39,7 @@ from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
-REFIT_FRACTION = 0.3
+REFIT_FRACTION = 0.5
 
 
 @dataclass(frozen=True)

@@ -68,6 +68,9 @@ class ComplexBlock:
         Covariance of the mean's ``[Re, Im]`` per cell.
     dof : int
         Degrees of freedom of ``cov`` (``R − 1`` for ``R`` repeats); at least 4.
+    runs : ndarray (R, X, C) complex, optional
+        The repeats themselves when each is a *run* over all points (a speed sweep with its own
+        thermal state): the null distributions then simulate the run-to-run structure.
     """
 
     name: str
@@ -77,6 +80,7 @@ class ComplexBlock:
     cov: np.ndarray
     dof: int
     meta: dict[str, Any] = field(default_factory=dict)
+    runs: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "channels", tuple(self.channels))
@@ -92,11 +96,19 @@ class ComplexBlock:
         check_int(f"block {self.name!r}.dof", self.dof, minimum=4)
         object.__setattr__(self, "mean", m)
         object.__setattr__(self, "cov", c)
+        if self.runs is not None:
+            runs = np.asarray(self.runs, dtype=complex)
+            if runs.shape[1:] != (X, C) or runs.shape[0] != self.dof + 1:
+                raise ValueError(f"block {self.name!r}: runs {runs.shape} must be "
+                                 f"({self.dof + 1}, {X}, {C})")
+            object.__setattr__(self, "runs", runs)
 
     @classmethod
     def from_repeats(cls, name: str, sweep: Sweep, channels: tuple[Channel, ...],
-                     records: np.ndarray, meta: dict[str, Any] | None = None) -> ComplexBlock:
-        """Mean and covariance of the mean from ``records`` (R, X, C) complex, R ≥ 5."""
+                     records: np.ndarray, meta: dict[str, Any] | None = None, *,
+                     runs: bool = True) -> ComplexBlock:
+        """Mean and covariance of the mean from ``records`` (R, X, C) complex, R ≥ 5;
+        ``runs``: each record is a run over all points (kept for the null distributions)."""
         rec = np.asarray(records, dtype=complex)
         if rec.ndim != 3 or rec.shape[0] < 5:
             raise ValueError(f"block {name!r}: records have shape {rec.shape}: need (R, X, C) "
@@ -105,7 +117,8 @@ class ComplexBlock:
         mean = rec.mean(axis=0)
         d = np.stack([rec.real - mean.real, rec.imag - mean.imag], axis=-1)  # (R, X, C, 2)
         S = np.einsum("rxci,rxcj->xcij", d, d) / (R - 1)
-        return cls(name, sweep, channels, mean, S / R, R - 1, dict(meta or {}))
+        return cls(name, sweep, channels, mean, S / R, R - 1, dict(meta or {}),
+                   rec if runs else None)
 
     @property
     def coord(self) -> np.ndarray:
@@ -129,7 +142,8 @@ class ComplexBlock:
         t = self.sweep
         sweep = Sweep(t.kind, t.spin_rad_s[mask], t.freq_rad_s[mask], t.excitations)
         return ComplexBlock(self.name, sweep, self.channels, self.mean[mask], self.cov[mask],
-                            self.dof, self.meta)
+                            self.dof, self.meta,
+                            None if self.runs is None else self.runs[:, mask])
 
 
 @dataclass(frozen=True)

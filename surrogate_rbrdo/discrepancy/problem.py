@@ -45,6 +45,8 @@ class Problem:
         Block name (or ``"identified"``) → boolean mask of the points used; default all.
     nuisance : NuisanceOptions, optional
         What is recalibrated (default :class:`~.nuisance.NuisanceOptions`).
+    run_offset : list, optional
+        Per block (after masking), a correction added to the unit responses or None.
 
     Residual order: every complex block's cells ``[Re, Im]`` (points × channels), then the
     identified stiffness, then the priors' pseudo-observations.
@@ -52,7 +54,8 @@ class Problem:
 
     def __init__(self, forward: ForwardModel, data: MeasuredData,
                  masks: dict[str, np.ndarray] | None = None,
-                 nuisance: NuisanceOptions | None = None) -> None:
+                 nuisance: NuisanceOptions | None = None,
+                 run_offset: list[np.ndarray | None] | None = None) -> None:
         masks = masks or {}
         self.forward = forward
         self.nuisance = NuisanceOptions() if nuisance is None else nuisance
@@ -81,6 +84,12 @@ class Problem:
             self.identified = RealBlock(ib.name, ib.speeds_rpm[m], ib.bearings, ib.values[m],
                                         ib.sd[m], ib.dof)
         self.n_prior = self.parametrisation().n_prior
+        #: per block, a correction added to the model's unit responses (the average over the
+        #: runs' thermal states, :func:`~.noise.run_offsets`); None: none
+        self.run_offset = list(run_offset) if run_offset else [None] * len(self.blocks)
+        if len(self.run_offset) != len(self.blocks):
+            raise ValueError(f"run_offset has {len(self.run_offset)} entries for "
+                             f"{len(self.blocks)} blocks")
 
     def parametrisation(self) -> Parametrisation:
         """The nuisance-only parametrisation of this problem."""
@@ -114,9 +123,11 @@ class Problem:
         u = np.array([keys.index(k) for k in uniq])
         inv = np.array([at[k] for k in keys])
         out = []
-        for b, idx in zip(self.blocks, self.channel_index, strict=True):
+        for b, idx, off in zip(self.blocks, self.channel_index, self.run_offset, strict=True):
             G = self.forward.response(b.sweep, theta[u], ds[u], [extras[i] for i in u],
                                       mass[u])[inv][:, :, idx]
+            if off is not None:
+                G = G + off[None]
             w = b.sweep.freq_rad_s[None, :, None]
             chain = rows.gain[:, None, idx] / (1 + 1j * w * rows.tau[:, None, idx])
             out.append(G * chain[..., None])

@@ -2,11 +2,11 @@
 
 For a candidate, every bearing scope and shape start is screened first: the strength is stepped
 along a geometric grid from the off state to its physical bound with the nuisance held at its
-recalibrated value (one batched evaluation), and the linearised estimate from the bootstrap's
-Jacobian is added as a start. The best start of every scope is then refined by a full bounded
-fit of the nuisance and the candidate's parameters together (the recalibration moves far when
-an effect is strong, so a screen at the base nuisance cannot choose the scope); the best of
-these is the candidate's fit.
+recalibrated value and what the recalibration absorbs to first order projected out (one
+batched evaluation). The best start of every scope is then refined by a short bounded fit of
+the nuisance and the candidate's parameters together (the recalibration moves far when an
+effect is strong, so a screen at the base nuisance cannot choose the scope), and the best of
+these is fitted to convergence.
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from surrogate_rbrdo.discrepancy.problem import Problem
 
 #: screened strengths per start (geometric from 1e-4 of the range, or 1e-11 m/N, to the bound)
 N_SCREEN = 12
+#: residual evaluations of the short fit from each scope's start (the best is then finished)
+SHORT_NFEV = 10
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,7 @@ class CandidateFit:
     at_bound : bool
         A strength parameter sits on its physical bound (not the off state).
     significant : bool
-        Every strength interval excludes the off state.
+        Some strength interval excludes the off state (the effect is on).
     """
 
     name: str
@@ -128,9 +130,11 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
         par = par0.with_slots(par0.slots + (slot,))
         x0 = par.x0(st)
         x0[:base.x.size] = base.x
-        f = fit(problem, par, x0, max_nfev=max_nfev)
+        f = fit(problem, par, x0, max_nfev=SHORT_NFEV if len(starts) > 1 else max_nfev)
         if best is None or f.chi2 < best.chi2:
             best, best_slot = f, slot
+    if len(starts) > 1:                              # finish the best start
+        best = fit(problem, best.par, best.x, max_nfev=max_nfev)
     return describe(c, best_slot, best, base.chi2)
 
 
@@ -146,7 +150,7 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
     lo_s, hi_s = f.wald_ci(fixed=shape)
     vals = f.par.slot_values(f.x)[-1]
     params = c.physical(vals)
-    ci, at_bound, significant = {}, False, True
+    ci, at_bound, significant = {}, False, False
     for i, p in enumerate(slot.free):
         a, b = float(lo_ci[k0 + i]), float(hi_ci[k0 + i])
         if p in c.strength:
@@ -156,7 +160,7 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
             x = f.x[k0 + i]
             edge = hi if x > off else lo
             at_bound |= bool(edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30))
-            significant &= not (a <= off <= b)
+            significant |= not (a <= off <= b)
             if c.reciprocal[j]:
                 a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         ci[p] = [a, b]

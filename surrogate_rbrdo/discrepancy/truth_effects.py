@@ -10,6 +10,8 @@ them.
   ``−k_m`` at the motor-rotor plane (Dorrell & Smith, *IEE Proc. Electr. Power Appl.* 141,
   1994; for motor spindles Abele, Altintas & Brecher, *CIRP Annals* 59, 2010, §3.3). It pulls
   the bending mode down where bearing effects cannot act.
+* ``disk_mass_error``: a disk (the motor rotor) heavier or lighter than drawn — the library
+  has bearing, housing and interface effects, not mass errors of the rotor.
 * ``shaft_stiffness_loss``: a local loss of bending stiffness of the shaft (a transverse crack,
   a fretted shrink fit) modelled as one shaft element of reduced diameter (the "equivalent
   reduced section" of Dimarogonas, *Eng. Fract. Mech.* 55, 1996, for an open crack; the
@@ -81,3 +83,18 @@ def shaft_stiffness_loss(geometry: SpindleGeometry, *, position_mm: float, depth
         raise ValueError(f"shaft_stiffness_loss.position_mm = {position_mm} is not on the "
                          f"shaft [0, {geometry.total_length_mm}) mm")
     return replace(geometry, sections=tuple(out))
+
+
+@TRUTH_MODIFIERS.register("disk_mass_error")
+def disk_mass_error(geometry: SpindleGeometry, *, factor: float, disk: str = "motor_rotor"
+                    ) -> SpindleGeometry:
+    """The named disk's mass and inertias scaled by ``factor`` (a motor rotor whose
+    laminations and sleeve weigh other than the drawing says)."""
+    check_range("disk_mass_error.factor", factor, 0.1, 10.0)
+    names = [d.name for d in geometry.disks]
+    if disk not in names:
+        raise ValueError(f"disk_mass_error.disk = {disk!r} is not a disk; disks are {names}")
+    return replace(geometry, disks=tuple(
+        replace(d, mass_kg=d.mass_kg * factor, polar_inertia_kgm2=d.polar_inertia_kgm2 * factor,
+                diametral_inertia_kgm2=d.diametral_inertia_kgm2 * factor)
+        if d.name == disk else d for d in geometry.disks))

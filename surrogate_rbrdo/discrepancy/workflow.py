@@ -21,7 +21,7 @@ much the gap shrinks once it is added.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from surrogate_rbrdo.discrepancy.naming import (
     decide,
     run_stage,
 )
+from surrogate_rbrdo.discrepancy.noise import run_offsets, run_scatter, theta_jacobian
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
@@ -123,6 +124,8 @@ class DiscrepancyResult:
     separating: str
     seconds: float
     options: DiscrepancyOptions
+    #: run-to-run SD of each log stiffness factor estimated from the repeats (0: no runs)
+    run_scatter: tuple[float, ...] = ()
 
     @property
     def named_effects(self) -> tuple[Effect, ...]:
@@ -147,11 +150,34 @@ class DiscrepancyResult:
                 if f.evaluation.unbalance else []}
 
 
-def _problems(fm: ForwardModel, data: MeasuredData, split: Split, nuisance: NuisanceOptions):
+def _problems(fm: ForwardModel, data: MeasuredData, split: Split, nuisance: NuisanceOptions,
+              runs: tuple | None = None):
+    """Training, held-out (interleaved, extrapolated) and all-held-out problems; with ``runs``
+    ``(par, x, s)`` each carries the run-averaging correction at ``x`` (:mod:`.noise`)."""
     def prob(which: str) -> Problem:
-        return Problem(fm, data, masks_for(data, split, which), nuisance)
+        p = Problem(fm, data, masks_for(data, split, which), nuisance)
+        if runs is None:
+            return p
+        return Problem(fm, data, masks_for(data, split, which), nuisance,
+                       run_offsets(p, *runs))
     return (prob("train"), HoldoutProblems(prob("interleaved"), prob("extrapolated")),
             prob("held_out"))
+
+
+def _recalibrate(fm, data, split, options) -> tuple:
+    """The problems and the recalibrated baseline, with the runs' thermal scatter (estimated
+    from the repeats at a first fit) averaged into the model when the data have runs."""
+    train, ho, held = _problems(fm, data, split, options.nuisance)
+    par = train.parametrisation()
+    base = fit(train, par, par.x0(), max_nfev=options.max_nfev)
+    u = tuple(v[0] for v in base.evaluation.unbalance)
+    J = theta_jacobian(train, par, base.x, u)
+    W = np.concatenate([w.reshape(-1, 2, 2) for w in train.whiten])
+    s = run_scatter(train, J, W)
+    if np.any(s > 0):
+        train, ho, held = _problems(fm, data, split, options.nuisance, (par, base.x, s))
+        base = fit(train, par, base.x, max_nfev=options.max_nfev)
+    return train, ho, held, base, s
 
 
 def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tuple[Effect, ...],
@@ -186,11 +212,9 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     planes = tuple(u.position_mm for u in geometry.unbalances)
     fm = ForwardModel(geometry, effects, data.channels, planes, theta_bearings,
                       options.nuisance.mass_disks)
-    train, ho, held = _problems(fm, data, split, options.nuisance)
-    bearings = fm.bearing_names
-    cands = library(options.library, bearings)
-    par = train.parametrisation()
-    base = current = fit(train, par, par.x0(), max_nfev=options.max_nfev)
+    train, ho, held, base, run_sd = _recalibrate(fm, data, split, options)
+    cands = library(options.library, fm.bearing_names)
+    current = base
     stages, named = [], []
     confounded: list[Assessment] = []
     while True:
@@ -208,8 +232,9 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             confounded = group
         else:
             named.append(group[0])
-    return _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
-                     tuple(confounded), options, one_x[0].coord, time.perf_counter() - t0)
+    res = _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
+                    tuple(confounded), options, one_x[0].coord, time.perf_counter() - t0)
+    return replace(res, run_scatter=tuple(float(v) for v in run_sd))
 
 
 def _conclude(data, train, held, split, base, final, stages, named, confounded, options,
