@@ -82,7 +82,7 @@ class NoiseModel:
         ``(B, nc, 2, 2)`` and the real observables' whitening ``(B, nr)``, each from its own
         re-estimated covariance."""
         nc = self.L.shape[0]
-        e_c = (self.L @ rng.normal(size=(B, nc, 2, 1)))[..., 0]
+        e_c = _lower_times(self.L, rng.normal(size=(B, nc, 2)))
         W = _wishart_whitening(self.L, self.dof, rng, B)
         for rs in self.runs:
             e_c[:, rs.cells], W[:, rs.cells] = _draw_runs(rs, B, rng)
@@ -121,7 +121,7 @@ def _draw_runs(rs: RunStructure, B: int, rng: np.random.Generator
     """Mean noise ``(B, n, 2)`` and whitening ``(B, n, 2, 2)`` of ``R`` simulated runs."""
     n, k = rs.Le.shape[0], rs.J.shape[1]
     a = rng.normal(size=(B, rs.R, k)) @ rs.La.T
-    e = (rs.Le @ rng.normal(size=(B, rs.R, n, 2, 1)))[..., 0]
+    e = _lower_times(rs.Le, rng.normal(size=(B, rs.R, n, 2)))
     X = rs.V.shape[0]
     delta = rng.normal(size=(B, rs.R, X)) * rs.sd_phase
     y = e + (a @ rs.J.T).reshape(B, rs.R, n, 2) + (
@@ -130,8 +130,29 @@ def _draw_runs(rs: RunStructure, B: int, rng: np.random.Generator
     d = y - m[:, None]
     S = np.einsum("brni,brnj->bnij", d, d) / (rs.R - 1) / rs.R       # covariance of the mean
     nu = rs.R - 1
-    P = np.linalg.inv(S) * (nu - 3) / nu
-    return m, np.swapaxes(np.linalg.cholesky(P), -1, -2)
+    return m, _whitening_2x2(S, (nu - 3) / nu)
+
+
+def _lower_times(L: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``L z`` for lower-triangular 2x2 ``L`` (..., 2, 2) and vectors ``z`` (..., 2)."""
+    out = np.empty(np.broadcast_shapes(L.shape[:-1], z.shape))
+    out[..., 0] = L[..., 0, 0] * z[..., 0]
+    out[..., 1] = L[..., 1, 0] * z[..., 0] + L[..., 1, 1] * z[..., 1]
+    return out
+
+
+def _whitening_2x2(S: np.ndarray, factor) -> np.ndarray:
+    """``W`` (upper triangular) with ``WᵀW = factor · S⁻¹`` for symmetric positive 2x2 ``S``,
+    in closed form (the batched LAPACK calls cost more than the arithmetic)."""
+    a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]
+    det = a * c - b * b
+    p00, p01, p11 = factor * c / det, -factor * b / det, factor * a / det
+    l00 = np.sqrt(p00)
+    l10 = p01 / l00
+    l11 = np.sqrt(np.maximum(p11 - l10 * l10, 0.0))
+    W = np.zeros(S.shape)
+    W[..., 0, 0], W[..., 0, 1], W[..., 1, 1] = l00, l10, l11
+    return W
 
 
 def _wishart_whitening(L: np.ndarray, dof: np.ndarray, rng: np.random.Generator,
@@ -144,8 +165,7 @@ def _wishart_whitening(L: np.ndarray, dof: np.ndarray, rng: np.random.Generator,
     A[..., 1, 0] = rng.normal(size=(B, n))
     LA = L @ A
     S = LA @ np.swapaxes(LA, -1, -2)
-    P = np.linalg.inv(S) * (dof - 3)[:, None, None]
-    return np.swapaxes(np.linalg.cholesky(P), -1, -2)
+    return _whitening_2x2(S, (dof - 3).astype(float))
 
 
 def run_scatter(problem: Problem, J_theta: np.ndarray, whiten: np.ndarray) -> np.ndarray:

@@ -24,7 +24,7 @@ from surrogate_rbrdo.discrepancy.problem import Problem
 #: screened strengths per start (geometric from 1e-4 of the range, or 1e-11 m/N, to the bound)
 N_SCREEN = 12
 #: residual evaluations of the short fit from each scope's start (the best is then finished)
-SHORT_NFEV = 10
+SHORT_NFEV = 25
 
 
 @dataclass(frozen=True)
