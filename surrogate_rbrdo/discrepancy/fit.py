@@ -63,7 +63,10 @@ class Fit:
         keep = np.ones(self.x.size, dtype=bool) if fixed is None else ~np.asarray(fixed)
         cov = np.zeros((self.x.size, self.x.size))
         J = self.jac[:, keep]
-        cov[np.ix_(keep, keep)] = np.linalg.pinv(J.T @ J)
+        d = np.linalg.norm(J, axis=0)
+        d = np.where(d > 0, d, 1.0)            # columns scaled: parameters differ by 1e20
+        Js = J / d
+        cov[np.ix_(keep, keep)] = np.linalg.pinv(Js.T @ Js) / np.outer(d, d)
         return cov
 
     def wald_ci(self, level: float = 0.95, fixed: np.ndarray | None = None

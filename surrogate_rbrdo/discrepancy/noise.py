@@ -16,17 +16,19 @@ keyphasor's shaft-angle reference, whose error at a speed with a near-integer nu
 per revolution does not average out), with ``Σ_a`` the covariance of the ``a_r``, ``σ_δ(x)`` the
 SD of the ``δ_r(x)`` and ``Σ_e`` the per-cell covariance of the ``e_r``; every bootstrap draw
 simulates ``R`` runs from the three and re-estimates the per-cell covariance from them exactly
-as the data's was estimated
-(:meth:`~.observables.ComplexBlock.from_repeats`). Blocks without runs (and averaged FRFs) get a
-Wishart draw with the cell's degrees of freedom (Bartlett's decomposition).
+as the data's was estimated (:meth:`~.observables.ComplexBlock.from_repeats`). Blocks without
+runs (and averaged FRFs) get a Wishart draw with the cell's degrees of freedom (Bartlett's
+decomposition).
 
 The mean of the runs is not the response at the mean state: the response is nonlinear in θ
-(near a resonance strongly), so averaging over states scattered by ``s = √diag Σ_a`` (log
-stiffness) adds ``½ Σ_b s_b² ∂²y/∂(log θ_b)²`` (Jensen). :func:`run_offsets` computes that
-correction of the model's unit responses by a degree-3 cubature (the ``2k`` points
-``±√k s_b`` on each axis, weights ``1/2k``: exact for the second-order term) at a fit, and the
-problem adds it to every row's responses; without it the generic lack-of-fit test rejected
-58 % of the virtual rig's null data sets at the 1 % level (thermal preload CoV 8 %).
+(near a resonance strongly: a resonance a few half-power bandwidths wide is far from quadratic
+over the runs' scatter), so the model's mean is the average of its responses over the runs'
+own states, ``(1/R) Σ_r y(θ e^{a_r})`` with each run's ``a_r`` estimated from the run
+(:func:`run_states`), computed at a fit as a correction of the unit responses
+(:func:`run_offsets`) that the problem adds to every row. On the virtual rig's default campaign
+(thermal preload CoV 8 %) the generic lack-of-fit test rejected 58 % of null data sets at the
+1 % level without it; with a Gaussian second-order (Jensen) correction still some; with the
+runs' own states none of 30.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ class RunStructure:
     R: int
     V: np.ndarray           # (X, C, 2) common-phase direction i·ȳ at each point
     sd_phase: np.ndarray    # (X,) SD of a run's common phase error at each point
+    a: np.ndarray           # (R, k) each run's estimated deviation along J_θ
 
 
 @dataclass(frozen=True)
@@ -113,7 +116,7 @@ def _run_structure(b, cells: slice, J: np.ndarray, W: np.ndarray) -> RunStructur
     Sa = np.atleast_2d(np.cov(a)) + 1e-30 * np.eye(a.shape[0])
     Le = np.linalg.cholesky(Se + 1e-30 * np.eye(2))
     return RunStructure(cells, J, np.linalg.cholesky(Sa), Le, R, V,
-                        delta.std(axis=0, ddof=1))
+                        delta.std(axis=0, ddof=1), a.T)
 
 
 def _draw_runs(rs: RunStructure, B: int, rng: np.random.Generator
@@ -168,35 +171,34 @@ def _wishart_whitening(L: np.ndarray, dof: np.ndarray, rng: np.random.Generator,
     return _whitening_2x2(S, (dof - 3).astype(float))
 
 
-def run_scatter(problem: Problem, J_theta: np.ndarray, whiten: np.ndarray) -> np.ndarray:
-    """Run-to-run SD of each log stiffness factor, pooled over the run-structured blocks
-    (zeros if there is none)."""
+def run_states(problem: Problem, J_theta: np.ndarray, whiten: np.ndarray
+               ) -> dict[str, np.ndarray]:
+    """Per run-structured block (by name): each run's log stiffness deviation from the mean
+    state ``(R, k)``, estimated by least squares along ``J_θ``."""
     nm = NoiseModel.of(problem, J_theta, whiten)
-    if not nm.runs:
-        return np.zeros(J_theta.shape[1])
-    var = np.mean([np.diag(rs.La @ rs.La.T) for rs in nm.runs], axis=0)
-    return np.sqrt(var)
+    names = [b.name for b in problem.blocks if b.runs is not None]
+    return {n: rs.a for n, rs in zip(names, nm.runs, strict=True)} if nm.runs else {}
 
 
-def run_offsets(problem: Problem, par: Parametrisation, x: np.ndarray, s: np.ndarray
-                ) -> list[np.ndarray | None]:
-    """Per block of ``problem``: the runs' average of the unit responses minus the response at
-    the fitted state (``None`` for blocks without runs), by the cubature of the module doc."""
-    if not np.any(s > 0):
-        return [None] * len(problem.blocks)
+def run_offsets(problem: Problem, par: Parametrisation, x: np.ndarray,
+                states: dict[str, np.ndarray]) -> list[np.ndarray | None]:
+    """Per block of ``problem``: the average of the unit responses over its runs' states minus
+    the response at the fitted state (``None`` for blocks without estimated states)."""
     rows = par.rows(x[None])
-    k = s.size
-    pts = np.concatenate([np.eye(k), -np.eye(k)]) * np.sqrt(k) * s       # (2k, k)
-    n = pts.shape[0]
-    theta = rows.theta * np.exp(pts)
-    rep = Rows(theta, *(np.repeat(a, n, 0) for a in (rows.damping, rows.mass, rows.gain,
-                                                       rows.tau)), rows.extras * n)
     if any(o is not None for o in problem.run_offset):
         raise ValueError("run_offsets: the problem carries offsets already; give the plain one")
     center = problem.responses(rows)
-    spread = problem.responses(rep)
-    return [None if b.runs is None else sp.mean(axis=0) - c[0]
-            for b, c, sp in zip(problem.blocks, center, spread, strict=False)]
+    out: list[np.ndarray | None] = []
+    for i, b in enumerate(problem.blocks):
+        a = states.get(b.name)
+        if a is None or b.runs is None:
+            out.append(None)
+            continue
+        n = a.shape[0]
+        rep = Rows(rows.theta * np.exp(a), *(np.repeat(v, n, 0) for v in (
+            rows.damping, rows.mass, rows.gain, rows.tau)), rows.extras * n)
+        out.append(problem.responses(rep)[i].mean(axis=0) - center[i][0])
+    return out
 
 
 def theta_jacobian(problem: Problem, par: Parametrisation, x: np.ndarray,

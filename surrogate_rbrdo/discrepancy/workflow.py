@@ -39,10 +39,11 @@ from surrogate_rbrdo.discrepancy.naming import (
     decide,
     run_stage,
 )
-from surrogate_rbrdo.discrepancy.noise import run_offsets, run_scatter, theta_jacobian
+from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jacobian
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
@@ -126,6 +127,8 @@ class DiscrepancyResult:
     options: DiscrepancyOptions
     #: run-to-run SD of each log stiffness factor estimated from the repeats (0: no runs)
     run_scatter: tuple[float, ...] = ()
+    #: every block's data and predictions at every point (:mod:`.summary`)
+    curves: tuple[BlockCurves, ...] = ()
 
     @property
     def named_effects(self) -> tuple[Effect, ...]:
@@ -150,34 +153,49 @@ class DiscrepancyResult:
                 if f.evaluation.unbalance else []}
 
 
+def _problem(fm: ForwardModel, data: MeasuredData, masks: dict | None,
+             nuisance: NuisanceOptions, runs: tuple | None) -> Problem:
+    """A problem on the points ``masks`` select; with ``runs`` ``(par, x, s)`` it carries the
+    run-averaging correction at ``x`` (:mod:`.noise`)."""
+    p = Problem(fm, data, masks, nuisance)
+    return p if runs is None else Problem(fm, data, masks, nuisance, run_offsets(p, *runs))
+
+
 def _problems(fm: ForwardModel, data: MeasuredData, split: Split, nuisance: NuisanceOptions,
               runs: tuple | None = None):
-    """Training, held-out (interleaved, extrapolated) and all-held-out problems; with ``runs``
-    ``(par, x, s)`` each carries the run-averaging correction at ``x`` (:mod:`.noise`)."""
+    """Training, held-out (interleaved, extrapolated) and all-held-out problems."""
     def prob(which: str) -> Problem:
-        p = Problem(fm, data, masks_for(data, split, which), nuisance)
-        if runs is None:
-            return p
-        return Problem(fm, data, masks_for(data, split, which), nuisance,
-                       run_offsets(p, *runs))
+        return _problem(fm, data, masks_for(data, split, which), nuisance, runs)
     return (prob("train"), HoldoutProblems(prob("interleaved"), prob("extrapolated")),
             prob("held_out"))
 
 
 def _recalibrate(fm, data, split, options) -> tuple:
     """The problems and the recalibrated baseline, with the runs' thermal scatter (estimated
-    from the repeats at a first fit) averaged into the model when the data have runs."""
+    from the repeats) averaged into the model when the data have runs; the average depends on
+    the state it is taken at, so fit and average alternate until the fit settles."""
     train, ho, held = _problems(fm, data, split, options.nuisance)
     par = train.parametrisation()
     base = fit(train, par, par.x0(), max_nfev=options.max_nfev)
-    u = tuple(v[0] for v in base.evaluation.unbalance)
-    J = theta_jacobian(train, par, base.x, u)
     W = np.concatenate([w.reshape(-1, 2, 2) for w in train.whiten])
-    s = run_scatter(train, J, W)
-    if np.any(s > 0):
-        train, ho, held = _problems(fm, data, split, options.nuisance, (par, base.x, s))
-        base = fit(train, par, base.x, max_nfev=options.max_nfev)
-    return train, ho, held, base, s
+    runs = None
+    for _ in range(RUN_ITERATIONS):
+        u = tuple(v[0] for v in base.evaluation.unbalance)
+        states = run_states(train if runs is None else _problem(
+            fm, data, masks_for(data, split, "train"), options.nuisance, None),
+            theta_jacobian(train, par, base.x, u), W)
+        if not states:
+            break
+        runs = (par, base.x, states)
+        train, ho, held = _problems(fm, data, split, options.nuisance, runs)
+        previous, base = base.chi2, fit(train, par, base.x, max_nfev=options.max_nfev)
+        if abs(previous - base.chi2) < 0.1:
+            break
+    return train, ho, held, base, runs
+
+
+#: most alternations of fit and run average
+RUN_ITERATIONS = 4
 
 
 def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tuple[Effect, ...],
@@ -212,7 +230,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     planes = tuple(u.position_mm for u in geometry.unbalances)
     fm = ForwardModel(geometry, effects, data.channels, planes, theta_bearings,
                       options.nuisance.mass_disks)
-    train, ho, held, base, run_sd = _recalibrate(fm, data, split, options)
+    train, ho, held, base, runs = _recalibrate(fm, data, split, options)
     cands = library(options.library, fm.bearing_names)
     current = base
     stages, named = [], []
@@ -234,7 +252,15 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             named.append(group[0])
     res = _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
                     tuple(confounded), options, one_x[0].coord, time.perf_counter() - t0)
-    return replace(res, run_scatter=tuple(float(v) for v in run_sd))
+    everything = _problem(fm, data, None, options.nuisance, runs)
+    held_pts = split.interleaved | split.extrapolated
+    gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
+          else None)
+    return replace(res, run_scatter=tuple(
+        float(v) for v in np.concatenate(list(runs[2].values())).std(axis=0, ddof=1))
+        if runs else (),
+                   curves=tuple(block_curves(everything, held_pts, base, current, gp)),
+                   seconds=time.perf_counter() - t0)
 
 
 def _conclude(data, train, held, split, base, final, stages, named, confounded, options,
