@@ -6,10 +6,11 @@ structure" by local parameters: the bending stiffness and the mass of every shaf
 mass and diametral inertia of every disk, and a grounded spring at every node. Their first-order
 changes of the observables span a subspace in which any local structural change — a crack, a
 loose shrink fit, a magnetic pull on the motor, a mass error — leaves most of its signature.
-The residual's projection on that subspace (with the nuisance and the named effects projected
-out first) is a lack-of-fit statistic with a few tens of degrees of freedom instead of the
-thousands of the omnibus χ²: far more power against structural misfit, and still only a
-detector — local parameters are not named physical effects.
+The residual's best one-parameter fit among these directions (with the nuisance and the named
+effects projected out first; the maximum over the directions calibrated by the bootstrap) is a
+lack-of-fit statistic far more powerful against a local structural change than the omnibus χ²
+with its thousands of degrees of freedom — and still only a detector: local parameters are not
+named physical effects.
 
 The derivatives are adjoint sensitivities of the full system at every point,
 ``∂y_c/∂p = −z_cᵀ (∂A/∂p) q`` with ``A q = F u`` (the fitted unbalance) and ``Aᵀ z_c = e_c``;

@@ -6,16 +6,18 @@ any data are seen):
 1. **likelihood ratio**: its ``Δχ²`` over the current model has a family-wise adjusted p-value
    ``≤ α`` (bootstrap min-p over every candidate tried, :mod:`.calibration`);
 2. **significant**: the 95 % interval of a strength parameter excludes the off state;
-3. **physical**: no strength parameter sits on its physical bound;
+3. **physical**: no strength parameter sits on its physical bound, no shape parameter on a
+   bound other than a natural zero;
 4. **held-out speeds improve**: the held-out χ² (parameters and unbalance from training) falls
    in total and worsens on neither the interleaved nor the extrapolated speeds by more than
    ``holdout_tolerance``.
 
 Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
 a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
-confounded set. Candidates whose first-
-order statistic is far below the threshold are not refitted (their nonlinear ``Δχ²`` equals
-the first-order one for small effects; this saves the fits when nothing is missing).
+confounded set. When the base model's residual
+looks like noise, candidates whose first-order statistic is far below the threshold are not
+refitted (their nonlinear ``Δχ²`` equals the first-order one for small effects; this saves the
+fits when nothing is missing).
 """
 
 from __future__ import annotations
@@ -39,7 +41,9 @@ from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
+#: — or whenever a lack-of-fit test of the stage's base model has a p-value below QUIET_P
 REFIT_FRACTION = 0.5
+QUIET_P = 0.05
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,12 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
     r = base.evaluation.residuals[0]
     struct = float(gp_statistic(r, problem.series()))
+    gen = generic_statistic(problem, lin, r)
+    gof_p, struct_p, gen_p = (null.p_value("gof", base.chi2), null.p_value("structure", struct),
+                              null.p_value("generic", gen))
+    # the first-order screen only where the residual looks like noise: a strong effect can be
+    # far from its linearisation at the off state (a housing mode inside the speed range)
+    quiet = min(gof_p, struct_p, gen_p) > QUIET_P
     tails = null.tails()
     p_crit = null.critical_p(alpha) if lin.candidates else 0.0
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
@@ -115,7 +125,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     out = []
     for k, (c, _) in enumerate(lin.candidates):
         threshold = tails[k].isf(p_crit)
-        if lin_stat[k] < REFIT_FRACTION * threshold:
+        if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
             p = float(tails[k].sf(lin_stat[k]))
             out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
                                   {"likelihood_ratio": False}))
@@ -132,9 +142,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
                         and min(gain.values()) >= -holdout_tolerance),
         }
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks))
-    gen = generic_statistic(problem, lin, r)
-    return Stage(base, null, tuple(out), lin.absorbed, null.p_value("gof", base.chi2), struct,
-                 null.p_value("structure", struct), gen, null.p_value("generic", gen))
+    return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
 
 
 def decide(stage: Stage, delta: float) -> list[Assessment]:

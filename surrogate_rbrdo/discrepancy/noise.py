@@ -112,7 +112,8 @@ def _run_structure(b, cells: slice, J: np.ndarray, W: np.ndarray) -> RunStructur
     delta = np.einsum("rxci,xci->rx", We, Wv) / np.maximum(np.einsum("xci,xci->x", Wv, Wv),
                                                            1e-300)
     e = (e - delta[..., None, None] * V[None]).reshape(R, -1, 2)
-    Se = np.einsum("rni,rnj->nij", e, e) / (R - 1)
+    # the phase fit takes one of the 2C real values of each run and point
+    Se = np.einsum("rni,rnj->nij", e, e) / (R - 1) * (2 * C) / (2 * C - 1)
     Sa = np.atleast_2d(np.cov(a)) + 1e-30 * np.eye(a.shape[0])
     Le = np.linalg.cholesky(Se + 1e-30 * np.eye(2))
     return RunStructure(cells, J, np.linalg.cholesky(Sa), Le, R, V,

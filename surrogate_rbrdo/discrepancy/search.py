@@ -42,12 +42,14 @@ class CandidateFit:
     parameters : dict
         The effect's parameters (its own units; reciprocals undone; ``bearings``).
     ci : dict
-        95 % Wald intervals of the fitted parameters (own units); a strength's is conditional
-        on the fitted shape parameters.
+        95 % Wald intervals of the fitted parameters (own units).
     at_bound : bool
-        A strength parameter sits on its physical bound (not the off state).
+        A strength parameter sits on its physical bound (not the off state), or a shape
+        parameter on a bound other than a natural zero (a massless, undamped housing is
+        physical; a softening exponent at the end of its range means the law is stretched).
     significant : bool
-        Some strength interval excludes the off state (the effect is on).
+        Some strength's interval, conditional on the fitted shapes, excludes the off state
+        (the effect is on).
     """
 
     name: str
@@ -142,9 +144,9 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
     """Parameters, intervals and plausibility flags of a candidate's fit."""
     k0 = f.x.size - len(slot.free)
     lo_ci, hi_ci = f.wald_ci()
-    # a strength's interval is conditional on the fitted shapes: a shape parameter is profiled
-    # (it is not identified when the strength is small), and its correlation with the strength
-    # would otherwise blow the strength's interval up
+    # significance is judged conditional on the fitted shapes: a shape parameter is not
+    # identified when the strength is small, and its correlation with the strength would
+    # otherwise blow the strength's interval up (the reported intervals are unconditional)
     shape = np.zeros(f.x.size, dtype=bool)
     shape[k0:] = [p not in c.strength for p in slot.free]
     lo_s, hi_s = f.wald_ci(fixed=shape)
@@ -154,13 +156,16 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
     for i, p in enumerate(slot.free):
         a, b = float(lo_ci[k0 + i]), float(hi_ci[k0 + i])
         if p in c.strength:
-            a, b = float(lo_s[k0 + i]), float(hi_s[k0 + i])
             j = c.strength.index(p)
             off, lo, hi = c.off[j], c.lower[j], c.upper[j]
             x = f.x[k0 + i]
             edge = hi if x > off else lo
             at_bound |= bool(edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30))
-            significant |= not (a <= off <= b)
+            significant |= not (lo_s[k0 + i] <= off <= hi_s[k0 + i])
+        else:                          # a shape pinned at a bound that is not a natural zero
+            a_s, b_s = c.shape_bounds[c.shape.index(p)]
+            x = f.x[k0 + i]
+            at_bound |= any(e != 0 and abs(x - e) <= 1e-6 * abs(e) for e in (a_s, b_s))
             if c.reciprocal[j]:
                 a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         ci[p] = [a, b]

@@ -85,14 +85,14 @@ class DiscrepancyOptions:
     nuisance: NuisanceOptions = field(default_factory=NuisanceOptions)
     alpha: float = 0.01
     alpha_residual: float = 0.01
-    n_draws: int = 400
+    n_draws: int = 300
     holdout_every: int = 5
     extrapolate_fraction: float = 0.1
     max_effects: int = 2
     confound_delta: float = 6.63
     holdout_tolerance: float = 10.83
     use_identified: bool = False
-    max_nfev: int = 60
+    max_nfev: int = 150
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "library", tuple(self.library))
