@@ -162,12 +162,12 @@ def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit
             edge = hi if x > off else lo
             at_bound |= bool(edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30))
             significant |= not (lo_s[k0 + i] <= off <= hi_s[k0 + i])
+            if c.reciprocal[j]:
+                a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         else:                          # a shape pinned at a bound that is not a natural zero
             a_s, b_s = c.shape_bounds[c.shape.index(p)]
             x = f.x[k0 + i]
             at_bound |= any(e != 0 and abs(x - e) <= 1e-6 * abs(e) for e in (a_s, b_s))
-            if c.reciprocal[j]:
-                a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         ci[p] = [a, b]
     if slot.scope:
         params["bearings"] = list(slot.scope)
