@@ -30,13 +30,13 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context, SyntheticSource, rates, run_scenario
+from surrogate_rbrdo.discrepancy.candidates import library
 from surrogate_rbrdo.discrepancy.grid import (
     build_grid,
     calibrate_grid,
     confounded_pairs,
     signature_cosines,
 )
-from surrogate_rbrdo.discrepancy.candidates import library
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, RealBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
