@@ -1,0 +1,142 @@
+"""Nonlinear weighted least squares of the outer parameters (bounded trust region), with a
+batched finite-difference Jacobian; the unbalance is projected out inside
+(:mod:`~surrogate_rbrdo.discrepancy.problem`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import norm
+
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
+from surrogate_rbrdo.discrepancy.problem import Evaluation, Problem
+
+#: relative finite-difference step (of a parameter's typical magnitude)
+FD_STEP = 1e-5
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A fitted parametrisation.
+
+    Attributes
+    ----------
+    par : Parametrisation
+    x : ndarray
+        Outer parameters (fitting units).
+    chi2 : float
+        Sum of squared whitened residuals at ``x``.
+    jac : ndarray (n_obs, n_x)
+        Jacobian of the whitened (variable-projection) residuals at ``x``.
+    evaluation : Evaluation
+        Residuals, predictions and unbalance at ``x`` (batch of one).
+    n_obs : int
+    n_params : int
+        Outer plus inner (unbalance) parameters.
+    nfev : int
+        Rows evaluated.
+    """
+
+    par: Parametrisation
+    x: np.ndarray
+    chi2: float
+    jac: np.ndarray
+    evaluation: Evaluation
+    n_obs: int
+    n_params: int
+    nfev: int
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.par.names
+
+    @property
+    def dof(self) -> int:
+        return self.n_obs - self.n_params
+
+    def covariance(self, fixed: np.ndarray | None = None) -> np.ndarray:
+        """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular); with
+        ``fixed`` (boolean mask) those parameters are held at their values (zero rows)."""
+        keep = np.ones(self.x.size, dtype=bool) if fixed is None else ~np.asarray(fixed)
+        cov = np.zeros((self.x.size, self.x.size))
+        J = self.jac[:, keep]
+        d = np.linalg.norm(J, axis=0)
+        d = np.where(d > 0, d, 1.0)            # columns scaled: parameters differ by 1e20
+        Js = J / d
+        cov[np.ix_(keep, keep)] = np.linalg.pinv(Js.T @ Js) / np.outer(d, d)
+        return cov
+
+    def wald_ci(self, level: float = 0.95, fixed: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Symmetric Wald interval of every outer parameter (conditional on ``fixed``)."""
+        se = np.sqrt(np.clip(np.diag(self.covariance(fixed)), 0.0, None))
+        z = norm.ppf(0.5 + level / 2)
+        return self.x - z * se, self.x + z * se
+
+
+def _fd_rows(x: np.ndarray, par: Parametrisation, lo: np.ndarray, hi: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``x + h_j e_j`` (step towards the interior at a bound) and the steps ``h``."""
+    h = FD_STEP * np.maximum(np.abs(x), par.scales())
+    h = np.where(x + h > hi, -h, h)
+    return x[None] + np.diag(h), h
+
+
+def jacobian(problem: Problem, par: Parametrisation, x: np.ndarray,
+             r0: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """Forward-difference Jacobian of the whitened residuals, one batched evaluation."""
+    lo, hi = par.bounds()
+    rows, h = _fd_rows(x, par, lo, hi)
+    if r0 is None:
+        rows = np.vstack([x[None], rows])
+    ev = problem.evaluate(par, rows)
+    R = ev.residuals
+    if r0 is None:
+        r0, R = R[0], R[1:]
+    return ((R - r0[None]) / h[:, None]).T, rows.shape[0]
+
+
+def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int = 60
+        ) -> Fit:
+    """Minimise the whitened χ² over the outer parameters within their bounds.
+
+    Parameters
+    ----------
+    problem : Problem
+    par : Parametrisation
+    x0 : ndarray
+        Start (clipped into the bounds).
+    max_nfev : int
+        Most residual evaluations of the trust-region solver.
+    """
+    lo, hi = par.bounds()
+    x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
+    cache: dict[str, object] = {}
+    count = [0]
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        ev = problem.evaluate(par, x[None])
+        count[0] += 1
+        cache["x"], cache["r"] = x.copy(), ev.residuals[0]
+        return ev.residuals[0]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        r0 = cache["r"] if np.array_equal(cache.get("x"), x) else None
+        J, n = jacobian(problem, par, x, r0)
+        count[0] += n
+        return J
+
+    if x0.size:
+        sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac",
+                            max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+        x = sol.x
+    else:
+        x = x0
+    ev = problem.evaluate(par, x[None])
+    J, n = jacobian(problem, par, x, ev.residuals[0]) if x.size else (np.zeros((ev.residuals
+                                                                              .shape[1], 0)), 0)
+    return Fit(par, x, float(ev.chi2[0]), J, ev, problem.n_obs, x.size + problem.n_inner,
+               count[0] + n + 1)

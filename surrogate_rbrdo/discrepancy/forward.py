@@ -1,0 +1,293 @@
+"""The model side of the comparison: complex responses at the measured channels, batched.
+
+At every operating point of a sweep (:mod:`.sweeps`) the rotor is condensed exactly onto the
+retained nodes (unbalance planes, bearings, channels, excitation points, disks whose mass is
+recalibrated; :mod:`.impedance`), and everything a batch row changes is coupled by a low-rank
+(Woodbury) update: with ``H = S⁻¹`` and ``P`` picking the coupled DOFs,
+
+    q_O = H_OF − H_OP (I + Z H_PP)⁻¹ Z H_PF,
+
+where ``Z`` is block diagonal: each bearing's dynamic stiffness (housing stage condensed in) on
+its node's x, y DOFs, and each recalibrated disk's change of mass and inertia on its node's four
+DOFs. The condensed rotor depends on the rotor only, so it is computed once per rotor (cached)
+and every batch row — a bearing stiffness factor θ, a damping factor, a disk mass factor, a
+candidate effect's parameters — costs one small solve per point. Nothing is approximated: the
+tests compare with the dense solve of
+:meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
+
+Loads are unit loads: a unit unbalance (1 kg m) in each plane for the 1x sweep (force
+``Ω² [1, −i]``, :func:`~surrogate_rbrdo.spindle.harmonic.unbalance_load`), a unit force for an
+impact test, so the response to any unbalance is ``G u`` (linear in the plane phasors ``u``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.discrepancy.impedance import (
+    acts_on_rotor,
+    bearing_dynamic_stiffness,
+    condensed_dynamic_stiffness,
+)
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
+from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
+from surrogate_rbrdo.spindle.effects import Effect
+from surrogate_rbrdo.spindle.geometry import SpindleGeometry
+
+
+@dataclass(frozen=True)
+class _Condensed:
+    """Per point: the rotor's receptances restricted to outputs O, coupled DOFs P, loads F."""
+
+    H_OF: np.ndarray  # (X, nO, nL)
+    H_OP: np.ndarray  # (X, nO, nP)
+    H_PP: np.ndarray  # (X, nP, nP)
+    H_PF: np.ndarray  # (X, nP, nL)
+
+
+@dataclass
+class ForwardModel:
+    """Complex responses of a spindle at measured channels, for batches of parameters.
+
+    Parameters
+    ----------
+    geometry : SpindleGeometry
+        The model's geometry (nodes are added at channel and plane positions).
+    effects : tuple of Effect
+        The model's own effects; a row's extra effects are appended to them.
+    channels : tuple of Channel
+        The measured outputs.
+    planes_mm : tuple of float
+        Unbalance planes (positions, mm) whose phasors are unknown.
+    theta_bearings : tuple of str
+        Bearings carrying a stiffness factor θ (default all).
+    mass_disks : tuple of str
+        Disks (by name) whose mass and inertias a row may scale.
+
+    The instance memoises assembled models (keyed by the effect tuple) and condensed rotors
+    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each; nothing else
+    changes between calls.
+
+    Examples
+    --------
+    >>> from surrogate_rbrdo.spindle import reference_spindle
+    >>> sp = reference_spindle()
+    >>> g = sp.geometry_for(sp.baseline)
+    >>> fm = ForwardModel(g, sp.effects, (Channel("tool_x", 0.0, "x"),), (0.0, 350.0))
+    >>> G = fm.response(Sweep.unbalance([12000.0]), np.ones((1, 2)), np.ones((1, 2)))
+    >>> G.shape                                  # (B, X, channels, planes)
+    (1, 1, 1, 2)
+    """
+
+    geometry: SpindleGeometry
+    effects: tuple[Effect, ...]
+    channels: tuple[Channel, ...]
+    planes_mm: tuple[float, ...]
+    theta_bearings: tuple[str, ...] | None = None
+    mass_disks: tuple[str, ...] = ()
+    cache_size: int = 64
+    _models: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        # an off effect leaves the model unchanged; dropping it lets a candidate of the same
+        # kind (at most one gyroscopics effect) be added
+        self.effects = tuple(e for e in self.effects if not e.is_off)
+        self.channels = tuple(self.channels)
+        self.planes_mm = tuple(float(p) for p in self.planes_mm)
+        self.mass_disks = tuple(self.mass_disks)
+        names = [b.name for b in self.geometry.bearings]
+        self.theta_bearings = tuple(names if self.theta_bearings is None
+                                    else self.theta_bearings)
+        if not self.channels:
+            raise ValueError("channels = () is not allowed: give at least one channel")
+        if not self.planes_mm:
+            raise ValueError("planes_mm = () is not allowed: give at least one unbalance plane")
+        disks = {d.name: d for d in self.geometry.disks}
+        for d in self.mass_disks:
+            if d not in disks:
+                raise ValueError(f"mass_disks: {d!r} is not a disk; disks are {sorted(disks)}")
+        self._disks = tuple(disks[d] for d in self.mass_disks)
+        self._positions = sorted({c.position_mm for c in self.channels} | set(self.planes_mm)
+                                 | {d.position_mm for d in self._disks})
+        self.geometry = with_nodes_at(self.geometry, self._positions)
+
+    @property
+    def n_bearings(self) -> int:
+        return len(self.geometry.bearings)
+
+    @property
+    def bearing_names(self) -> tuple[str, ...]:
+        return tuple(b.name for b in self.geometry.bearings)
+
+    def model(self, extra: tuple[Effect, ...] = ()) -> SpindleModel:
+        """The assembled model with the extra effects (memoised)."""
+        key = tuple(extra)
+        if key not in self._models:
+            self._models[key] = build_model(self.geometry, self.effects + key,
+                                            theta_bearings=self.theta_bearings)
+            if len(self._models) > self.cache_size:
+                self._models.popitem(last=False)
+        return self._models[key]
+
+    def node(self, model: SpindleModel, position_mm: float) -> int:
+        """The mesh node at ``position_mm``."""
+        return int(np.argmin(np.abs(model.z - position_mm * 1e-3)))
+
+    def layout(self, model: SpindleModel, sweep: Sweep
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Retained DOFs (global), the channels' and coupled DOFs' positions among them (bearing
+        x, y, then four per recalibrated disk), and the sweep's unit loads ``(X, r, L)``."""
+        nodes = sorted({self.node(model, p) for p in self._positions}
+                       | {self.node(model, c.position_mm) for c in sweep.excitations}
+                       | set(map(int, model.bearing_nodes)))
+        dofs = (4 * np.asarray(nodes)[:, None] + np.arange(4)).ravel()
+        at = {n: 4 * i for i, n in enumerate(nodes)}
+        out = np.array([at[self.node(model, c.position_mm)] + c.dof_offset
+                        for c in self.channels])
+        cpl = [[at[int(n)], at[int(n)] + 1] for n in model.bearing_nodes]
+        cpl += [list(range(at[self.node(model, d.position_mm)],
+                           at[self.node(model, d.position_mm)] + 4)) for d in self._disks]
+        r = dofs.size
+        if sweep.kind == "unbalance_1x":
+            F = np.zeros((sweep.freq_rad_s.size, r, len(self.planes_mm)), dtype=complex)
+            w2 = sweep.freq_rad_s**2
+            for j, p in enumerate(self.planes_mm):
+                k = at[self.node(model, p)]
+                F[:, k, j] = w2
+                F[:, k + 1, j] = -1j * w2
+        else:
+            F = np.zeros((sweep.freq_rad_s.size, r, len(sweep.excitations)), dtype=complex)
+            for j, c in enumerate(sweep.excitations):
+                F[:, at[self.node(model, c.position_mm)] + c.dof_offset, j] = 1.0
+        return dofs, out, np.concatenate(cpl), F
+
+    def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
+        h = hashlib.sha1()
+        spinning = bool(np.any(sweep.spin_rad_s != 0))  # at standstill G does not enter
+        for a in (model.M, model.K, model.G * model.gyro_scale * spinning, sweep.spin_rad_s,
+                  sweep.freq_rad_s):
+            h.update(np.ascontiguousarray(a).tobytes())
+        h.update(repr((model.alpha, model.beta, sweep.kind, sweep.excitations)).encode())
+        key = h.hexdigest()
+        if key not in self._condensed:
+            dofs, out, cpl, F = self.layout(model, sweep)
+            S = condensed_dynamic_stiffness(model, sweep.spin_rad_s, sweep.freq_rad_s, dofs)
+            try:
+                HF = np.linalg.solve(S, F)
+                HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, cpl],
+                                                        S.shape[:1] + (dofs.size, cpl.size)))
+            except np.linalg.LinAlgError as exc:
+                raise ModelError("ForwardModel: singular condensed rotor") from exc
+            self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])
+            if len(self._condensed) > self.cache_size:
+                self._condensed.popitem(last=False)
+        return self._condensed[key]
+
+    @property
+    def disks(self) -> tuple:
+        """The disks whose mass a row may scale (geometry objects, ``mass_disks`` order)."""
+        return self._disks
+
+    def disk_impedance(self, sweep: Sweep, mass: np.ndarray, model: SpindleModel
+                       ) -> np.ndarray:
+        """Dynamic stiffness of each recalibrated disk's change ``(B, X, nd, 4, 4)``: mass and
+        inertias scaled by ``mass`` (B, nd) factors (mass-proportional damping and gyroscopics
+        included)."""
+        w = sweep.freq_rad_s[None, :, None]
+        s = sweep.spin_rad_s[None, :, None]
+        dm = (mass - 1.0)[:, None, :]                                  # (B, 1, nd)
+        a_m = -(w**2) + 1j * w * model.alpha
+        Z = np.zeros(mass.shape[:1] + (sweep.freq_rad_s.size, len(self._disks), 4, 4),
+                     dtype=complex)
+        for k, d in enumerate(self._disks):
+            m, jd = d.mass_kg * dm[..., k], d.diametral_inertia_kgm2 * dm[..., k]
+            jp = d.polar_inertia_kgm2 * dm[..., k] * model.gyro_scale
+            Z[..., k, 0, 0] = Z[..., k, 1, 1] = a_m[..., 0] * m
+            Z[..., k, 2, 2] = Z[..., k, 3, 3] = a_m[..., 0] * jd
+            Z[..., k, 2, 3] = 1j * w[..., 0] * s[..., 0] * jp
+            Z[..., k, 3, 2] = -1j * w[..., 0] * s[..., 0] * jp
+        return Z
+
+    def response(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
+                 extras: Sequence[tuple[Effect, ...]] | None = None,
+                 mass: np.ndarray | None = None) -> np.ndarray:
+        """Channel responses to the sweep's unit loads, ``(B, X, n_channels, n_loads)``.
+
+        Parameters
+        ----------
+        sweep : Sweep
+        theta : ndarray (B, m)
+            Stiffness factors of ``theta_bearings``.
+        damping_scale : ndarray (B, nb)
+            Factors on each bearing's damping.
+        extras : sequence of tuple of Effect, optional
+            Per row, effects added to the model's own (default none).
+        mass : ndarray (B, n_mass), optional
+            Factors on the mass and inertias of ``mass_disks`` (default 1).
+        """
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
+        B = theta.shape[0]
+        extras = [()] * B if extras is None else [tuple(e) for e in extras]
+        mass = np.ones((B, len(self._disks))) if mass is None else np.atleast_2d(mass)
+        if ds.shape != (B, self.n_bearings) or len(extras) != B or mass.shape != (
+                B, len(self._disks)):
+            raise ValueError(f"damping_scale {ds.shape}, extras {len(extras)} rows and mass "
+                             f"{mass.shape}: must be ({B}, {self.n_bearings}), {B} rows and "
+                             f"({B}, {len(self._disks)})")
+        n_load = len(self.planes_mm) if sweep.kind == "unbalance_1x" else len(sweep.excitations)
+        out = np.zeros((B, sweep.freq_rad_s.size, len(self.channels), n_load), dtype=complex)
+        groups: dict[tuple[Effect, ...], list[int]] = {}
+        for i, e in enumerate(extras):
+            groups.setdefault(e, []).append(i)
+        for extra, rows in groups.items():
+            model = self.model(tuple(e for e in extra if acts_on_rotor(e)))
+            cond = self._rotor(model, sweep)
+            Z = bearing_dynamic_stiffness(self.geometry, self.effects + extra,
+                                          self.theta_bearings, sweep.spin_rad_s,
+                                          sweep.freq_rad_s, theta[rows], ds[rows])
+            Zd = self.disk_impedance(sweep, mass[rows], model) if self._disks else None
+            out[rows] = _couple(cond, Z, Zd)
+        if not np.all(np.isfinite(out)):
+            raise ModelError("ForwardModel.response: non-finite response")
+        return out
+
+    def bearing_impedance(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
+                          extras: Sequence[tuple[Effect, ...]] | None = None) -> np.ndarray:
+        """Effective bearing impedance ``(B, X, nb, 2, 2)`` (what an identification of the
+        bearing coefficients at the bearing nodes sees: housing stage condensed in)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
+        extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
+        return np.stack([bearing_dynamic_stiffness(
+            self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
+            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0] for i, extra in enumerate(extras)])
+
+
+def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
+    and disk changes ``Zd`` (B, X, nd, 4, 4)."""
+    B, X, nb = Z.shape[:3]
+    blocks = [Z[:, :, j] for j in range(nb)]
+    if Zd is not None:
+        blocks += [Zd[:, :, k] for k in range(Zd.shape[2])]
+    n = sum(b.shape[-1] for b in blocks)
+    Zf = np.zeros((B, X, n, n), dtype=complex)
+    k = 0
+    for b in blocks:
+        m = b.shape[-1]
+        Zf[:, :, k:k + m, k:k + m] = b
+        k += m
+    lhs = np.eye(n) + Zf @ c.H_PP[None]
+    try:
+        U = np.linalg.solve(lhs, Zf @ c.H_PF[None])
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("ForwardModel: singular coupled system") from exc
+    return c.H_OF[None] - c.H_OP[None] @ U

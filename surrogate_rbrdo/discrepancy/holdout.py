@@ -1,0 +1,132 @@
+"""The held-out split and the gap between model and data on held-out points.
+
+Speeds are split *before* anything is fitted: the top ``extrapolate_fraction`` of the 1x
+speeds are held out for extrapolation, and every ``every``-th of the rest (starting in the
+middle of the first stride) for interpolation; everything else trains. Impact tests train in
+full (they have no speeds). The gap is measured on held-out 1x speeds with the unbalance and
+parameters fitted on training speeds only: RMSE and largest modulus of the complex residual
+(µm), and the whitened χ² per real observable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_int, check_range
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
+from surrogate_rbrdo.discrepancy.observables import MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
+
+
+@dataclass(frozen=True)
+class Split:
+    """Masks over one 1x block's speeds: training, interleaved and extrapolated held-out."""
+
+    train: np.ndarray
+    interleaved: np.ndarray
+    extrapolated: np.ndarray
+
+    def to_dict(self, speeds_rpm: np.ndarray) -> dict:
+        return {k: np.asarray(speeds_rpm)[getattr(self, k)].round(1).tolist()
+                for k in ("train", "interleaved", "extrapolated")}
+
+
+def split_speeds(n: int, every: int = 5, extrapolate_fraction: float = 0.1) -> Split:
+    """Split ``n`` ascending speeds.
+
+    >>> s = split_speeds(20, every=5, extrapolate_fraction=0.1)
+    >>> np.flatnonzero(s.extrapolated).tolist(), np.flatnonzero(s.interleaved).tolist()
+    ([18, 19], [2, 7, 12, 17])
+    """
+    check_int("holdout_every", every, minimum=2)
+    check_range("extrapolate_fraction", extrapolate_fraction, 0.0, 0.5)
+    if n < 8:
+        raise ValueError(f"the 1x test has {n} speeds: need at least 8 to hold some out")
+    n_ex = max(1, math.ceil(extrapolate_fraction * n)) if extrapolate_fraction > 0 else 0
+    ex = np.zeros(n, dtype=bool)
+    ex[n - n_ex:] = True
+    inter = np.zeros(n, dtype=bool)
+    inter[every // 2:n - n_ex:every] = True
+    return Split(~(ex | inter), inter, ex)
+
+
+def masks_for(data: MeasuredData, split: Split, which: str) -> dict[str, np.ndarray]:
+    """Per-block masks selecting ``which`` (``train``, ``interleaved``, ``extrapolated``,
+    ``held_out``) of every 1x block; impact blocks are training only."""
+    out = {}
+    for b in data.blocks:
+        n = b.mean.shape[0]
+        if b.sweep.kind != "unbalance_1x":
+            out[b.name] = np.full(n, which == "train")
+            continue
+        if n != split.train.size:
+            raise ValueError(f"block {b.name!r} has {n} speeds, the split {split.train.size}: "
+                             "every 1x test must use the same speeds")
+        out[b.name] = (split.interleaved | split.extrapolated if which == "held_out"
+                       else getattr(split, which))
+    if data.identified is not None:
+        ib = data.identified
+        m = out[next(b.name for b in data.blocks if b.sweep.kind == "unbalance_1x")]
+        out["identified"] = m if ib.speeds_rpm.size == m.size else np.full(
+            ib.speeds_rpm.size, which == "train")
+    return out
+
+
+@dataclass(frozen=True)
+class Gap:
+    """Held-out agreement: RMSE and largest |residual| (µm), χ² per real observable, and per
+    channel the same (the 1x blocks only)."""
+
+    rmse: float
+    max_abs: float
+    chi2_dof: float
+    chi2: float
+    n: int
+    per_channel: dict
+
+    def to_dict(self) -> dict:
+        return {"rmse": self.rmse, "max_abs": self.max_abs, "chi2_dof": self.chi2_dof}
+
+
+def residuals(problem: Problem, par: Parametrisation, x: np.ndarray,
+              unbalance: tuple[np.ndarray, ...],
+              correction: list[np.ndarray] | None = None) -> list[np.ndarray]:
+    """Complex residuals ``data − model`` per block of ``problem`` (its points) with the
+    parameters ``x`` and the unbalance fitted elsewhere; ``correction`` is added to the model
+    (a GP prediction)."""
+    raw = problem.responses(par.rows(x[None]))
+    out, k = [], 0
+    for i, (b, G) in enumerate(zip(problem.blocks, raw, strict=False)):
+        if b.sweep.kind == "unbalance_1x":
+            pred = G[0] @ unbalance[k]
+            k += 1
+        else:
+            pred = G[0].sum(axis=-1)
+        if correction is not None:
+            pred = pred + correction[i]
+        out.append(b.mean - pred)
+    return out
+
+
+def gap(problem: Problem, res: list[np.ndarray]) -> Gap:
+    """The gap of complex residuals ``res`` (from :func:`residuals`) on the 1x blocks."""
+    mods, chis, per = [], [], {}
+    for b, W, r in zip(problem.blocks, problem.whiten, res, strict=False):
+        if b.sweep.kind != "unbalance_1x" or r.size == 0:
+            continue
+        w = _whitened(r[None], W)[0].reshape(r.shape + (2,))
+        mods.append(np.abs(r).ravel())
+        chis.append(np.sum(w**2, axis=-1).ravel())
+        for j, c in enumerate(b.channels):
+            per[f"{b.name}:{c.name}"] = {
+                "rmse": float(np.sqrt(np.mean(np.abs(r[:, j]) ** 2)) * 1e6),
+                "max_abs": float(np.max(np.abs(r[:, j])) * 1e6),
+                "chi2_dof": float(np.sum(w[:, j] ** 2) / (2 * r.shape[0]))}
+    if not mods:
+        return Gap(math.nan, math.nan, math.nan, math.nan, 0, {})
+    m, c = np.concatenate(mods), np.concatenate(chis)
+    return Gap(float(np.sqrt(np.mean(m**2)) * 1e6), float(m.max() * 1e6),
+               float(c.sum() / (2 * c.size)), float(c.sum()), 2 * c.size, per)

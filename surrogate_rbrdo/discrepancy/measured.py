@@ -1,0 +1,119 @@
+"""Measured data in the toolkit's format (``docs/measured-data.md``) → observables.
+
+* :func:`phasor_block` turns a table of demodulated 1x phasors — the rig campaign's
+  ``phasors.csv`` (one row per steady record and displacement channel: ``run`` (or
+  ``repeat``), ``speed_rpm``, ``channel``, ``re_m``, ``im_m``; ``build``/``tool`` when there are
+  several), or a user's table in the same columns — into a 1x block: one repeat per
+  ``(build, tool, run)``, every repeat at every speed and channel. The convention is the
+  format's: ``x(t) = Re(X e^{iφ})`` against the keyphasor, the FE model's own.
+* :func:`channel_positions` reads the channels' axial positions and directions from one native
+  record (``records/<id>.npz``: its ``meta`` JSON), so a campaign folder needs nothing else.
+* :func:`frf_block` turns averaged H1 FRFs with their coherence into an impact block; the
+  variance of each line is Bendat & Piersol's (*Random Data*, 4th ed., eq. 9.90):
+  ``var(Re H) = var(Im H) = |H|² (1 − γ²) / (2 n γ²)`` per component for ``n`` averages.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+
+#: the phasor table's required columns
+PHASOR_COLUMNS = ("speed_rpm", "channel", "re_m", "im_m")
+
+
+def read_phasor_table(path: str | Path) -> list[dict[str, Any]]:
+    """Rows of a phasor CSV (header row of column names); a missing column raises."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"phasor table {str(path)!r} does not exist")
+    with path.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        raise ValueError(f"{path}: the phasor table has no rows")
+    missing = [c for c in PHASOR_COLUMNS if c not in rows[0]]
+    if missing or not ({"run", "repeat"} & set(rows[0])):
+        raise ValueError(f"{path}: columns {sorted(rows[0])} lack {missing or ['run']}; "
+                         f"need {list(PHASOR_COLUMNS)} and 'run' (or 'repeat')")
+    return rows
+
+
+def channel_positions(record_npz: str | Path) -> dict[str, tuple[float, str]]:
+    """Channel name → (axial position in mm, direction) of the displacement channels of one
+    native record file."""
+    path = Path(record_npz)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"{path}: not a native record ({exc})") from None
+    out = {}
+    for ch in meta.get("channels", []):
+        loc = ch.get("location", {})
+        if ch.get("quantity") == "displacement":
+            if loc.get("position_mm") is None or loc.get("direction") not in ("x", "y"):
+                raise ValueError(f"{path}: channel {ch.get('name')!r}: location needs "
+                                 "position_mm and direction x or y")
+            out[ch["name"]] = (float(loc["position_mm"]), loc["direction"])
+    if not out:
+        raise ValueError(f"{path}: no displacement channel")
+    return out
+
+
+def phasor_block(rows: Iterable[Mapping[str, Any]],
+                 positions: Mapping[str, tuple[float, str]],
+                 name: str = "unbalance_1x") -> ComplexBlock:
+    """A 1x block from phasor rows (see module doc) and channel positions."""
+    table: dict[tuple, dict[tuple[float, str], complex]] = {}
+    for r in rows:
+        rep = (r.get("build", 0), r.get("tool", 0), r.get("run", r.get("repeat")))
+        ch = r["channel"]
+        if ch not in positions:
+            raise ValueError(f"phasor table: channel {ch!r} has no position; known: "
+                             f"{sorted(positions)}")
+        table.setdefault(rep, {})[(float(r["speed_rpm"]), ch)] = complex(
+            float(r["re_m"]), float(r["im_m"]))
+    speeds = sorted({s for t in table.values() for s, _ in t})
+    chans = sorted({c for t in table.values() for _, c in t})
+    rec = np.empty((len(table), len(speeds), len(chans)), dtype=complex)
+    for i, (rep, t) in enumerate(sorted(table.items(), key=lambda kv: str(kv[0]))):
+        for j, s in enumerate(speeds):
+            for k, c in enumerate(chans):
+                if (s, c) not in t:
+                    raise ValueError(f"phasor table: repeat {rep} has no phasor for channel "
+                                     f"{c!r} at {s} rpm (every repeat needs every speed)")
+                rec[i, j, k] = t[(s, c)]
+    channels = tuple(Channel(c, *positions[c]) for c in chans)
+    return ComplexBlock.from_repeats(name, Sweep.unbalance(speeds), channels, rec,
+                                     {"source": "phasor table", "repeats": len(table)})
+
+
+def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.ndarray,
+              n_averages: int, outputs: Sequence[Channel], excitation: Channel,
+              *, min_coherence: float = 0.9) -> ComplexBlock:
+    """An impact block from averaged FRFs ``H`` (n_out, F) with coherence (n_out, F); lines
+    where any output's coherence is below ``min_coherence`` are dropped (antiresonances,
+    noise floor: the variance formula is a small-error approximation)."""
+    H = np.asarray(H, dtype=complex)
+    g2 = np.asarray(coherence, dtype=float)
+    f = np.asarray(freq_hz, dtype=float)
+    if H.shape != g2.shape or H.shape != (len(outputs), f.size):
+        raise ValueError(f"frf {name!r}: H {H.shape} and coherence {g2.shape} must be "
+                         f"({len(outputs)}, {f.size})")
+    keep = np.all(g2 >= min_coherence, axis=0) & (f > 0)
+    if keep.sum() < 3:
+        raise ValueError(f"frf {name!r}: fewer than 3 lines with coherence >= {min_coherence}")
+    var = np.abs(H[:, keep]) ** 2 * (1 - g2[:, keep]) / (2 * n_averages * g2[:, keep])
+    var = np.maximum(var, 1e-12 * np.abs(H[:, keep]) ** 2 + 1e-300)
+    cov = var.T[..., None, None] * np.eye(2)
+    return ComplexBlock(name, Sweep.impact(f[keep], (excitation,)), tuple(outputs),
+                        H[:, keep].T, cov, max(2 * n_averages - 2, 4),
+                        {"source": "H1 FRF", "n_averages": n_averages})

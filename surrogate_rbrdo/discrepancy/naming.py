@@ -1,0 +1,170 @@
+"""The naming rule: which candidate, if any, the data support — one stage of forward selection.
+
+A candidate passes a stage only if all of these hold (every threshold is an option fixed before
+any data are seen):
+
+1. **likelihood ratio**: its ``Δχ²`` over the current model has a family-wise adjusted p-value
+   ``≤ α`` (bootstrap min-p over every candidate tried, :mod:`.calibration`);
+2. **significant**: the 95 % interval of a strength parameter excludes the off state;
+3. **physical**: no strength parameter sits on its physical bound, no shape parameter on a
+   bound other than a natural zero;
+4. **held-out speeds improve**: the held-out χ² (parameters and unbalance from training) falls
+   in total and worsens on neither the interleaved nor the extrapolated speeds by more than
+   ``holdout_tolerance``.
+
+Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
+a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
+confounded set. When the base model's residual
+looks like noise, candidates whose first-order statistic is far below the threshold are not
+refitted (their nonlinear ``Δχ²`` equals the first-order one for small effects; this saves the
+fits when nothing is missing).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surrogate_rbrdo.discrepancy.calibration import (
+    NullDistribution,
+    generic_statistic,
+    gp_statistic,
+    linear_statistics,
+    linearise,
+    simulate_null,
+)
+from surrogate_rbrdo.discrepancy.candidates import Candidate
+from surrogate_rbrdo.discrepancy.fit import Fit
+from surrogate_rbrdo.discrepancy.holdout import residuals
+from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
+from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate
+
+#: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
+#: — or whenever a lack-of-fit test of the stage's base model has a p-value below QUIET_P
+REFIT_FRACTION = 0.5
+QUIET_P = 0.05
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """One candidate in one stage: its fit (or first-order statistic) and the rule's checks."""
+
+    name: str
+    delta_chi2: float
+    p_raw: float
+    p_adjusted: float
+    fit: CandidateFit | None
+    holdout_gain: dict
+    checks: dict
+
+    @property
+    def passed(self) -> bool:
+        return all(self.checks.values())
+
+    def to_dict(self) -> dict:
+        d = {"name": self.name, "delta_chi2": self.delta_chi2, "p_raw": self.p_raw,
+             "p_adjusted": self.p_adjusted, "holdout_gain": self.holdout_gain,
+             "checks": self.checks, "passed": self.passed}
+        if self.fit is not None:
+            d.update(parameters=self.fit.parameters, ci=self.fit.ci,
+                     chi2=self.fit.fit.chi2)
+        return d
+
+
+@dataclass(frozen=True)
+class Stage:
+    """A stage of forward selection on top of ``base``."""
+
+    base: Fit
+    null: NullDistribution
+    assessments: tuple[Assessment, ...]
+    absorbed: tuple[str, ...]
+    gof_p: float
+    structure: float
+    structure_p: float
+    generic: float
+    generic_p: float
+    chosen: tuple[str, ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class HoldoutProblems:
+    """Problems on the interleaved and extrapolated held-out speeds."""
+
+    interleaved: Problem
+    extrapolated: Problem
+
+    def chi2(self, f: Fit) -> tuple[float, float]:
+        out = []
+        for p in (self.interleaved, self.extrapolated):
+            res = residuals(p, f.par, f.x, tuple(u[0] for u in f.evaluation.unbalance))
+            out.append(float(sum(np.sum(_whitened(r[None], W) ** 2)
+                                 for r, W in zip(res, p.whiten, strict=True))))
+        return out[0], out[1]
+
+
+def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
+              holdout: HoldoutProblems, *, alpha: float, n_draws: int,
+              holdout_tolerance: float, rng: np.random.Generator, max_nfev: int) -> Stage:
+    """Calibrate, fit and check every candidate on top of ``base``."""
+    lin = linearise(problem, base, candidates)
+    null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
+    r = base.evaluation.residuals[0]
+    struct = float(gp_statistic(r, problem.series()))
+    gen = generic_statistic(problem, lin, r)
+    gof_p, struct_p, gen_p = (null.p_value("gof", base.chi2), null.p_value("structure", struct),
+                              null.p_value("generic", gen))
+    # the first-order screen only where the residual looks like noise: a strong effect can be
+    # far from its linearisation at the off state (a housing mode inside the speed range)
+    quiet = min(gof_p, struct_p, gen_p) > QUIET_P
+    tails = null.tails()
+    p_crit = null.critical_p(alpha) if lin.candidates else 0.0
+    lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
+    base_ho = holdout.chi2(base)
+    out = []
+    for k, (c, _) in enumerate(lin.candidates):
+        threshold = tails[k].isf(p_crit)
+        if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
+            p = float(tails[k].sf(lin_stat[k]))
+            out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
+                                  {"likelihood_ratio": False}))
+            continue
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev)
+        p = float(tails[k].sf(cf.delta_chi2))
+        ho = holdout.chi2(cf.fit)
+        gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
+        checks = {
+            "likelihood_ratio": null.adjusted(p) <= alpha,
+            "significant": cf.significant,
+            "physical": not cf.at_bound,
+            "holdout": (gain["interleaved"] + gain["extrapolated"] > 0
+                        and min(gain.values()) >= -holdout_tolerance),
+        }
+        out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks))
+    return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
+
+
+def decide(stage: Stage, delta: float) -> list[Assessment]:
+    """The stage's answer: ``[]`` (nothing), one assessment (named) or several (confounded).
+
+    Candidates passing the likelihood-ratio test and inside their physical range, within
+    ``delta`` of the best χ² among them, cannot be told apart by the data. If one of them passes
+    every check, the group is the answer (a confounded set when it has several members; a
+    member that fails significance or the held-out check stays in the set, since the data do
+    not separate it from the rest); if none does, nothing is named at this stage.
+    """
+    lr = [a for a in stage.assessments if a.fit is not None and a.checks["likelihood_ratio"]
+          and a.checks["physical"]]
+    if not lr:
+        return []
+    best = min(a.fit.fit.chi2 for a in lr)
+    group = sorted((a for a in lr if a.fit.fit.chi2 - best <= delta),
+                   key=lambda a: a.fit.fit.chi2)
+    if not any(a.passed for a in group):
+        return []
+    if len(group) == 1:
+        return group
+    # the model carries the best-fitting member that passes every check
+    first = next(a for a in group if a.passed)
+    return [first] + [a for a in group if a is not first]

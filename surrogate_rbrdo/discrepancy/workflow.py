@@ -1,0 +1,308 @@
+"""The discrepancy workflow: where the model and the data part, which effect is missing, and how
+much the gap shrinks once it is added.
+
+1. **Where.** The model's own uncertain parameters (bearing stiffness factors, a damping factor,
+   the unbalance of every 1x test) are recalibrated on the training speeds; whitened residuals
+   show where the data leave the model.
+2. **Which effect.** Every candidate of the library is fitted on top of the recalibrated model
+   (nuisance refitted with it) and tested (:mod:`.naming`); the best passing one is added and the
+   search repeats for a second effect (forward selection, at most ``max_effects``).
+3. **Nothing missing / unnamed residual.** Whatever is named, the final model's residual must
+   pass three lack-of-fit tests (each at ``alpha_residual / 3``): the χ² goodness of fit, a GP
+   structure test along speed and frequency, and the projection on generic local
+   sensitivities (:mod:`.generic`).
+   If no candidate passes and the residual is noise: *nothing missing*. If the residual keeps
+   structure: *unnamed residual* (no library name is given, even for an effect that explained a
+   part), with a GP correction for prediction only.
+4. **The gap.** Held-out RMSE, largest error and χ² per observable, before (recalibrated
+   baseline) and after (the named model, or the baseline plus the GP correction).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from surrogate_rbrdo.core.rng import require_rng
+from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
+from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY, library, separating_test
+from surrogate_rbrdo.discrepancy.fit import Fit, fit
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.gp import gp_correction
+from surrogate_rbrdo.discrepancy.holdout import Gap, Split, gap, masks_for, residuals, split_speeds
+from surrogate_rbrdo.discrepancy.naming import (
+    Assessment,
+    HoldoutProblems,
+    Stage,
+    decide,
+    run_stage,
+)
+from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jacobian
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
+from surrogate_rbrdo.discrepancy.observables import MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
+from surrogate_rbrdo.spindle.effects import Effect
+from surrogate_rbrdo.spindle.geometry import SpindleGeometry
+
+VERDICTS = ("named", "confounded", "nothing_missing", "unnamed_residual")
+
+
+@dataclass(frozen=True)
+class DiscrepancyOptions:
+    """Options of the workflow; every threshold is fixed before data are seen.
+
+    Attributes
+    ----------
+    library : tuple of str
+        Candidate effects (registry names), explicit.
+    nuisance : NuisanceOptions
+    alpha : float
+        Family-wise error rate of naming, per stage (bootstrap min-p over the candidates).
+    alpha_residual : float
+        Error rate of declaring a residual unexplained (three lack-of-fit tests, a third each).
+    n_draws : int
+        Bootstrap draws of the null distributions.
+    holdout_every, extrapolate_fraction : int, float
+        The held-out split (:func:`~surrogate_rbrdo.discrepancy.holdout.split_speeds`).
+    max_effects : int
+        Most effects named (forward selection stages).
+    confound_delta : float
+        Passing candidates within this ``Δχ²`` of the best are confounded (χ²₁ 99 %: 6.63).
+    holdout_tolerance : float
+        Largest worsening of a held-out subset's χ² a named effect may cause (χ²₁ 99.9 %:
+        10.83; the total held-out χ² must fall in any case).
+    use_identified : bool
+        Add identified bearing stiffness to the observables (off by default: it is identified
+        from the same records as the 1x phasors, so it would count them twice).
+    max_nfev : int
+        Residual evaluations per candidate fit.
+    """
+
+    library: tuple[str, ...] = DEFAULT_LIBRARY
+    nuisance: NuisanceOptions = field(default_factory=NuisanceOptions)
+    alpha: float = 0.01
+    alpha_residual: float = 0.01
+    n_draws: int = 300
+    holdout_every: int = 5
+    extrapolate_fraction: float = 0.1
+    max_effects: int = 2
+    confound_delta: float = 6.63
+    holdout_tolerance: float = 10.83
+    use_identified: bool = False
+    max_nfev: int = 150
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "library", tuple(self.library))
+        check_range("alpha", self.alpha, 1e-6, 0.2)
+        check_range("alpha_residual", self.alpha_residual, 1e-6, 0.2)
+        check_int("n_draws", self.n_draws, minimum=100)
+        check_int("max_effects", self.max_effects, minimum=1)
+        check_int("max_nfev", self.max_nfev, minimum=5)
+        check_positive("confound_delta", self.confound_delta)
+        check_positive("holdout_tolerance", self.holdout_tolerance, allow_zero=True)
+
+
+@dataclass(frozen=True)
+class DiscrepancyResult:
+    """What the workflow found (``findings()`` is the machine-readable form)."""
+
+    verdict: str
+    effects: tuple[Assessment, ...]
+    confounded_with: tuple[str, ...]
+    test: dict
+    residual_test: dict
+    gap_before: Gap
+    gap_after: Gap
+    stages: tuple[Stage, ...]
+    base: Fit
+    final: Fit
+    split: Split
+    speeds_rpm: np.ndarray
+    partial: tuple[str, ...]
+    separating: str
+    seconds: float
+    options: DiscrepancyOptions
+    #: run-to-run SD of each log stiffness factor estimated from the repeats (0: no runs)
+    run_scatter: tuple[float, ...] = ()
+    #: every block's data and predictions at every point (:mod:`.summary`)
+    curves: tuple[BlockCurves, ...] = ()
+
+    @property
+    def named_effects(self) -> tuple[Effect, ...]:
+        """The effects the updated model adds (for *confounded*: the best-fitting member)."""
+        if self.verdict not in ("named", "confounded"):
+            return ()
+        return tuple(s.candidate.effect(s.scope, v) for s, v in
+                     zip(self.final.par.slots, self.final.par.slot_values(self.final.x),
+                         strict=True))
+
+    def recalibration(self, fit: Fit | None = None) -> dict:
+        f = self.final if fit is None else fit
+        rows = f.par.rows(f.x[None])
+        return {"theta": dict(zip(f.par.theta_bearings, rows.theta[0].tolist(), strict=True)),
+                "damping_scale": dict(zip(f.par.bearings, rows.damping[0].tolist(),
+                                          strict=True)),
+                "mass_factor": dict(zip(f.par.nuisance.mass_disks, rows.mass[0].tolist(),
+                                        strict=True)),
+                "channel_gain": rows.gain[0].tolist(), "channel_tau_s": rows.tau[0].tolist(),
+                "unbalance_kgm": [[float(abs(u)), float(np.degrees(np.angle(u)))]
+                                  for u in f.evaluation.unbalance[0][0]]
+                if f.evaluation.unbalance else []}
+
+
+def _problem(fm: ForwardModel, data: MeasuredData, masks: dict | None,
+             nuisance: NuisanceOptions, runs: tuple | None) -> Problem:
+    """A problem on the points ``masks`` select; with ``runs`` ``(par, x, s)`` it carries the
+    run-averaging correction at ``x`` (:mod:`.noise`)."""
+    p = Problem(fm, data, masks, nuisance)
+    return p if runs is None else Problem(fm, data, masks, nuisance, run_offsets(p, *runs))
+
+
+def _problems(fm: ForwardModel, data: MeasuredData, split: Split, nuisance: NuisanceOptions,
+              runs: tuple | None = None):
+    """Training, held-out (interleaved, extrapolated) and all-held-out problems."""
+    def prob(which: str) -> Problem:
+        return _problem(fm, data, masks_for(data, split, which), nuisance, runs)
+    return (prob("train"), HoldoutProblems(prob("interleaved"), prob("extrapolated")),
+            prob("held_out"))
+
+
+def _recalibrate(fm, data, split, options) -> tuple:
+    """The problems and the recalibrated baseline, with the runs' thermal scatter (estimated
+    from the repeats) averaged into the model when the data have runs; the average depends on
+    the state it is taken at, so fit and average alternate until the fit settles."""
+    train, ho, held = _problems(fm, data, split, options.nuisance)
+    par = train.parametrisation()
+    base = fit(train, par, par.x0(), max_nfev=options.max_nfev)
+    W = np.concatenate([w.reshape(-1, 2, 2) for w in train.whiten])
+    runs = None
+    for _ in range(RUN_ITERATIONS):
+        u = tuple(v[0] for v in base.evaluation.unbalance)
+        states = run_states(train if runs is None else _problem(
+            fm, data, masks_for(data, split, "train"), options.nuisance, None),
+            theta_jacobian(train, par, base.x, u), W)
+        if not states:
+            break
+        runs = (par, base.x, states)
+        train, ho, held = _problems(fm, data, split, options.nuisance, runs)
+        previous, base = base.chi2, fit(train, par, base.x, max_nfev=options.max_nfev)
+        if abs(previous - base.chi2) < 0.1:
+            break
+    return train, ho, held, base, runs
+
+
+#: most alternations of fit and run average
+RUN_ITERATIONS = 4
+
+
+def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tuple[Effect, ...],
+                     *, options: DiscrepancyOptions = DiscrepancyOptions(),
+                     rng: np.random.Generator,
+                     theta_bearings: tuple[str, ...] | None = None) -> DiscrepancyResult:
+    """Run the workflow on measured ``data`` against the model (``geometry`` + ``effects``).
+
+    Parameters
+    ----------
+    data : MeasuredData
+    geometry : SpindleGeometry
+        The model's geometry (the design already applied).
+    effects : tuple of Effect
+        The model's own effects.
+    options : DiscrepancyOptions
+    rng : numpy.random.Generator
+        For the bootstrap null distributions.
+    theta_bearings : tuple of str, optional
+        Bearings with a stiffness factor (default all).
+    """
+    rng = require_rng(rng)
+    t0 = time.perf_counter()
+    if not options.use_identified and data.identified is not None:
+        data = MeasuredData(data.blocks, None, data.provenance)
+    one_x = [b for b in data.blocks if b.sweep.kind == "unbalance_1x"]
+    if not one_x:
+        raise ValueError("data: no 'unbalance_1x' block; the workflow needs 1x responses vs "
+                         "speed")
+    split = split_speeds(one_x[0].mean.shape[0], options.holdout_every,
+                         options.extrapolate_fraction)
+    planes = tuple(u.position_mm for u in geometry.unbalances)
+    fm = ForwardModel(geometry, effects, data.channels, planes, theta_bearings,
+                      options.nuisance.mass_disks)
+    train, ho, held, base, runs = _recalibrate(fm, data, split, options)
+    cands = library(options.library, fm.bearing_names)
+    current = base
+    stages, named = [], []
+    confounded: list[Assessment] = []
+    while True:
+        left = tuple(c for c in cands if c.name not in {a.name for a in named})
+        n_left = len(left) if len(named) < options.max_effects and not confounded else 0
+        st = run_stage(train, current, left[:n_left], ho, alpha=options.alpha,
+                       n_draws=options.n_draws, holdout_tolerance=options.holdout_tolerance,
+                       rng=rng.spawn(1)[0], max_nfev=options.max_nfev)
+        stages.append(st)
+        group = decide(st, options.confound_delta) if n_left else []
+        if not group:
+            break
+        current = group[0].fit.fit
+        if len(group) > 1:
+            confounded = group
+        else:
+            named.append(group[0])
+    res = _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
+                    tuple(confounded), options, one_x[0].coord, time.perf_counter() - t0)
+    everything = _problem(fm, data, None, options.nuisance, runs)
+    held_pts = split.interleaved | split.extrapolated
+    gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
+          else None)
+    return replace(res, run_scatter=tuple(
+        float(v) for v in np.concatenate(list(runs[2].values())).std(axis=0, ddof=1))
+        if runs else (),
+                   curves=tuple(block_curves(everything, held_pts, base, current, gp)),
+                   seconds=time.perf_counter() - t0)
+
+
+def _conclude(data, train, held, split, base, final, stages, named, confounded, options,
+              speeds, seconds) -> DiscrepancyResult:
+    last = stages[-1]
+    level = options.alpha_residual / 3
+    residual = {"gof_chi2": final.chi2, "gof_dof": final.dof, "gof_p": last.gof_p,
+                "structure": last.structure, "structure_p": last.structure_p,
+                "generic": last.generic, "generic_p": last.generic_p, "threshold": level}
+    ps = {"gof": (final.chi2, last.gof_p), "structure": (last.structure, last.structure_p),
+          "generic": (last.generic, last.generic_p)}
+    worst = min(ps, key=lambda k: ps[k][1])
+    unexplained = ps[worst][1] <= level
+    u = tuple(x[0] for x in base.evaluation.unbalance)
+    before = gap(held, residuals(held, base.par, base.x, u))
+    first = stages[0]
+    partial: tuple[str, ...] = ()
+    if unexplained:
+        verdict = "unnamed_residual"
+        partial = tuple(a.name for a in named + confounded)
+        corr = gp_correction(train, final.evaluation.residuals[0], held)
+        fu = tuple(x[0] for x in final.evaluation.unbalance)
+        after = gap(held, residuals(held, final.par, final.x, fu, corr))
+        test = {"statistic": ps[worst][0], "p_value": ps[worst][1], "threshold": level,
+                "kind": f"residual lack of fit ({worst})"}
+        effects, conf = (), ()
+    else:
+        fu = tuple(x[0] for x in final.evaluation.unbalance)
+        after = gap(held, residuals(held, final.par, final.x, fu))
+        if confounded:
+            verdict, effects, conf = "confounded", confounded, tuple(a.name for a in confounded)
+        elif named:
+            verdict, effects, conf = "named", named, ()
+        else:
+            verdict, effects, conf = "nothing_missing", (), ()
+        lead = effects[0] if effects else max(first.assessments, key=lambda a: a.delta_chi2,
+                                              default=None)
+        test = {"statistic": lead.delta_chi2 if lead else 0.0,
+                "p_value": lead.p_adjusted if lead else 1.0, "threshold": options.alpha,
+                "kind": "likelihood ratio, bootstrap min-p over candidates",
+                "candidate": lead.name if lead else None}
+    return DiscrepancyResult(
+        verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
+        np.asarray(speeds), partial, separating_test(list(conf)) if conf else "", seconds,
+        options)

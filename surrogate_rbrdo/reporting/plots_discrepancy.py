@@ -1,0 +1,123 @@
+"""Figures of the discrepancy workflow: where the model and the data part, the candidates'
+ranking, and the gap before and after, one figure per observable."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_residual_map(result, path: str | Path) -> Path:
+    """Whitened residual modulus of the recalibrated baseline per channel and point (colour,
+    log scale; held-out points hatched below the axis) and χ²/dof per speed band, per block."""
+    plt = _plt()
+    curves = result.curves
+    fig, axes = plt.subplots(2, len(curves), figsize=(5.5 * len(curves), 6), squeeze=False)
+    for k, c in enumerate(curves):
+        ax = axes[0, k]
+        z = np.sqrt(np.sum(c.white_before**2, axis=-1)).T                   # (C, X)
+        im = ax.pcolormesh(c.coord, np.arange(len(c.channels)), np.log10(np.maximum(z, 1e-2)),
+                           cmap="magma", shading="nearest", vmin=-1, vmax=3)
+        ax.set_yticks(range(len(c.channels)), c.channels)
+        ax.set_title(f"{c.name}: |whitened residual| before (log10)")
+        ho = c.coord[c.held_out]
+        ax.plot(ho, np.full(ho.size, -0.45), "v", color="c", ms=4, label="held out")
+        if ho.size:
+            ax.legend(loc="upper left", fontsize=7)
+        fig.colorbar(im, ax=ax)
+        ax2 = axes[1, k]
+        tb, ta = c.chi2_table("before"), c.chi2_table("after")
+        edges = np.asarray(next(iter(tb.values()))["band_edges"])
+        mid = 0.5 * (edges[:-1] + edges[1:])
+        for ch in c.channels:
+            ax2.semilogy(mid, [v or np.nan for v in tb[ch]["bands"]], "o-", lw=1, label=ch)
+        ax2.semilogy(mid, np.nanmean([[v or np.nan for v in ta[ch]["bands"]]
+                                      for ch in c.channels], axis=0), "k--", lw=2,
+                     label="after (mean)")
+        ax2.axhline(1.0, color="grey", lw=0.8)
+        ax2.set_xlabel(c.coord_label)
+        ax2.set_ylabel("χ²/dof per band")
+        ax2.legend(fontsize=7, ncol=2)
+    fig.suptitle(f"where model and data part — verdict: {result.verdict}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_candidates(result, path: str | Path) -> Path:
+    """Δχ² of every candidate in each stage, with the family-wise threshold's p-value."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(result.stages), figsize=(5 * len(result.stages), 3.5),
+                             squeeze=False)
+    for i, st in enumerate(result.stages):
+        ax = axes[0, i]
+        names = [a.name for a in st.assessments]
+        d = [max(a.delta_chi2, 1e-3) for a in st.assessments]
+        colors = ["tab:green" if a.passed else "tab:grey" for a in st.assessments]
+        ax.barh(names, d, color=colors)
+        ax.set_xscale("log")
+        ax.set_xlabel("Δχ² (green: passes every check)")
+        ax.set_title(f"stage {i + 1}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_gap(result, block, j: int, path: str | Path) -> Path:
+    """One observable (block ``block``, channel ``j``): amplitude and phase of the data (±2
+    standard errors) and of the model before and after, and the whitened residual of both;
+    held-out points marked."""
+    plt = _plt()
+    c = block
+    fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7, 7.5), sharex=True)
+    x = c.coord
+    amp = np.abs(c.data[:, j]) * 1e6
+    a1.errorbar(x, amp, yerr=2 * c.se[:, j] * 1e6, fmt="o", ms=3, color="k", label="data ±2σ")
+    for lab, y, st in (("before", c.before, "--"), ("after", c.after, "-")):
+        a1.plot(x, np.abs(y[:, j]) * 1e6, st, label=lab)
+        a2.plot(x, np.degrees(np.angle(y[:, j])), st, label=lab)
+    a2.plot(x, np.degrees(np.angle(c.data[:, j])), "o", ms=3, color="k")
+    for lab, w, st in (("before", c.white_before, "o--"), ("after", c.white_after, "o-")):
+        a3.semilogy(x, np.maximum(np.sqrt(np.sum(w[:, j] ** 2, axis=-1)), 1e-3), st, ms=3,
+                    label=lab)
+    a3.axhline(2.0, color="grey", lw=0.8)
+    a3.set_ylabel("|residual| / noise")
+    a3.legend(fontsize=8)
+    for ax in (a1, a2, a3):
+        for xv in x[c.held_out]:
+            ax.axvline(xv, color="c", lw=0.6, alpha=0.5)
+    a1.set_yscale("log")
+    a1.set_ylabel("amplitude (µm/unit load)" if c.coord_label.startswith("freq")
+                  else "1x amplitude (µm)")
+    a2.set_ylabel("phase (deg)")
+    a3.set_xlabel(c.coord_label)
+    a1.legend(fontsize=8)
+    a1.set_title(f"{c.name}: {c.channels[j]} (held-out points: cyan lines)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_all(result, out_dir: str | Path) -> dict[str, Path]:
+    """Every figure into ``out_dir``: ``residual_map.png``, ``candidates.png`` and
+    ``gap_<block>_<channel>.png`` per observable."""
+    out = Path(out_dir)
+    paths = {"residual_map": plot_residual_map(result, out / "residual_map.png"),
+             "candidates": plot_candidates(result, out / "candidates.png")}
+    for c in result.curves:
+        for j, ch in enumerate(c.channels):
+            paths[f"gap_{c.name}_{ch}"] = plot_gap(result, c, j, out / f"gap_{c.name}_{ch}.png")
+    return paths

@@ -1,0 +1,32 @@
+"""Shared builders: the reference spindle at its baseline design and small virtual campaigns."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.synthetic import Assembly, Campaign, NoiseLevel, Truth, measure
+from surrogate_rbrdo.spindle.reference import reference_spindle
+
+#: a small campaign that keeps the default suite fast (24 speeds, 10 repeats, 60 FRF lines)
+SMALL = Campaign(speeds_rpm=tuple(np.linspace(2000.0, 24000.0, 24).tolist()), repeats=10,
+                 impact_freqs_hz=tuple(np.linspace(50.0, 1500.0, 60).tolist()),
+                 impact_repeats=8)
+
+
+@pytest.fixture(scope="session")
+def spindle():
+    sp = reference_spindle()
+    return sp, sp.geometry_for(sp.baseline)
+
+
+def campaign_data(spindle, hidden=(), *, seed, geometry=None, campaign=SMALL,
+                  noise=None):
+    """Virtual data of the baseline spindle with ``hidden`` effects and a drawn assembly."""
+    sp, g = spindle
+    noise = NoiseLevel() if noise is None else noise
+    truth = Truth(geometry or g, sp.effects + tuple(hidden), planes_mm=(0.0, 350.0))
+    rng = np.random.default_rng(seed)
+    U = 2 * sp.geometry.unbalances[0].magnitude_kgm
+    asm = Assembly.draw(U, 2, 2, rng=rng)
+    return measure(truth, asm, campaign, noise, rng=rng), asm

@@ -1,0 +1,72 @@
+"""Blind-test bookkeeping: outcome scoring, rates, strength coordinates; the slow grid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context, SyntheticSource, rates, score
+from surrogate_rbrdo.discrepancy.grid import build_grid, calibrate_grid, confounded_pairs
+from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
+from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
+
+F = frozenset
+
+
+@pytest.mark.parametrize("truth, outside, verdict, names, expected", [
+    (F(), False, "nothing_missing", (), "nothing"),
+    (F(), False, "unnamed_residual", (), "false_alarm"),
+    (F(), False, "named", ("housing",), "wrong_name"),
+    (F({"housing"}), False, "named", ("housing",), "correct_name"),
+    (F({"housing"}), False, "confounded", ("housing", "thermal_preload"),
+     "correct_confounded"),
+    (F({"housing"}), False, "confounded", ("gyroscopics", "thermal_preload"), "wrong_name"),
+    (F({"housing", "anisotropy"}), False, "named", ("housing",), "partial"),
+    (F({"housing"}), False, "unnamed_residual", (), "detected_unnamed"),
+    (F(), True, "unnamed_residual", (), "detected_unnamed"),
+    (F(), True, "named", ("gyroscopics",), "wrong_name"),
+])
+def test_score(truth, outside, verdict, names, expected):
+    assert score(truth, outside, F(), verdict, names) == expected
+
+
+def test_absorbed_effect_expects_nothing():
+    assert score(F({"unbalance_error"}), False, F({"unbalance_error"}), "nothing_missing",
+                 ()) == "nothing"
+    assert score(F({"unbalance_error"}), False, F({"unbalance_error"}), "named",
+                 ("housing",)) == "wrong_name"
+
+
+def test_rates_and_strength_coordinate():
+    rows = [{"class": "a", "strength": "s", "outcome": o} for o in ("nothing", "nothing",
+                                                                    "wrong_name")]
+    r = rates(rows)[("a", "s")]
+    assert r["n"] == 3 and r["nothing"] == pytest.approx(2 / 3)
+    h = HIDDEN["housing"]
+    assert h.value(1.0) == h.knob_limit and h.value(0.5) > h.value(1.0)   # stiffer = weaker
+    assert HIDDEN["disk_mass_error"].value(0.0) == pytest.approx(1.0, abs=1e-5)
+    assert confounded_pairs(("a", "b"), np.array([[1, 0.97], [0.97, 1]]),
+                            {"a": True, "b": True}) == [("a", "b", 0.97), ("b", "a", 0.97)]
+
+
+@pytest.mark.slow
+def test_blind_grid_small(spindle):
+    """A reduced blind grid (synthetic source, one noise level, two seeds): no wrong name, no
+    false alarm, strong single effects named or confounded (the full grid with rates:
+    benchmarks/discrepancy_blind.py)."""
+    from surrogate_rbrdo.discrepancy.blind import run_scenario
+
+    sp, g = spindle
+    src = SyntheticSource(Campaign(), {"default": NoiseLevel()},
+                          2 * sp.geometry.unbalances[0].magnitude_kgm, (0.0, 350.0))
+    ctx = Context(g, sp.effects, src, DiscrepancyOptions(n_draws=200))
+    names = ("housing", "cross_coupling", "anisotropy", "shaft_stiffness_loss")
+    cal = calibrate_grid(ctx, names, ("default",))
+    grid = [sc for sc in build_grid(ctx, cal, ("default",), 2, [])
+            if sc.strength in ("strong", "-") and (sc.label == "nothing hidden"
+                                                    or sc.label.split(": ")[1] in names)]
+    rows = [run_scenario(ctx, sc) for sc in grid]
+    assert all(r["outcome"] != "wrong_name" for r in rows)
+    assert all(r["outcome"] == "nothing" for r in rows if r["class"] == "nothing hidden")
+    strong = [r for r in rows if r["class"].startswith("single")]
+    assert all(r["outcome"] in ("correct_name", "correct_confounded") for r in strong)

@@ -1,0 +1,62 @@
+"""The experiment kind's library side: config tables, a measured-data folder, the analysis."""
+
+from __future__ import annotations
+
+import csv
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.runner.config import spindle_from_config
+
+from .conftest import campaign_data
+
+PENDING = Path(__file__).resolve().parents[2] / "experiments" / "pending"
+
+
+@pytest.mark.parametrize("name", ["discrepancy.toml", "discrepancy_null.toml"])
+def test_configs_parse(name):
+    cfg = tomllib.loads((PENDING / name).read_text())
+    assert cfg["experiment"]["kind"] == "discrepancy"
+    o = options_from_dict(cfg["discrepancy"])
+    assert o.nuisance.gain_sd == 0.02 and "housing" in o.library
+    spindle_from_config(cfg["spindle"])
+    rig = pytest.importorskip("surrogate_rbrdo.rig.config")
+    truth = rig.rig_config_from_dict(cfg["rig"]).truth
+    assert [e.name for e in truth.hidden] == ([] if "null" in name else ["housing"])
+
+
+def test_bad_tables_name_the_key():
+    with pytest.raises(ValueError, match=r"\[discrepancy\]"):
+        options_from_dict({"alpha_typo": 0.1})
+    with pytest.raises(ValueError, match="preset"):
+        options_from_dict({"nuisance": {"preset": "nope"}})
+
+
+def test_a_folder_of_phasors_is_analysed(spindle, tmp_path):
+    sp, g = spindle
+    data, _ = campaign_data(spindle, seed=3)
+    b = data.blocks[0]
+    with (tmp_path / "phasors.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["run", "speed_rpm", "channel", "re_m", "im_m"])
+        for r in range(b.runs.shape[0]):
+            for i, s in enumerate(b.coord):
+                for j, c in enumerate(b.channels):
+                    w.writerow([r, s, c.name, b.runs[r, i, j].real, b.runs[r, i, j].imag])
+    (tmp_path / "channels.json").write_text(json.dumps(
+        {c.name: [c.position_mm, c.direction] for c in b.channels}))
+    folder = data_from_folder(tmp_path)
+    order = [[c.name for c in b.channels].index(c.name) for c in folder.blocks[0].channels]
+    assert np.allclose(folder.blocks[0].mean, b.mean[:, order])
+    res, paths = analyse(folder, g, sp.effects, spindle_section={"geometry": "reference"},
+                         options=options_from_dict({"n_draws": 120}),
+                         rng=np.random.default_rng(0), out_dir=tmp_path / "run")
+    assert res.verdict == "nothing_missing"
+    assert json.loads(paths["findings"].read_text())["verdict"] == "nothing_missing"
+    with pytest.raises(ValueError, match="no phasors.csv"):
+        data_from_folder(tmp_path / "run")

@@ -1,0 +1,105 @@
+"""The forward model against an independent dense solve of the whole system."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
+from surrogate_rbrdo.spindle.assembly import RPM, build_model
+from surrogate_rbrdo.spindle.effects import CrossCoupling, Gyroscopics, HousingFlexibility
+
+CHANNELS = (Channel("tool_x", 0.0, "x"), Channel("tool_y", 0.0, "y"),
+            Channel("front_x", 100.0, "x"), Channel("rear_y", 600.0, "y"),
+            Channel("mid_x", 250.0, "x"))
+EXTRA = (HousingFlexibility(k_N_per_m=5e8, m_kg=20.0, c_Ns_per_m=2000.0),
+         CrossCoupling(kappa=0.1), Gyroscopics(g=0.3))
+
+
+def _dense_model(fm, extra, ds):
+    """The same spindle with the damping factors put into the bearing laws, assembled whole."""
+    m = fm.model(extra)
+    bs = tuple(replace(b, law=replace(b.law, damping_eta_s=b.law.damping_eta_s * s))
+               for b, s in zip(m.geometry.bearings, ds, strict=True))
+    return build_model(replace(m.geometry, bearings=bs), m.effects)
+
+
+def _at(model, Q, c):
+    n = int(np.argmin(np.abs(model.z - c.position_mm * 1e-3)))
+    return Q[4 * n + c.dof_offset]
+
+
+@pytest.mark.known_answer
+def test_unbalance_response_equals_dense_solve(spindle):
+    sp, g = spindle
+    fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0))
+    speeds = np.linspace(1000.0, 24000.0, 6)
+    th, ds = np.array([[0.9, 1.1]]), np.array([[1.3, 0.8]])
+    G = fm.response(Sweep.unbalance(speeds), th, ds, [EXTRA])[0]
+    m = _dense_model(fm, EXTRA, ds[0])
+    for i, s in enumerate(speeds):
+        w = s * RPM
+        M, C, K = m.system_matrices(w, th)
+        for j, plane in enumerate((0.0, 350.0)):
+            n = int(np.argmin(np.abs(m.z - plane * 1e-3)))
+            F = np.zeros(M.shape[0], complex)
+            F[4 * n], F[4 * n + 1] = w**2, -1j * w**2
+            Q = np.linalg.solve(K - w**2 * M + 1j * w * C, F)
+            ref = np.array([_at(m, Q, c) for c in CHANNELS])
+            assert np.allclose(G[i, :, j], ref, rtol=0, atol=1e-10 * np.abs(Q).max())
+
+
+@pytest.mark.known_answer
+def test_impact_frf_equals_dense_solve_at_standstill(spindle):
+    sp, g = spindle
+    fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0))
+    freqs = np.linspace(50.0, 2000.0, 7)
+    th, ds = np.array([[1.0, 0.95]]), np.array([[0.7, 1.2]])
+    H = fm.response(Sweep.impact(freqs, (CHANNELS[0],)), th, ds, [EXTRA])[0, :, :, 0]
+    m = _dense_model(fm, EXTRA, ds[0])
+    M, C, K = m.system_matrices(0.0, th)
+    for i, f in enumerate(freqs):
+        w = 2 * np.pi * f
+        F = np.zeros(M.shape[0], complex)
+        F[0] = 1.0
+        Q = np.linalg.solve(K - w**2 * M + 1j * w * C, F)
+        ref = np.array([_at(m, Q, c) for c in CHANNELS])
+        assert np.allclose(H[i], ref, rtol=0, atol=1e-10 * np.abs(Q).max())
+
+
+def test_rows_with_other_effects_are_solved_apart(spindle):
+    sp, g = spindle
+    fm = ForwardModel(g, sp.effects, CHANNELS[:2], (0.0, 350.0))
+    t = Sweep.unbalance([8000.0, 16000.0])
+    th, ds = np.ones((3, 2)), np.ones((3, 2))
+    both = fm.response(t, th, ds, [(), EXTRA[:1], ()])
+    assert np.allclose(both[0], both[2])
+    alone = fm.response(t, th[:1], ds[:1], [EXTRA[:1]])
+    assert np.allclose(both[1], alone[0])
+    assert not np.allclose(both[0], both[1])
+
+
+def test_rotor_hooks_are_told_apart():
+    assert not acts_on_rotor(HousingFlexibility(k_N_per_m=1e9))
+    assert acts_on_rotor(Gyroscopics(g=0.2))
+
+
+def test_nodes_are_added_at_channel_positions(spindle):
+    _, g = spindle
+    m = build_model(with_nodes_at(g, [37.0]))
+    assert np.min(np.abs(m.z - 0.037)) < 1e-12
+
+
+def test_bad_input_names_the_field(spindle):
+    sp, g = spindle
+    with pytest.raises(ValueError, match="direction"):
+        Channel("p", 0.0, "z")
+    with pytest.raises(ValueError, match="channels"):
+        ForwardModel(g, sp.effects, (), (0.0,))
+    fm = ForwardModel(g, sp.effects, CHANNELS[:1], (0.0,))
+    with pytest.raises(ValueError, match="damping_scale"):
+        fm.response(Sweep.unbalance([1000.0]), np.ones((2, 2)), np.ones((1, 2)))

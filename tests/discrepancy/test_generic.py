@@ -1,0 +1,46 @@
+"""Generic local sensitivities against finite differences of the truth-only geometry changes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.fit import fit
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.generic import NODE_SPRING_SCALE, generic_columns
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.sweeps import Sweep
+from surrogate_rbrdo.discrepancy.synthetic import default_channels
+from surrogate_rbrdo.discrepancy.truth_effects import magnetic_pull
+
+
+@pytest.mark.known_answer
+def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
+    sp, g = spindle
+    ch = default_channels(g)
+    sw = Sweep.unbalance(np.linspace(3000, 22000, 9))
+    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
+    rng = np.random.default_rng(0)
+    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ np.array([5e-6, 5e-6j])
+    rec = y[None] * (1 + 1e-3 * (rng.normal(size=(8,) + y.shape)
+                                 + 1j * rng.normal(size=(8,) + y.shape)))
+    data = MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sw, ch, rec),))
+    prob = Problem(fm, data)
+    par = prob.parametrisation()
+    f = fit(prob, par, par.x0())
+    G = generic_columns(prob, f)
+    u = tuple(v[0] for v in f.evaluation.unbalance)
+    y0 = prob.model_vector(par, f.x[None], u)[0]
+    eps = 1e3                                           # N/m, a small negative spring
+    fm2 = ForwardModel(magnetic_pull(g, k_N_per_m=eps, position_mm=350.0), sp.effects, ch,
+                       (0.0, 350.0), ("front", "rear"))
+    prob2 = Problem(fm2, data)
+    rows = par.rows(f.x[None])
+    y1 = prob2.data_vector(type(rows)(rows.theta, np.hstack([rows.damping, np.ones((1, 1))]),
+                                      rows.mass, rows.gain, rows.tau, rows.extras), u)[0]
+    m = fm.model(())
+    ne, nd = m.element_mats.shape[0], len(m.geometry.disks)
+    col = G[:y1.size, 2 * ne + 2 * nd + fm.node(m, 350.0)]
+    fd = (y1 - y0[:y1.size]) / (-eps) * NODE_SPRING_SCALE
+    assert np.linalg.norm(fd - col) < 2e-3 * np.linalg.norm(col)

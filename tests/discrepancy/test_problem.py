@@ -1,0 +1,80 @@
+"""Residuals: the unbalance solved exactly inside, the measurement chain, the priors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.fit import fit
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.sweeps import Sweep
+from surrogate_rbrdo.discrepancy.synthetic import default_channels
+
+U = np.array([4e-6 * np.exp(0.7j), 9e-6 * np.exp(-2.0j)])
+
+
+def _data(fm, sweep, theta, noise=1e-12, gain=None, tau=0.0, seed=0):
+    """Noise-level records of the model's own response (a known answer)."""
+    rng = np.random.default_rng(seed)
+    G = fm.response(sweep, theta[None], np.ones((1, 2)))[0]
+    y = G @ U
+    w = sweep.freq_rad_s[:, None]
+    g = np.ones(y.shape[1]) if gain is None else gain
+    y = y * g / (1 + 1j * w * tau)
+    rec = y[None] + noise * (rng.normal(size=(10,) + y.shape)
+                             + 1j * rng.normal(size=(10,) + y.shape))
+    return MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sweep, fm.channels, rec),))
+
+
+@pytest.fixture(scope="module")
+def model(spindle):
+    sp, g = spindle
+    return ForwardModel(g, sp.effects, default_channels(g), (0.0, 350.0))
+
+
+@pytest.mark.known_answer
+def test_unbalance_and_stiffness_come_back_exactly(model):
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 12))
+    data = _data(model, sw, np.array([0.93, 1.04]))
+    prob = Problem(model, data)
+    par = prob.parametrisation()
+    f = fit(prob, par, par.x0())
+    assert np.allclose(np.exp(f.x[:2]), [0.93, 1.04], rtol=1e-6)
+    assert np.allclose(f.evaluation.unbalance[0][0], U, rtol=1e-6)
+
+
+@pytest.mark.known_answer
+def test_channel_gains_and_time_constants_are_recalibrated(model):
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 12))
+    gain = np.array([1.02, 0.99, 1.0, 1.01, 0.97, 1.0])
+    tau0 = 1 / (2 * np.pi * 1e4)
+    data = _data(model, sw, np.ones(2), gain=gain, tau=tau0, noise=1e-13)
+    prob = Problem(model, data, nuisance=NuisanceOptions(gain_sd=0.02, bandwidth_hz=1e4,
+                                                          delay_sd_s=1e-6))
+    par = prob.parametrisation()
+    f = fit(prob, par, par.x0(), max_nfev=200)
+    rows = par.rows(f.x[None])
+    # gains are known up to a common factor the unbalance takes: compare ratios
+    assert np.allclose(rows.gain[0] / rows.gain[0, 0], gain / gain[0], rtol=1e-5)
+    assert np.allclose(rows.tau[0], tau0, rtol=1e-3)
+
+
+def test_model_vector_and_residuals_agree(model):
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 8))
+    data = _data(model, sw, np.array([1.1, 0.9]), noise=1e-9)
+    prob = Problem(model, data, nuisance=NuisanceOptions(gain_sd=0.02))
+    par = prob.parametrisation()
+    x = par.x0()
+    x[3] = 0.01
+    ev = prob.evaluate(par, x[None])
+    u = tuple(v[0] for v in ev.unbalance)
+    m = prob.model_vector(par, x[None], u)[0]
+    b = prob.blocks[0]
+    y = np.stack([b.mean.real, b.mean.imag], -1).reshape(-1)
+    W = prob.whiten[0].reshape(-1, 2, 2)
+    r = np.einsum("nij,nj->ni", W, (y - m[:y.size]).reshape(-1, 2)).reshape(-1)
+    assert np.allclose(r, ev.residuals[0, :y.size])
+    assert np.allclose(ev.residuals[0, y.size:], -m[y.size:])   # priors: (μ − p)/σ

@@ -1,0 +1,79 @@
+"""The workflow end to end on small virtual campaigns: silent when nothing is missing, names a
+strong hidden housing stage and shrinks the gap, never names a library effect for a strong
+effect outside the library; the run folder a study can load."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.report import findings, write_run
+from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
+from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
+from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.spindle.effects import HousingFlexibility
+
+from .conftest import campaign_data
+
+FAST = DiscrepancyOptions(n_draws=150)
+
+
+@pytest.fixture(scope="module")
+def housing_result(spindle):
+    sp, g = spindle
+    data, _ = campaign_data(spindle, (HousingFlexibility(k_N_per_m=2e9, m_kg=20.0),), seed=2)
+    return find_discrepancy(data, g, sp.effects, options=FAST, rng=np.random.default_rng(0))
+
+
+def test_nothing_missing_when_nothing_is_hidden(spindle):
+    sp, g = spindle
+    data, _ = campaign_data(spindle, seed=11)
+    res = find_discrepancy(data, g, sp.effects, options=FAST, rng=np.random.default_rng(0))
+    assert res.verdict == "nothing_missing"
+    assert res.test["p_value"] > res.test["threshold"]
+    assert res.gap_after == res.gap_before
+
+
+def test_hidden_housing_is_named_with_its_parameters(housing_result):
+    res = housing_result
+    assert res.verdict == "named" and [a.name for a in res.effects] == ["housing"]
+    p, ci = res.effects[0].fit.parameters, res.effects[0].fit.ci
+    assert ci["k_N_per_m"][0] < 2e9 < ci["k_N_per_m"][1]
+    assert ci["m_kg"][0] < 20.0 < ci["m_kg"][1]
+    assert p["k_N_per_m"] == pytest.approx(2e9, rel=0.01)
+    # the gap shrinks on held-out speeds (interleaved and extrapolated) to about the noise
+    assert res.gap_after.chi2_dof < 3.0 < res.gap_before.chi2_dof / 10
+    assert res.gap_after.rmse < res.gap_before.rmse / 5
+
+
+@pytest.mark.slow
+def test_outside_library_effect_is_never_given_a_library_name(spindle):
+    sp, g = spindle
+    geo = TRUTH_MODIFIERS["shaft_stiffness_loss"](g, position_mm=250.0, depth=0.3)
+    data, _ = campaign_data(spindle, seed=5, geometry=geo)
+    res = find_discrepancy(data, g, sp.effects, options=FAST, rng=np.random.default_rng(0))
+    assert res.verdict in ("unnamed_residual", "nothing_missing")
+    assert not res.effects
+    if res.verdict == "unnamed_residual":       # the GP correction closes part of the gap
+        assert res.gap_after.chi2_dof < res.gap_before.chi2_dof
+
+
+def test_findings_and_updated_spindle_load_back(housing_result, spindle, tmp_path):
+    sp, _ = spindle
+    section = {"geometry": "reference", "baseline": [2000.0, 500.0, 65.0]}
+    paths = write_run(housing_result, tmp_path, spindle_section=section,
+                      model_effects=sp.effects)
+    f = json.loads(paths["findings"].read_text())
+    assert f["verdict"] == "named" and f["effects"][0]["name"] == "housing"
+    assert set(f["test"]) >= {"statistic", "p_value", "threshold"}
+    assert set(f["gap"]["before"]) == set(f["gap"]["after"]) == {"rmse", "max_abs", "chi2_dof"}
+    assert set(f["effects"][0]["ci"]) == {"k_N_per_m", "m_kg", "c_Ns_per_m"}
+    table = tomllib.loads(paths["spindle"].read_text())["spindle"]
+    updated = spindle_from_config(table)
+    assert [e.name for e in updated.effects][-1] == "housing"
+    assert updated.effects[-1].k_N_per_m == pytest.approx(
+        housing_result.effects[0].fit.parameters["k_N_per_m"])
+    assert json.loads(json.dumps(findings(housing_result))) == f
