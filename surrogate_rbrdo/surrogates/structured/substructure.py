@@ -321,6 +321,13 @@ class SubstructureOptions(SamplingOptions):
         check_int("n_start", self.n_start, minimum=1)
         check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
 
+    def check_response(self, response: ResponseSpec) -> None:
+        if response.kind == "peak_unbalance":
+            raise ValueError("structure = 'substructure' is not allowed with response.kind = "
+                             "'peak_unbalance': its coupling takes the geometry's fixed "
+                             "unbalance; the exact coupling of the random-unbalance peak is "
+                             "the FE model itself (structure = 'fe'), or use 'global'")
+
 
 @register_structure("substructure", SubstructureOptions, "Kriging of the rotor's condensed "
                     "dynamic stiffness over the designs, bearings and θ coupled exactly")
