@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
+from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.formulations import DeterministicOptions
 from surrogate_rbrdo.runner.runfolder import check_name
 from surrogate_rbrdo.runner.schema import load_toml
@@ -29,14 +29,14 @@ from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry
 from surrogate_rbrdo.spindle.practice import PracticeSpec
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
-from surrogate_rbrdo.spindle.unbalance import (
-    REFERENCE_TOLERANCES,
-    PlaneTolerance,
-    UnbalanceTolerances,
-)
 from surrogate_rbrdo.study.constraints import spindle_constraints
-from surrogate_rbrdo.study.problem import RESIDUAL_STD, TABLE4_STD, peak_unbalance_inputs
-from surrogate_rbrdo.uncertainty import FACTOR_DISTRIBUTIONS, stiffness_factors
+from surrogate_rbrdo.study.problem import (
+    RESIDUAL_STD,
+    TABLE4_STD,
+    UnbalanceOptions,
+    peak_unbalance_inputs,
+)
+from surrogate_rbrdo.uncertainty import stiffness_factors
 
 
 @dataclass(frozen=True)
@@ -162,25 +162,6 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
 
 
 @dataclass(frozen=True)
-class UnbalanceTable:
-    """``[uncertainty.unbalance]`` (``response.kind = "peak_unbalance"``): the residual
-    unbalance of each plane, ISO 21940-11 (``spindle.unbalance``). ``magnitude``: ``"disk"``
-    (uniform over each plane's tolerance disk, a θ column per plane) or ``"limit"`` (every
-    plane at its permissible value); ``relative_phase``: phases of planes 2… relative to plane 1
-    (exact: a common rotation leaves the orbit unchanged); ``planes``: grade and balanced disks
-    of each plane (default: the tool holder in the tool plane, the rest of the rotor in the
-    motor plane, G 2.5); ``speed_rpm``: service speed of the grades (default the top speed)."""
-
-    magnitude: str = "disk"
-    relative_phase: bool = True
-    planes: tuple[PlaneTolerance, ...] | None = None
-    speed_rpm: float | None = None
-
-    def tolerances(self) -> UnbalanceTolerances:
-        return UnbalanceTolerances(self.planes or REFERENCE_TOLERANCES.planes, self.speed_rpm)
-
-
-@dataclass(frozen=True)
 class UncertaintyTable:
     """``[uncertainty]``: θ. The stiffness block, one factor per θ bearing: ``distribution``
     (``"normal"`` or ``"lognormal"``: positive support, ``uncertainty.stiffness_factors``),
@@ -188,40 +169,34 @@ class UncertaintyTable:
     with ``response.kind = "peak_unbalance"``; the paper's pooled Table 4 CoVs otherwise, the
     synthetic benchmarks), ``corr``. With ``kind = "peak_unbalance"`` θ continues with the
     thermal preload state (``thermal_max > 0``: τ ~ U(0, thermal_max), the preload bearing at
-    F(1 + τ)) and the unbalance columns of ``[uncertainty.unbalance]``. (Identification phase 2
-    replaces the stiffness block by an identified model; the unbalance block stays ISO's.)"""
+    F(1 + τ)) and the unbalance columns of ``[uncertainty.unbalance]`` (``UnbalanceOptions``).
+    (Identification phase 2 replaces the stiffness block by an identified model; the
+    unbalance block stays ISO's.)"""
 
     distribution: str = "normal"
     mean: tuple[float, ...] | None = None
     std: tuple[float, ...] | None = None
     corr: tuple[tuple[float, ...], ...] | None = None
     thermal_max: float = 0.0
-    unbalance: UnbalanceTable | None = None
+    unbalance: UnbalanceOptions | None = None
 
 
 def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...], *,
                  default_std: tuple[float, ...] = TABLE4_STD) -> Any:
-    """The stiffness block of a ``[uncertainty]`` table: one factor per θ bearing, positive
-    (normal: mean > 8 std, so P(θ ≤ 0) < 1e-15; or lognormal)."""
+    """The stiffness block of a ``[uncertainty]`` table: one positive factor per θ bearing
+    (``uncertainty.stiffness_factors``)."""
     m = len(theta_bearings)
-    check_choice("uncertainty.distribution", t.distribution, FACTOR_DISTRIBUTIONS)
-    mean = np.asarray([1.0] * m if t.mean is None else t.mean, dtype=float)
-    std = np.asarray(default_std[:m] if t.std is None else t.std, dtype=float)
+    mean = [1.0] * m if t.mean is None else list(t.mean)
+    std = list(default_std[:m]) if t.std is None else list(t.std)
     for name, v in (("mean", mean), ("std", std)):
-        if v.shape != (m,):
-            raise ValueError(f"uncertainty.{name} = {v.tolist()} is not allowed: need {m} "
-                             f"values, one per θ bearing {list(theta_bearings)}")
-    for i in range(m):
-        check_positive(f"uncertainty.std[{i}]", float(std[i]))
-        if not mean[i] > (8.0 * std[i] if t.distribution == "normal" else 0.0):
-            raise ValueError(f"uncertainty.mean[{i}] = {mean[i]} is not allowed: θ scales a "
-                             "bearing stiffness and must stay positive: need mean > 8 std = "
-                             f"{8.0 * std[i]:g} (or distribution = 'lognormal', mean > 0)")
+        if len(v) != m:
+            raise ValueError(f"uncertainty.{name} = {v} is not allowed: need {m} values, one "
+                             f"per θ bearing {list(theta_bearings)}")
     try:
         return stiffness_factors(mean, std, None if t.corr is None else np.asarray(t.corr),
                                  distribution=t.distribution)
     except ValueError as exc:
-        raise ValueError(f"uncertainty.corr: {exc}") from None
+        raise ValueError(f"uncertainty.{exc}") from None
 
 
 def build_theta(t: UncertaintyTable, spindle: ReferenceSpindle, response: ResponseSpec
@@ -237,11 +212,9 @@ def build_theta(t: UncertaintyTable, spindle: ReferenceSpindle, response: Respon
                                  "unbalance is fixed); use kind = 'peak_unbalance'")
         return build_inputs(t, spindle.theta_bearings), response
     block = build_inputs(t, spindle.theta_bearings, default_std=RESIDUAL_STD)
-    u = t.unbalance or UnbalanceTable()
     try:
         return peak_unbalance_inputs(spindle, block, thermal_max=t.thermal_max,
-                                     magnitude=u.magnitude, relative_phase=u.relative_phase,
-                                     tolerances=u.tolerances())
+                                     unbalance=t.unbalance)
     except ValueError as exc:
         key = str(exc).split(" ", 1)[0]
         where = {"thermal_max": "uncertainty.", "magnitude": "uncertainty.unbalance.",
@@ -297,20 +270,17 @@ class DeterministicTable:
 
     def constraints(self, spindle: ReferenceSpindle) -> tuple[Any, ...]:
         """The practice checks and the exact separation guard, as design constraints."""
-        check_positive("deterministic.search_factor", self.search_factor)
         if self.practice_spec is not None and not self.practice:
             raise ValueError("deterministic.practice_spec is not allowed with practice = false: "
                              "set practice = true")
         spec = self.practice_spec or PracticeSpec(speed_max_rpm=spindle.geometry.speed_max_rpm)
-        cons = spindle_constraints(spindle, practice=spec if self.practice else None,
-                                   resonance="separation" if self.resonance == "separation"
-                                   else "none", search_factor=self.search_factor)
         try:
-            for c in cons:
-                c(np.asarray(spindle.baseline, dtype=float)[None, :])
-        except (KeyError, ValueError) as exc:
-            raise ValueError(f"deterministic.practice_spec: {exc}") from None
-        return cons
+            return spindle_constraints(spindle, practice=spec if self.practice else None,
+                                       resonance="none" if self.resonance != "separation"
+                                       else "separation", search_factor=self.search_factor)
+        except ValueError as exc:
+            raise ValueError(f"deterministic.{str(exc).replace('practice:', 'practice_spec:')}"
+                             ) from None
 
 
 def available_memory() -> int:
@@ -334,5 +304,5 @@ def require_memory(field: str, value: Any, nbytes: float, detail: str) -> None:
 
 
 __all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",
-           "SpindleTable", "UnbalanceTable", "UncertaintyTable", "available_memory",
+           "SpindleTable", "UncertaintyTable", "available_memory",
            "build_inputs", "build_spindle", "build_theta", "require_memory"]

@@ -27,7 +27,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from surrogate_rbrdo.core.validate import check_choice
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_choice, check_positive
 from surrogate_rbrdo.formulations.constraints import DesignConstraint, block_constraints
 from surrogate_rbrdo.spindle.practice import PracticeConstraints, PracticeSpec
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle
@@ -43,11 +45,17 @@ def spindle_constraints(spindle: ReferenceSpindle, *, practice: PracticeSpec | N
                         ) -> tuple[DesignConstraint, ...]:
     """The practice checks (if ``practice`` is given) and the exact API separation guard
     (``resonance = "separation"``: every critical speed up to ``search_factor · n_max`` with
-    AF ≥ 2.5 outside the operating range by the API margins)."""
+    AF ≥ 2.5 outside the operating range by the API margins). The practice data are checked
+    against the spindle (bearing names) on its baseline design."""
     check_choice("resonance", resonance, EXACT_GUARDS)
+    check_positive("search_factor", search_factor)
     out: tuple[DesignConstraint, ...] = ()
     if practice is not None:
         con = PracticeConstraints(spindle, practice)
+        try:
+            con(np.asarray(spindle.baseline, dtype=float)[None, :])
+        except (KeyError, ValueError) as exc:
+            raise ValueError(f"practice: {exc}") from None
         out += block_constraints(con.names, con)
     if resonance == "separation":
         guard = ResonanceGuard(spindle, "separation", search_factor=search_factor)

@@ -34,6 +34,7 @@ from surrogate_rbrdo.spindle.practice import PracticeSpec
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
 from surrogate_rbrdo.spindle.unbalance import (
     REFERENCE_TOLERANCES,
+    PlaneTolerance,
     UnbalanceTolerances,
     permissible_unbalance,
 )
@@ -138,28 +139,50 @@ def reference_problem() -> Problem:
         baseline=np.array([2000.0, 465.8, 65.0]))
 
 
+@dataclass(frozen=True)
+class UnbalanceOptions:
+    """The random residual unbalance (the ``[uncertainty.unbalance]`` table), ISO 21940-11.
+
+    ``magnitude``: ``"disk"`` (uniform over each plane's tolerance disk, one θ column per
+    plane) or ``"limit"`` (every plane at its permissible value); ``relative_phase``: phases
+    of planes 2… relative to plane 1 (exact: a common rotation leaves the orbit unchanged);
+    ``planes``: grade and balanced disks per plane (default: the tool holder in the tool
+    plane, the rest of the rotor in the motor plane, G 2.5); ``speed_rpm``: service speed of
+    the grades (default: the top speed).
+    """
+
+    magnitude: str = "disk"
+    relative_phase: bool = True
+    planes: tuple[PlaneTolerance, ...] | None = None
+    speed_rpm: float | None = None
+
+    @property
+    def tolerances(self) -> UnbalanceTolerances:
+        return UnbalanceTolerances(self.planes or REFERENCE_TOLERANCES.planes, self.speed_rpm)
+
+
 def peak_unbalance_inputs(spindle: ReferenceSpindle, stiffness: Any, *, thermal_max: float = 0.0,
-                          magnitude: str = "disk", relative_phase: bool = True,
-                          tolerances: UnbalanceTolerances = REFERENCE_TOLERANCES
+                          unbalance: UnbalanceOptions | None = None
                           ) -> tuple[Any, PeakUnbalanceSpec]:
     """θ and the response of the random-unbalance peak: ``stiffness`` (a random vector of the
     factors of ``spindle.theta_bearings``: normal or lognormal around the speed trend, or an
     identified model) followed by the thermal preload state (``thermal_max > 0``) and the
-    unbalance magnitude fractions and phases of the planes of ``tolerances``
-    (``uncertainty.spindle_theta``). The tolerances are checked against the spindle's
-    unbalance planes and disks."""
+    unbalance magnitude fractions and phases (``uncertainty.spindle_theta``). The tolerances
+    are checked against the spindle's unbalance planes and disks."""
+    u = UnbalanceOptions() if unbalance is None else unbalance
     m = len(spindle.theta_bearings)
     if int(stiffness.dim) != m:
         raise ValueError(f"stiffness.dim = {stiffness.dim} is not allowed: need {m}, one "
                          f"factor per θ bearing {list(spindle.theta_bearings)}")
     std = tuple(float(v) for v in np.sqrt(np.diag(np.asarray(stiffness.cov, dtype=float))))
+    tol = u.tolerances
     spec = ThetaSpec(bearings=spindle.theta_bearings, stiffness_std=std, thermal_max=thermal_max,
                      preload_bearing=spindle.design_map.preload_bearing,
-                     n_planes=len(tolerances.planes), magnitude=magnitude,
-                     relative_phase=relative_phase)
-    permissible_unbalance(spindle.model(spindle.baseline), tolerances)   # planes and disks
+                     n_planes=len(tol.planes), magnitude=u.magnitude,
+                     relative_phase=u.relative_phase)
+    permissible_unbalance(spindle.model(spindle.baseline), tol)   # planes and disks
     return theta_random_vector(spec, stiffness), PeakUnbalanceSpec(theta_spec=spec,
-                                                                   tolerances=tolerances)
+                                                                   tolerances=tol)
 
 
 def credible_problem(*, delta_lim_um: float = 1.0) -> Problem:
@@ -184,4 +207,4 @@ def credible_problem(*, delta_lim_um: float = 1.0) -> Problem:
 
 
 __all__ = ["DESIGN_NAMES", "RESIDUAL_STD", "TABLE4_STD", "Problem", "credible_problem",
-           "peak_unbalance_inputs", "reference_problem"]
+           "UnbalanceOptions", "peak_unbalance_inputs", "reference_problem"]

@@ -266,7 +266,7 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"unknown key report.n_speed; allowed: \['campbell_speeds', 'designs'"),
     # ------------------------------------------------------------------ [uncertainty]
     ("mean_negative", S("uncertainty", "mean = [-1.0, 1.0]"), {}, [],
-     r"uncertainty.mean\[0\] = -1.0 is not allowed: θ scales a bearing stiffness"),
+     r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay positive"),
     ("mean_str", S("uncertainty", "mean = '1,1'"), {}, [],
      r"uncertainty.mean = '1,1' is not allowed: " + ARR),
     ("mean_len", S("uncertainty", "mean = [1.0, 1.0, 1.0]"), {}, [],
