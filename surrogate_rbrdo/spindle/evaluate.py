@@ -92,8 +92,9 @@ class AtSpeedAmplitudeResponse(_PerDesign):
     """Tool-tip orbit amplitude (m) at one operating speed, for designs × θ samples.
 
     The response of a spindle that runs at a rated speed (the paper validates at 24 000 rpm,
-    its Table 7): unlike the peak over the range, it sees the tool-tip *anti-resonance*, which
-    the design can tune to the operating speed (docs/paper-study.md, "rated-speed problem").
+    its Table 7): unlike the peak over the range, it sees the tool-tip *cancellation notch* of
+    the fixed in-phase unbalance planes, which the design can tune to the operating speed
+    (docs/paper-study.md, synthetic "rated-speed problem": not a spindle result).
 
     ``method`` says how the FE model is solved, both exactly: ``"direct"`` (default) solves
     the whole system once per θ (``harmonic.tool_amplitude``); ``"condensed"`` condenses the

@@ -19,7 +19,7 @@ What is modelled
   (``spindle.coupling.coupled_tool_amplitude_theta``): all designs × 1 000 θ in
   milliseconds.
 
-So the only approximation is ``S`` over ``x``; the resonance and the tool-tip anti-resonance
+So the only approximation is ``S`` over ``x``; the resonance and the tool-tip cancellation notch
 of the assembled spindle, and the whole θ dependence, come out of the coupling algebra. A
 Kriging of ``y`` itself over ``(x, θ)`` has to learn them from 200 points and smooths them away
 (docs/surrogates.md, "Substructure surrogate").
