@@ -113,16 +113,17 @@ def strategy_rows(opt: Optimisation, ver: Verification) -> list[dict[str, Any]]:
     return rows
 
 
-def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...]
-             ) -> list[dict[str, Any]]:
-    """``mbr.csv``: marginal benefit ratios between the P_target levels, from the surrogate's
-    compromises (CRN), their FE verification and the ends of each feasible front."""
+def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...],
+             in_loop: str = "surrogate") -> list[dict[str, Any]]:
+    """``mbr.csv``: marginal benefit ratios between the P_target levels, from the compromises
+    of the model in the loop on the CRN sample (``<in_loop>_crn``: ``surrogate_crn`` or
+    ``fe_crn``), their FE verification and the ends of each feasible front."""
     comp = opt.compromises(weights)
     rb = [(pt, lab) for (n, pt), lab in zip(opt.runs, opt.labels, strict=True) if n == "rbrdo"]
     levels_s = [(pt, comp[lab].mean, comp[lab].std) for pt, lab in rb if comp[lab] is not None]
     rows: list[dict[str, Any]] = []
     if len(levels_s) >= 2:
-        rows += [{"source": "surrogate_crn", **r} for r in mbr_table(levels_s)]
+        rows += [{"source": f"{in_loop}_crn", **r} for r in mbr_table(levels_s)]
         idx = {k: i for i, k in enumerate(ver.names)}
         levels_f = [(pt, ver.fe.mean[idx[lab]], ver.fe.std[idx[lab]]) for pt, lab in rb
                     if lab in idx]

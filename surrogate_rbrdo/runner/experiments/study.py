@@ -231,7 +231,7 @@ def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
     if ver.fronts is not None:
         run.write_rows("front_verification.csv", ver.fronts.rows(DESIGN_NAMES))
     run.write_rows("strategy_comparison.csv", tables.strategy_rows(opt, ver))
-    mbr = tables.mbr_rows(opt, ver, w)
+    mbr = tables.mbr_rows(opt, ver, w, sur.in_loop)
     if mbr:
         run.write_rows("mbr.csv", mbr)
     comp = tables.compromise_rows(opt, w)
