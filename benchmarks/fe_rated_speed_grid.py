@@ -3,7 +3,7 @@
 Run:  OMP_NUM_THREADS=1 python benchmarks/fe_rated_speed_grid.py [--n-theta 100] [--n-jobs 2]
 
 The peak over 1000–24 000 rpm has none (``fe_design_lines.py``, ``fe_uncertainty_scenarios.py``):
-μ_y and σ_y fall together. At a fixed speed the design can tune the tool-tip anti-resonance to
+μ_y and σ_y fall together. At a fixed speed the design can tune the tool-tip cancellation notch to
 that speed. This script evaluates the FE amplitude at several candidate rated speeds on a grid
 over the whole design box (5 preloads × 46 spans × 7 diameters = 1610 designs) with common
 stiffness samples (Table 4 CoVs), and prints, per speed, the designs that are non-dominated in

@@ -26,6 +26,8 @@ _EXPORTS = {
     # the problem and the physics
     "Problem": "study.problem", "reference_problem": "study.problem",
     "DESIGN_NAMES": "study.problem", "TABLE4_STD": "study.problem",
+    "credible_problem": "study.problem", "RESIDUAL_STD": "study.problem",
+    "credible_spindle": "spindle.reference", "PeakUnbalanceSpec": "spindle.peak_response",
     "reference_spindle": "spindle.reference", "ResponseSpec": "spindle.evaluate",
     "PeakAmplitudeResponse": "spindle.evaluate", "AtSpeedAmplitudeResponse": "spindle.evaluate",
     "peak_tool_amplitude": "spindle.harmonic", "tool_amplitude": "spindle.harmonic",

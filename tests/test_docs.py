@@ -21,10 +21,11 @@ def _blocks(name: str) -> list[str]:
     return re.findall(r"```python\n(.*?)```", (DOCS / name).read_text(), re.S)
 
 
-@pytest.mark.parametrize("i", range(3), ids=["a_spindle", "b_surrogate", "c_rbrdo"])
+@pytest.mark.parametrize("i", range(4), ids=["a_spindle", "b_surrogate", "c_rbrdo",
+                                             "d_credible"])
 def test_api_scripts_run(i, capsys):
     blocks = _blocks("api.md")
-    assert len(blocks) == 3 and all(len(b.strip().splitlines()) <= 22 for b in blocks)
+    assert len(blocks) == 4 and all(len(b.strip().splitlines()) <= 22 for b in blocks)
     exec(compile(blocks[i], f"docs/api.md[{i}]", "exec", dont_inherit=True), {})
     assert capsys.readouterr().out.strip()
 

@@ -16,7 +16,7 @@ from surrogate_rbrdo.formulations.base import (
     ReliabilityConstraint,
     make_formulation,
 )
-from surrogate_rbrdo.formulations.constraints import DesignConstraint
+from surrogate_rbrdo.formulations.constraints import DesignConstraint, block_constraints
 from surrogate_rbrdo.formulations.deterministic import (
     RESONANCE_GUARDS,
     DeterministicConstraints,
@@ -49,5 +49,6 @@ __all__ = [
     "RBRDOFormulation",
     "RDOFormulation",
     "ReliabilityConstraint",
+    "block_constraints",
     "make_formulation",
 ]

@@ -161,6 +161,59 @@ class DesignConstraint:
         return g / self.scale
 
 
+class _Block:
+    """``func(X (P, d)) -> (P, k)`` evaluated once per distinct design row and kept (the
+    columns of one block share the evaluation; an expensive check, e.g. exact critical
+    speeds, is never repeated for a design already seen)."""
+
+    def __init__(self, func: Callable[[np.ndarray], np.ndarray], k: int) -> None:
+        self.func, self.k = func, k
+        self._cache: dict[bytes, np.ndarray] = {}
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        x = np.ascontiguousarray(x, dtype=float)
+        keys = [row.tobytes() for row in x]
+        todo: dict[bytes, int] = {}
+        for i, key in enumerate(keys):
+            if key not in self._cache and key not in todo:
+                todo[key] = i
+        if todo:
+            rows = list(todo.values())
+            g = np.asarray(self.func(x[rows]), dtype=float).reshape(len(rows), self.k)
+            self._cache.update(zip(todo, g, strict=True))
+        return np.array([self._cache[key] for key in keys]).reshape(len(keys), self.k)
+
+
+@dataclass(frozen=True, eq=False)
+class _Column:
+    block: _Block
+    j: int
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return self.block(x)[:, self.j]
+
+
+def block_constraints(names: Sequence[str], func: Callable[[np.ndarray], np.ndarray], *,
+                      scale: float = 1.0) -> tuple[DesignConstraint, ...]:
+    """One :class:`DesignConstraint` per column of a vectorised ``func(x (P, d)) -> (P, k)``
+    (``names`` in column order); the columns share one evaluation per distinct design.
+
+    >>> calls = []
+    >>> def g(x):
+    ...     calls.append(len(x))
+    ...     return np.column_stack([x[:, 0] - 1.0, x[:, 1] - 2.0])
+    >>> a, b = block_constraints(("a", "b"), g)
+    >>> x = np.array([[0.0, 3.0], [2.0, 0.0]])
+    >>> a(x).tolist(), b(x).tolist(), a(x[::-1]).tolist(), calls
+    ([-1.0, 1.0], [1.0, -2.0], [1.0, -1.0], [2])
+    """
+    names = tuple(names)
+    if not names:
+        raise ValueError("names = () is not allowed: give one name per column")
+    block = _Block(func, len(names))
+    return tuple(DesignConstraint(n, _Column(block, j), scale) for j, n in enumerate(names))
+
+
 def constraint_matrix(constraints: Sequence[DesignConstraint], x: np.ndarray) -> np.ndarray:
     """``(P, n)`` values of ``constraints`` at the designs ``x`` (``(P, 0)`` for none)."""
     if not constraints:
@@ -168,4 +221,4 @@ def constraint_matrix(constraints: Sequence[DesignConstraint], x: np.ndarray) ->
     return np.column_stack([c(x) for c in constraints])
 
 
-__all__ = ["CONSTANTS", "FUNCTIONS", "DesignConstraint", "constraint_matrix"]
+__all__ = ["CONSTANTS", "FUNCTIONS", "DesignConstraint", "block_constraints", "constraint_matrix"]

@@ -239,3 +239,7 @@ def run_slsqp(formulation, lower, upper, *, rng: np.random.Generator,
     ev = formulation.evaluate(X)
     return evaluator.result(archive, X, ev.F, ev.G, wall,
                             {"name": "slsqp", **asdict(options), "starts": runs})
+
+
+#: read by the study's options: SLSQP minimises a single objective only
+run_slsqp.single_objective = True

@@ -45,9 +45,27 @@ def front_rows(opt: Optimisation) -> list[dict[str, Any]]:
     return rows
 
 
-def verification_rows(ver: Verification) -> list[dict[str, Any]]:
+def critical_columns(crit_rpm: np.ndarray, speed_range_rpm: tuple[float, float]
+                     ) -> dict[str, Any]:
+    """The FE Campbell check of one design: its first damped critical speed (rpm, NaN if none
+    up to 1.5 × the top speed), how many lie inside the operating range, and the first one's
+    margin above the top speed (``n_1/n_max − 1``).
+
+    >>> critical_columns(np.array([21780.0]), (1000.0, 24000.0))["criticals_in_range_fe"]
+    1
+    """
+    lo, hi = speed_range_rpm
+    first = float(crit_rpm[0]) if crit_rpm.size else float("nan")
+    return {"first_critical_rpm_fe": first,
+            "criticals_in_range_fe": int(np.sum((crit_rpm >= lo) & (crit_rpm <= hi))),
+            "first_critical_margin_fe": first / hi - 1.0}
+
+
+def verification_rows(ver: Verification, speed_range_rpm: tuple[float, float] = (0.0, np.inf)
+                      ) -> list[dict[str, Any]]:
     """``verification.csv``: every chosen design on the CRN sample, the surrogate and the FE
-    model on the fresh sample, the FE P_f interval and the deterministic constraints."""
+    model on the fresh sample, the FE P_f interval, the deterministic constraints and the FE
+    Campbell check (critical speeds against ``speed_range_rpm``)."""
     crn, fe = ver.crn, ver.fe
     nan = np.full(len(ver.names), np.nan)
     sv = ver.surrogate
@@ -69,6 +87,8 @@ def verification_rows(ver: Verification) -> list[dict[str, Any]]:
                "n_theta_fe": ver.n_theta}
         if ver.pf_is is not None:
             row["pf_pct_fe_is"] = float(ver.pf_is[i] * 100)
+        if ver.critical_rpm:
+            row.update(critical_columns(ver.critical_rpm[i], speed_range_rpm))
         row.update({f"g_{n}": float(v) for n, v in zip(ver.det_names, ver.G_det[i],
                                                           strict=True)})
         rows.append(row)
@@ -113,16 +133,17 @@ def strategy_rows(opt: Optimisation, ver: Verification) -> list[dict[str, Any]]:
     return rows
 
 
-def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...]
-             ) -> list[dict[str, Any]]:
-    """``mbr.csv``: marginal benefit ratios between the P_target levels, from the surrogate's
-    compromises (CRN), their FE verification and the ends of each feasible front."""
+def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...],
+             in_loop: str = "surrogate") -> list[dict[str, Any]]:
+    """``mbr.csv``: marginal benefit ratios between the P_target levels, from the compromises
+    of the model in the loop on the CRN sample (``<in_loop>_crn``: ``surrogate_crn`` or
+    ``fe_crn``), their FE verification and the ends of each feasible front."""
     comp = opt.compromises(weights)
     rb = [(pt, lab) for (n, pt), lab in zip(opt.runs, opt.labels, strict=True) if n == "rbrdo"]
     levels_s = [(pt, comp[lab].mean, comp[lab].std) for pt, lab in rb if comp[lab] is not None]
     rows: list[dict[str, Any]] = []
     if len(levels_s) >= 2:
-        rows += [{"source": "surrogate_crn", **r} for r in mbr_table(levels_s)]
+        rows += [{"source": f"{in_loop}_crn", **r} for r in mbr_table(levels_s)]
         idx = {k: i for i, k in enumerate(ver.names)}
         levels_f = [(pt, ver.fe.mean[idx[lab]], ver.fe.std[idx[lab]]) for pt, lab in rb
                     if lab in idx]
@@ -233,12 +254,16 @@ def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt:
     stages = {"optimization": merge_calls(opt.calls, {k: v for k, v in ref.calls.items()
                                                       if k != "fe"}),
               "refine": {"fe": ref.calls.get("fe", 0)}, "verification": ver.calls}
-    fe = {"doe": trained.fe_calls, "design_model": design_model.validation["n_fe_calls"],
+    fe = {"doe": trained.fe_calls,
+          "design_model": 0 if design_model is None else design_model.validation["n_fe_calls"],
           **{k: int(c.get("fe", 0)) for k, c in stages.items()}}
     sc = {k: int(c.get("surrogate", 0)) for k, c in stages.items() if k != "refine"}
     dm = {k: int(c.get("design_model", 0)) for k, c in stages.items() if k != "refine"}
     runs = final_opt.by_label()
     return {"model_in_loop": trained.in_loop, "response": problem.response.label,
+            "design_box": problem.design_bounds.tolist(),
+            "theta_names": list(problem.theta_names),
+            "design_constraints": [c.name for c in problem.constraints],
             "fe_calls": {**fe, "total": sum(fe.values())},
             "fe_cache_hits": {"doe": trained.fe_cache_hits},
             "surrogate_calls": {**sc, "total": sum(sc.values())},
@@ -251,6 +276,7 @@ def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt:
             else {}}
 
 
-__all__ = ["compromise_rows", "front_figures", "front_rows", "mbr_rows", "refine_rows",
-           "spindle_figures", "spotlight", "strategy_rows", "study_meta", "verification_fe",
+__all__ = ["compromise_rows", "critical_columns", "front_figures", "front_rows", "mbr_rows",
+           "refine_rows", "spindle_figures", "spotlight", "strategy_rows", "study_meta",
+           "verification_fe",
            "verification_rows"]

@@ -26,10 +26,18 @@ from surrogate_rbrdo.runner.runfolder import check_name
 from surrogate_rbrdo.runner.schema import load_toml
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.effects import effect_from_dict
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry
-from surrogate_rbrdo.spindle.reference import ReferenceSpindle, reference_spindle
-from surrogate_rbrdo.study.problem import TABLE4_STD
-from surrogate_rbrdo.uncertainty import MultivariateNormal
+from surrogate_rbrdo.spindle.practice import PracticeSpec
+from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
+from surrogate_rbrdo.study.constraints import spindle_constraints
+from surrogate_rbrdo.study.problem import (
+    RESIDUAL_STD,
+    TABLE4_STD,
+    UnbalanceOptions,
+    peak_unbalance_inputs,
+)
+from surrogate_rbrdo.uncertainty import stiffness_factors
 
 
 @dataclass(frozen=True)
@@ -63,8 +71,10 @@ class DesignMapTable:
 
 @dataclass(frozen=True)
 class SpindleTable:
-    """``[spindle]``: ``geometry`` (``"reference"`` or a TOML/JSON file, relative to the
-    config), ``balance_grade_mm_s`` (reference geometry only), ``effects`` (replace the
+    """``[spindle]``: ``geometry`` (``"credible"``: the reference problem's spindle,
+    ``"reference"``: the paper-box spindle of the synthetic benchmarks, or a TOML/JSON file,
+    relative to the config), ``balance_grade_mm_s`` (the fixed in-phase unbalance of the
+    built-in geometries), ``effects`` (replace the
     default physical effects: ``[{name = ..., <params>}]``), ``design_map``, ``baseline``
     (``[F N, L mm, D mm]``), ``theta_bearings`` (the bearings θ scales)."""
 
@@ -105,14 +115,14 @@ def _geometry_file(path: Path) -> SpindleGeometry:
 
 def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpindle:
     """The spindle of a ``[spindle]`` table (every field checked, errors name it)."""
-    if t.geometry == "reference":
+    if t.geometry in ("reference", "credible"):
         grade = 2.5 if t.balance_grade_mm_s is None else t.balance_grade_mm_s
-        sp = reference_spindle(balance_grade_mm_s=check_positive(
-            "spindle.balance_grade_mm_s", grade))
+        factory = reference_spindle if t.geometry == "reference" else credible_spindle
+        sp = factory(balance_grade_mm_s=check_positive("spindle.balance_grade_mm_s", grade))
     else:
         if t.balance_grade_mm_s is not None:
-            raise ValueError("spindle.balance_grade_mm_s applies only to geometry = 'reference'; "
-                             "give the unbalances in the geometry file")
+            raise ValueError("spindle.balance_grade_mm_s applies only to geometry = 'reference' "
+                             "or 'credible'; give the unbalances in the geometry file")
         p = Path(t.geometry)
         geometry = _geometry_file(p if p.is_absolute() else Path(base_dir) / p)
         sp = ReferenceSpindle(geometry, (), DesignMap(), np.array(DesignMap().lower))
@@ -154,35 +164,63 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
 
 @dataclass(frozen=True)
 class UncertaintyTable:
-    """``[uncertainty]``: θ ~ MVN(``mean``, ``std``, ``corr``), one entry per θ bearing
-    (defaults: mean 1, the Table 4 CoVs)."""
+    """``[uncertainty]``: θ. The stiffness block, one factor per θ bearing: ``distribution``
+    (``"normal"`` or ``"lognormal"``: positive support, ``uncertainty.stiffness_factors``),
+    ``mean`` (default 1), ``std`` (default: the scatter around the speed trend, 1.5 % / 3.3 %,
+    with ``response.kind = "peak_unbalance"``; the paper's pooled Table 4 CoVs otherwise, the
+    synthetic benchmarks), ``corr``. With ``kind = "peak_unbalance"`` θ continues with the
+    thermal preload state (``thermal_max > 0``: τ ~ U(0, thermal_max), the preload bearing at
+    F(1 + τ)) and the unbalance columns of ``[uncertainty.unbalance]`` (``UnbalanceOptions``).
+    (Identification phase 2 replaces the stiffness block by an identified model; the
+    unbalance block stays ISO's.)"""
 
+    distribution: str = "normal"
     mean: tuple[float, ...] | None = None
     std: tuple[float, ...] | None = None
     corr: tuple[tuple[float, ...], ...] | None = None
+    thermal_max: float = 0.0
+    unbalance: UnbalanceOptions | None = None
 
 
-def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...]) -> MultivariateNormal:
-    """θ of a ``[uncertainty]`` table. θ are stiffness factors: every component must stay
-    positive (mean > 8 std, so P(θ ≤ 0) < 1e-15)."""
+def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...], *,
+                 default_std: tuple[float, ...] = TABLE4_STD) -> Any:
+    """The stiffness block of a ``[uncertainty]`` table: one positive factor per θ bearing
+    (``uncertainty.stiffness_factors``)."""
     m = len(theta_bearings)
-    mean = np.asarray([1.0] * m if t.mean is None else t.mean, dtype=float)
-    std = np.asarray(TABLE4_STD[:m] if t.std is None else t.std, dtype=float)
+    mean = [1.0] * m if t.mean is None else list(t.mean)
+    std = list(default_std[:m]) if t.std is None else list(t.std)
     for name, v in (("mean", mean), ("std", std)):
-        if v.shape != (m,):
-            raise ValueError(f"uncertainty.{name} = {v.tolist()} is not allowed: need {m} "
-                             f"values, one per θ bearing {list(theta_bearings)}")
-    for i in range(m):
-        check_positive(f"uncertainty.std[{i}]", float(std[i]))
-        if not mean[i] > 8.0 * std[i]:
-            raise ValueError(f"uncertainty.mean[{i}] = {mean[i]} is not allowed: θ scales a "
-                             f"bearing stiffness and must stay positive: need mean > 8 std = "
-                             f"{8.0 * std[i]:g}")
-    corr = None if t.corr is None else np.asarray(t.corr, dtype=float)
+        if len(v) != m:
+            raise ValueError(f"uncertainty.{name} = {v} is not allowed: need {m} values, one "
+                             f"per θ bearing {list(theta_bearings)}")
     try:
-        return MultivariateNormal(mean, std=std, corr=corr)
+        return stiffness_factors(mean, std, None if t.corr is None else np.asarray(t.corr),
+                                 distribution=t.distribution)
     except ValueError as exc:
-        raise ValueError(f"uncertainty.corr: {exc}") from None
+        raise ValueError(f"uncertainty.{exc}") from None
+
+
+def build_theta(t: UncertaintyTable, spindle: ReferenceSpindle, response: ResponseSpec
+                ) -> tuple[Any, ResponseSpec]:
+    """θ of a ``[uncertainty]`` table for ``response``, and the response (for
+    ``kind = "peak_unbalance"`` the ``PeakUnbalanceSpec`` carrying θ's columns)."""
+    if response.kind != "peak_unbalance":
+        for key, given in (("unbalance", t.unbalance is not None),
+                           ("thermal_max", t.thermal_max != 0.0)):
+            if given:
+                raise ValueError(f"uncertainty.{key} is not allowed with response.kind = "
+                                 f"{response.kind!r}: θ is the stiffness factors (the geometry's "
+                                 "unbalance is fixed); use kind = 'peak_unbalance'")
+        return build_inputs(t, spindle.theta_bearings), response
+    block = build_inputs(t, spindle.theta_bearings, default_std=RESIDUAL_STD)
+    try:
+        return peak_unbalance_inputs(spindle, block, thermal_max=t.thermal_max,
+                                     unbalance=t.unbalance)
+    except ValueError as exc:
+        key = str(exc).split(" ", 1)[0]
+        where = {"thermal_max": "uncertainty.", "magnitude": "uncertainty.unbalance.",
+                 "relative_phase": "uncertainty.unbalance."}.get(key)
+        raise ValueError(f"{where}{exc}" if where else f"uncertainty.unbalance: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -200,31 +238,50 @@ class LimitTable:
 
 @dataclass(frozen=True)
 class DeterministicTable:
-    """``[deterministic]``: the g_det constraints (``DeterministicOptions``, speeds in rpm;
-    ``omega_max_rpm`` defaults to the spindle's top speed)."""
+    """``[deterministic]``: the deterministic constraints. ``stress`` (σ_VM/σ_yield ≤ 1,
+    design model), ``resonance``: ``"paper"`` (f_n1 ≥ ``factor`` · ``omega_max_rpm``/60,
+    design model), ``"separation"`` (API 617 / API RP 684: every critical speed with AF ≥ 2.5
+    outside the operating range by the API margins, from the exact forward critical speeds of
+    each design up to ``search_factor`` × the top speed) or ``"none"``; ``practice``: the
+    checks a spindle designer imposes (``spindle.practice``: bearing speed capability, ISO 281
+    life, ISO 76 static safety, motor length against span, run-up time), with
+    ``[deterministic.practice_spec]`` (``PracticeSpec`` fields) replacing their data."""
 
     stress: bool = True
     yield_strength_pa: float = 930e6
     resonance: str = "paper"
     factor: float = 1.2
     omega_max_rpm: float | None = None
-    operating_speeds_rpm: tuple[float, ...] = ()
-    margin: float = 0.15
+    search_factor: float = 1.5
+    practice: bool = False
+    practice_spec: PracticeSpec | None = None
 
     def options(self, speed_max_rpm: float) -> DeterministicOptions:
+        """The g_det of the design model (the separation guard is a design constraint)."""
         if self.omega_max_rpm is not None:
             check_positive("deterministic.omega_max_rpm", self.omega_max_rpm)
-        for i, s in enumerate(self.operating_speeds_rpm):
-            check_positive(f"deterministic.operating_speeds_rpm[{i}]", s)
         top = speed_max_rpm if self.omega_max_rpm is None else self.omega_max_rpm
         try:
             return DeterministicOptions(
                 stress=self.stress, yield_strength_pa=self.yield_strength_pa,
-                resonance=self.resonance, factor=self.factor, omega_max=top * RPM,
-                operating_speeds=tuple(float(s) * RPM for s in self.operating_speeds_rpm),
-                margin=self.margin)
+                resonance="none" if self.resonance == "separation" else self.resonance,
+                factor=self.factor, omega_max=top * RPM)
         except ValueError as exc:
             raise ValueError(f"deterministic.{exc}") from None
+
+    def constraints(self, spindle: ReferenceSpindle) -> tuple[Any, ...]:
+        """The practice checks and the exact separation guard, as design constraints."""
+        if self.practice_spec is not None and not self.practice:
+            raise ValueError("deterministic.practice_spec is not allowed with practice = false: "
+                             "set practice = true")
+        spec = self.practice_spec or PracticeSpec(speed_max_rpm=spindle.geometry.speed_max_rpm)
+        try:
+            return spindle_constraints(spindle, practice=spec if self.practice else None,
+                                       resonance="none" if self.resonance != "separation"
+                                       else "separation", search_factor=self.search_factor)
+        except ValueError as exc:
+            raise ValueError(f"deterministic.{str(exc).replace('practice:', 'practice_spec:')}"
+                             ) from None
 
 
 def available_memory() -> int:
@@ -261,4 +318,4 @@ def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str |
 
 __all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",
            "SpindleTable", "UncertaintyTable", "available_memory", "build_inputs",
-           "build_spindle", "require_disk", "require_memory"]
+           "build_spindle", "build_theta", "require_disk", "require_memory"]

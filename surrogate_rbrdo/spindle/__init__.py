@@ -28,7 +28,11 @@ from surrogate_rbrdo.spindle.peak_coupling import (
     peak_tool_amplitude_coupled,
     peak_tool_amplitude_unbalance,
 )
-from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse, ThetaSpec
+from surrogate_rbrdo.spindle.peak_response import (
+    PeakUnbalanceResponse,
+    PeakUnbalanceSpec,
+    ThetaSpec,
+)
 from surrogate_rbrdo.spindle.practice import PracticeConstraints, PracticeSpec
 from surrogate_rbrdo.spindle.reference import (
     ReferenceSpindle,
@@ -45,6 +49,7 @@ __all__ = [
     "PeakOptions",
     "PeakResult",
     "PeakUnbalanceResponse",
+    "PeakUnbalanceSpec",
     "PracticeConstraints",
     "PracticeSpec",
     "ReferenceSpindle",

@@ -92,8 +92,9 @@ class AtSpeedAmplitudeResponse(_PerDesign):
     """Tool-tip orbit amplitude (m) at one operating speed, for designs × θ samples.
 
     The response of a spindle that runs at a rated speed (the paper validates at 24 000 rpm,
-    its Table 7): unlike the peak over the range, it sees the tool-tip *anti-resonance*, which
-    the design can tune to the operating speed (docs/paper-study.md, "rated-speed problem").
+    its Table 7): unlike the peak over the range, it sees the tool-tip *cancellation notch* of
+    the fixed in-phase unbalance planes, which the design can tune to the operating speed
+    (docs/paper-study.md, synthetic "rated-speed problem": not a spindle result).
 
     ``method`` says how the FE model is solved, both exactly: ``"direct"`` (default) solves
     the whole system once per θ (``harmonic.tool_amplitude``); ``"condensed"`` condenses the
@@ -140,7 +141,7 @@ class PointwiseAtSpeed:
         return AtSpeedAmplitudeResponse(self.spindle, self.speed_rpm).point(z)
 
 
-RESPONSE_KINDS = ("peak", "at_speed")
+RESPONSE_KINDS = ("peak", "at_speed", "peak_unbalance")
 
 
 @dataclass(frozen=True)
@@ -148,7 +149,12 @@ class ResponseSpec:
     """Which tool-tip amplitude ``y`` is: the config's ``[response]`` table.
 
     ``kind = "peak"`` (default, the paper's definition): the peak over the speed range of the
-    geometry. ``kind = "at_speed"``: the amplitude at ``speed_rpm`` (the rated speed).
+    geometry, under the geometry's fixed unbalance; θ = the bearing stiffness factors.
+    ``kind = "at_speed"``: the amplitude at ``speed_rpm`` (the rated speed), same θ.
+    ``kind = "peak_unbalance"``: the peak over the speed range under a random residual
+    unbalance (ISO 21940-11 magnitude and random phase per plane), whose columns join θ:
+    :class:`~surrogate_rbrdo.spindle.peak_response.PeakUnbalanceSpec` carries them (the
+    runner builds it from ``[uncertainty]``).
 
     >>> ResponseSpec("at_speed", 24000.0).label
     'amplitude at 24000 rpm'
@@ -164,9 +170,9 @@ class ResponseSpec:
 
     def __post_init__(self) -> None:
         check_choice("response.kind", self.kind, RESPONSE_KINDS)
-        if self.kind == "peak" and self.speed_rpm is not None:
+        if self.kind != "at_speed" and self.speed_rpm is not None:
             raise ValueError(f"response.speed_rpm = {self.speed_rpm!r} is not allowed with kind "
-                             "= 'peak' (the peak is over the geometry's speed range)")
+                             f"= {self.kind!r} (the peak is over the geometry's speed range)")
         if self.kind == "at_speed":
             try:
                 object.__setattr__(self, "speed_rpm",
@@ -176,12 +182,26 @@ class ResponseSpec:
 
     @property
     def label(self) -> str:
+        if self.kind == "peak_unbalance":
+            return "peak amplitude, random unbalance"
         return ("peak amplitude" if self.kind == "peak"
                 else f"amplitude at {self.speed_rpm:.0f} rpm")
+
+    def theta_names(self, spindle: ReferenceSpindle) -> tuple[str, ...]:
+        """The columns of θ (here the stiffness factors of the θ bearings)."""
+        self._check_kind()
+        return tuple(f"k_{b}" for b in spindle.theta_bearings)
+
+    def _check_kind(self) -> None:
+        if self.kind == "peak_unbalance":
+            raise ValueError("response.kind = 'peak_unbalance' needs its θ columns and "
+                             "unbalance tolerances: use spindle.peak_response.PeakUnbalanceSpec "
+                             "(the runner builds it from [uncertainty])")
 
     def fe_response(self, spindle: ReferenceSpindle, method: str = "direct"):
         """The full-FE ``Response`` (designs × θ → metres); ``method`` as
         :class:`AtSpeedAmplitudeResponse` (the peak response has only ``"direct"``)."""
+        self._check_kind()
         check_choice("method", method, FE_METHODS)
         if self.kind == "peak":
             if method != "direct":
@@ -192,6 +212,7 @@ class ResponseSpec:
 
     def pointwise(self, spindle: ReferenceSpindle):
         """The one-point FE function ``f([x, θ]) -> y`` used for DOE sampling."""
+        self._check_kind()
         if self.kind == "peak":
             return PointwisePeak(spindle)
         return PointwiseAtSpeed(spindle, self.speed_rpm)

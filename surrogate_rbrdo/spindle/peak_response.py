@@ -39,6 +39,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.spindle.coupling import theta_grid
+from surrogate_rbrdo.spindle.evaluate import FE_METHODS, ResponseSpec
 from surrogate_rbrdo.spindle.geometry import PreloadLaw
 from surrogate_rbrdo.spindle.peak_coupling import (
     CoupledPeakOptions,
@@ -226,4 +227,59 @@ class PeakUnbalanceResponse:
         return float(self(z[None, :d], z[None, d:])[0, 0])
 
 
-__all__ = ["MAGNITUDE_LAWS", "PEAK_METHODS", "PeakUnbalanceResponse", "ThetaSpec"]
+@dataclass(frozen=True)
+class PointwisePeakUnbalance:
+    """``f(z) -> y`` for one joint point ``z = [x, θ]`` (metres), for DOE sampling in worker
+    processes."""
+
+    response: PeakUnbalanceResponse
+
+    def __call__(self, z: np.ndarray) -> float:
+        return self.response.point(z)
+
+
+@dataclass(frozen=True)
+class PeakUnbalanceSpec(ResponseSpec):
+    """``[response] kind = "peak_unbalance"`` with its θ columns and unbalance tolerances.
+
+    The study's response object for the random-unbalance peak (the runner builds it from
+    ``[uncertainty]``): ``fe_response(spindle, "direct")`` is the FE model's peak search per
+    sample, ``"condensed"`` the exact coupling of :mod:`~surrogate_rbrdo.spindle.
+    peak_coupling` (condensation + θ polynomials, ≤ 3e-5 from the FE peak search).
+
+    >>> from surrogate_rbrdo.spindle.reference import credible_spindle
+    >>> spec = PeakUnbalanceSpec()
+    >>> spec.label, spec.theta_names(credible_spindle())[2:]
+    ('peak amplitude, random unbalance', ('u_frac[0]', 'u_frac[1]', 'phase_deg[1]'))
+    """
+
+    kind: str = "peak_unbalance"
+    theta_spec: ThetaSpec = field(default_factory=ThetaSpec)
+    tolerances: UnbalanceTolerances = REFERENCE_TOLERANCES
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.kind != "peak_unbalance":
+            raise ValueError(f"kind = {self.kind!r} is not allowed: PeakUnbalanceSpec is "
+                             "kind = 'peak_unbalance'")
+        if self.theta_spec.n_planes != len(self.tolerances.planes):
+            raise ValueError(f"theta_spec.n_planes = {self.theta_spec.n_planes} is not allowed:"
+                             f" the tolerances give {len(self.tolerances.planes)} planes")
+
+    def theta_names(self, spindle: ReferenceSpindle) -> tuple[str, ...]:
+        return self.theta_spec.names
+
+    def _response(self, spindle: ReferenceSpindle, method: str) -> PeakUnbalanceResponse:
+        check_choice("method", method, FE_METHODS)
+        return PeakUnbalanceResponse(spindle, self.theta_spec, self.tolerances,
+                                     method="coupled" if method == "condensed" else "direct")
+
+    def fe_response(self, spindle: ReferenceSpindle, method: str = "direct"):
+        return self._response(spindle, method)
+
+    def pointwise(self, spindle: ReferenceSpindle):
+        return PointwisePeakUnbalance(self._response(spindle, "direct"))
+
+
+__all__ = ["MAGNITUDE_LAWS", "PEAK_METHODS", "PeakUnbalanceResponse", "PeakUnbalanceSpec",
+           "PointwisePeakUnbalance", "ThetaSpec"]

@@ -61,64 +61,79 @@ class CriticalSpeeds:
         return 1.0 / (2.0 * self.damping_ratio)
 
 
-def _plane_matrices(model: SpindleModel, omega: float, theta):
-    """``K_t``, ``M − G T`` and ``C`` on the x–slope plane at speed ``omega`` (rad/s)."""
-    if any(s is not None for s in model.supports):
-        raise ValueError("forward_critical_speeds: a housing stage is not handled here; use "
-                         "modal.critical_speeds")
-    Kb, Cb = model.bearing_coefficients(np.array([[omega]]), model.check_theta(theta)[:1])
-    Kb, Cb = Kb[0, 0], Cb[0, 0]                                     # (nb, 2, 2)
-    iso = np.allclose(Kb[:, 0, 0], Kb[:, 1, 1], rtol=1e-12) and np.allclose(Kb[:, 0, 1], 0.0) \
-        and np.allclose(Kb[:, 1, 0], 0.0)
-    if not iso:
-        raise ValueError("forward_critical_speeds: bearings are not isotropic without "
-                         "cross-coupling; use modal.critical_speeds")
-    n = model.n_dof
-    idx = np.sort(np.concatenate([np.arange(0, n, 4), np.arange(2, n, 4)]))   # x, a
-    T = np.zeros((n, n))                                  # 90° rotation: x → y, a → b
-    T[np.arange(1, n, 4), np.arange(0, n, 4)] = T[np.arange(3, n, 4), np.arange(2, n, 4)] = 1
-    T[np.arange(0, n, 4), np.arange(1, n, 4)] = T[np.arange(2, n, 4), np.arange(3, n, 4)] = -1
-    Mf = model.M - model.gyro_scale * model.G @ T
-    K = model.K.copy()
-    C = model.alpha * model.M + model.beta * model.K
-    for j, node in enumerate(model.bearing_nodes):
-        K[4 * node, 4 * node] += Kb[j, 0, 0]
-        C[4 * node, 4 * node] += Cb[j, 0, 0]
-    ix = np.ix_(idx, idx)
-    return K[ix], Mf[ix], C[ix]
+class _Plane:
+    """``K_t``, ``M − G T`` and ``C`` on the x–slope plane of one model and θ: the speed-free
+    parts built once, the bearings added per speed."""
 
+    def __init__(self, model: SpindleModel, theta) -> None:
+        if any(s is not None for s in model.supports):
+            raise ValueError("forward_critical_speeds: a housing stage is not handled here; "
+                             "use modal.critical_speeds")
+        self.model, self.theta = model, model.check_theta(theta)[:1]
+        n = model.n_dof
+        idx = np.sort(np.concatenate([np.arange(0, n, 4), np.arange(2, n, 4)]))   # x, a
+        T = np.zeros((n, n))                              # 90° rotation: x → y, a → b
+        T[np.arange(1, n, 4), np.arange(0, n, 4)] = T[np.arange(3, n, 4),
+                                                      np.arange(2, n, 4)] = 1
+        T[np.arange(0, n, 4), np.arange(1, n, 4)] = T[np.arange(2, n, 4),
+                                                      np.arange(3, n, 4)] = -1
+        ix = np.ix_(idx, idx)
+        self.M = (model.M - model.gyro_scale * model.G @ T)[ix]
+        self.K0 = model.K[ix]
+        self.C0 = (model.alpha * model.M + model.beta * model.K)[ix]
+        # the x DOF of node i is row 2i of the plane
+        self.rows = np.array([2 * node for node in model.bearing_nodes])
 
-def _omega_k(model, n_rpm: float, k: int, theta) -> tuple[float, np.ndarray]:
-    """k-th synchronous forward frequency (rpm) at speed ``n_rpm`` and its mode.
+    def at(self, omega: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``K_t``, ``M − G T``, ``C`` at speed ``omega`` (rad/s)."""
+        Kb, Cb = self.model.bearing_coefficients(np.array([[omega]]), self.theta)
+        Kb, Cb = Kb[0, 0], Cb[0, 0]                                     # (nb, 2, 2)
+        iso = np.allclose(Kb[:, 0, 0], Kb[:, 1, 1], rtol=1e-12) and np.allclose(
+            Kb[:, 0, 1], 0.0) and np.allclose(Kb[:, 1, 0], 0.0)
+        if not iso:
+            raise ValueError("forward_critical_speeds: bearings are not isotropic without "
+                             "cross-coupling; use modal.critical_speeds")
+        K, C = self.K0.copy(), self.C0.copy()
+        np.add.at(K, (self.rows, self.rows), Kb[:, 0, 0])
+        np.add.at(C, (self.rows, self.rows), Cb[:, 0, 0])
+        return K, self.M, C
 
-    ``M − G T`` is indefinite (a shaft's polar inertia is twice its diametral one), ``K_t``
-    positive definite: solve ``(M − G T) u = μ K_t u``; each ``μ > 0`` is ``1/ω²``, largest
-    first; ``μ ≤ 0`` never meets the synchronous line (``inf``).
-    """
-    K, M, _ = _plane_matrices(model, n_rpm * RPM, theta)
-    m = K.shape[0]
-    mu, v = sla.eigh(M, K, subset_by_index=[m - 1 - k, m - 1 - k])
-    if mu[0] <= 0:
-        return np.inf, v[:, 0]
-    return float(1.0 / np.sqrt(mu[0]) / RPM), v[:, 0]
+    def omega_k(self, n_rpm: float, k: int) -> tuple[float, np.ndarray]:
+        """k-th synchronous forward frequency (rpm) at speed ``n_rpm`` and its mode.
+
+        ``M − G T`` is indefinite (a shaft's polar inertia is twice its diametral one),
+        ``K_t`` positive definite: solve ``(M − G T) u = μ K_t u``; each ``μ > 0`` is
+        ``1/ω²``, largest first; ``μ ≤ 0`` never meets the synchronous line (``inf``).
+        """
+        K, M, _ = self.at(n_rpm * RPM)
+        m = K.shape[0]
+        mu, v = sla.eigh(M, K, subset_by_index=[m - 1 - k, m - 1 - k])
+        if mu[0] <= 0:
+            return np.inf, v[:, 0]
+        return float(1.0 / np.sqrt(mu[0]) / RPM), v[:, 0]
 
 
 def forward_critical_speeds(model: SpindleModel, up_to_rpm: float, theta=None,
                             *, rtol: float = 1e-9) -> CriticalSpeeds:
     """Undamped forward critical speeds (rpm) up to ``up_to_rpm``, with damping ratios."""
     check_positive("up_to_rpm", up_to_rpm)
+    plane = _Plane(model, theta)
     speeds, zetas = [], []
     for k in range(model.n_dof // 2):
-        def h(n: float, k: int = k) -> float:
-            return _omega_k(model, n, k, theta)[0] - n
+        seen: dict[float, float] = {}       # brentq asks for the bracket ends again
+
+        def h(n: float, k: int = k, seen: dict[float, float] = seen) -> float:
+            if n not in seen:
+                seen[n] = plane.omega_k(n, k)[0] - n
+            return seen[n]
         lo, hi = 1e-3 * up_to_rpm, up_to_rpm
         if not h(hi) < 0:                                   # crosses beyond up_to_rpm
             break
         if not h(lo) > 0:                                   # below the search range
             continue
         nc = brentq(h, lo, hi, xtol=1e-6, rtol=rtol)
-        _, u = _omega_k(model, nc, k, theta)
-        K, M, C = _plane_matrices(model, nc * RPM, theta)
+        _, u = plane.omega_k(nc, k)
+        _, M, C = plane.at(nc * RPM)
         zetas.append(float(u @ C @ u / (2.0 * nc * RPM * (u @ M @ u))))
         speeds.append(nc)
     if not all(np.isfinite(speeds)):

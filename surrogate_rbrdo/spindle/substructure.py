@@ -13,7 +13,7 @@ model's response at the retained nodes to round-off: nothing is approximated. Wh
 useful is that ``S`` depends on the design only through the rotor (span, diameter), is free of
 θ, and is *smooth* in the design: its poles are the natural frequencies of the rotor segments
 clamped at the retained nodes (> 1.6 kHz for the reference spindle, far above 400 Hz =
-24 000 rpm), while the resonances and the tool-tip anti-resonance of the assembled spindle
+24 000 rpm), while the resonances and the tool-tip cancellation notch of the assembled spindle
 come from the coupling algebra. A surrogate of ``S``
 over the design (``runner.substructure_surrogate``) therefore keeps the notch and the resonance
 that a Kriging of the amplitude itself smooths away.

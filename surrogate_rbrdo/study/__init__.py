@@ -6,8 +6,16 @@
 (:func:`~surrogate_rbrdo.surrogates.design_model.fit_design_model`).
 """
 
+from surrogate_rbrdo.study.constraints import expression_constraints, spindle_constraints
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
-from surrogate_rbrdo.study.problem import DESIGN_NAMES, TABLE4_STD, Problem, reference_problem
+from surrogate_rbrdo.study.problem import (
+    DESIGN_NAMES,
+    RESIDUAL_STD,
+    TABLE4_STD,
+    Problem,
+    credible_problem,
+    reference_problem,
+)
 from surrogate_rbrdo.study.stages import (
     Optimisation,
     Refinement,
@@ -22,7 +30,8 @@ from surrogate_rbrdo.study.stages import (
 )
 
 __all__ = [
-    "DESIGN_NAMES", "TABLE4_STD", "OptimizationOptions", "Optimisation", "Problem",
-    "Refinement", "Verification", "VerificationOptions", "chosen_designs", "formulation",
-    "merge_calls", "optimise", "reference_problem", "refine", "run_label", "verify",
+    "DESIGN_NAMES", "RESIDUAL_STD", "TABLE4_STD", "OptimizationOptions", "Optimisation",
+    "Problem", "Refinement", "Verification", "VerificationOptions", "chosen_designs",
+    "credible_problem", "expression_constraints", "formulation", "merge_calls", "optimise",
+    "reference_problem", "refine", "run_label", "spindle_constraints", "verify",
 ]

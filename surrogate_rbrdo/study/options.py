@@ -1,13 +1,19 @@
 """Options of the study's optimisation and verification stages (also their TOML tables).
 
 The optimiser is chosen by name from ``optimization.OPTIMIZERS`` (``"nsga2"``, ``"optuna"``,
-any registered one); its options dataclass is the annotation of its ``options`` parameter, and
-``pop_size`` / ``n_gen`` / ``eliminate_duplicates`` (where it has them) plus
-``optimizer_options`` fill it.
+``"slsqp"``, any registered one); its options dataclass is the annotation of its ``options``
+parameter, and ``pop_size`` / ``n_gen`` / ``eliminate_duplicates`` (where it has them) plus
+``optimizer_options`` fill it. ``single_objective_optimizer`` (with
+``single_objective_options``) takes the single-objective runs (``rbdo``, ``deterministic``),
+e.g. SLSQP on the sample-average P_f beside NSGA-II for the fronts.
 
 >>> o = OptimizationOptions(optimizer="optuna", pop_size=10, n_gen=3)
 >>> type(o.optimizer_config()).__name__, o.optimizer_config().pop_size
 ('OptunaOptions', 10)
+>>> o = OptimizationOptions(single_objective_optimizer="slsqp",
+...                         reliability_measure="quantile")
+>>> [type(o.optimizer_config(n)).__name__ for n in ("rbrdo", "rbdo")]
+['NSGA2Options', 'SLSQPOptions']
 >>> OptimizationOptions(weights=(0.5,))
 Traceback (most recent call last):
 ...
@@ -25,7 +31,9 @@ from typing import Any
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 from surrogate_rbrdo.estimators import ESTIMATORS
-from surrogate_rbrdo.formulations import FORMULATIONS
+from surrogate_rbrdo.formulations import FORMULATIONS, PF_BOUNDS, RELIABILITY_MEASURES
+from surrogate_rbrdo.formulations.options import NO_SAMPLING_ERROR
+from surrogate_rbrdo.formulations.reliability import quantile_rank
 from surrogate_rbrdo.optimization import OPTIMIZERS
 
 
@@ -42,6 +50,10 @@ def optimizer_options_class(name: str) -> type:
     raise ValueError(f"optimizer {name!r} has no options dataclass in its signature")
 
 
+def _n_obj(formulation: str) -> int:
+    return len(FORMULATIONS.get(formulation).objective_names)
+
+
 @dataclass(frozen=True)
 class OptimizationOptions:
     """``[optimization]``: the RBRDO levels, the comparison strategies and the optimiser.
@@ -49,7 +61,8 @@ class OptimizationOptions:
     Attributes
     ----------
     p_targets : tuple of float
-        RBRDO runs, one per target probability of failure, in (0, 1).
+        RBRDO runs, one per target probability of failure, in (0, 1) (may be empty when
+        ``strategies`` is not).
     strategies : tuple of str
         Further formulations (``FORMULATIONS``: ``rdo``, ``rbdo``, ``deterministic``) run at
         ``strategy_p_target``.
@@ -60,8 +73,19 @@ class OptimizationOptions:
         Size of the common-random-number θ sample every formulation sees.
     estimator : str
         ``ESTIMATORS`` name (``mc``: the fast path on the CRN sample).
+    estimator_options : mapping
+        Keyword options of the estimator (``get_estimator(estimator, **estimator_options)``).
+    reliability_measure : {"probability", "beta", "quantile"}
+        How each chance constraint is written (``FormulationOptions``): ``P_f/P_target − 1``,
+        ``β_t − β`` or the ``P_target``-quantile of the limit state on the CRN sample.
+    pf_bound : {"estimate", "upper"}
+        Constrain the P_f estimate, or (conservative) the upper end of its 95 % interval.
     optimizer : str
-        ``OPTIMIZERS`` name (``nsga2``, ``optuna``).
+        ``OPTIMIZERS`` name (``nsga2``, ``optuna``, ``slsqp`` for single-objective runs).
+    single_objective_optimizer : str or None
+        Optimiser of the ``rbdo`` and ``deterministic`` runs (default: ``optimizer``).
+    single_objective_options : mapping
+        Further fields of its options dataclass.
     pop_size, n_gen : int
         Population and generations (every optimiser here has them).
     n_jobs : int
@@ -78,7 +102,12 @@ class OptimizationOptions:
     weights: tuple[float, ...] = (0.5, 0.5)
     n_theta: int = 1000
     estimator: str = "mc"
+    estimator_options: Mapping[str, Any] = field(default_factory=dict)
+    reliability_measure: str = "probability"
+    pf_bound: str = "estimate"
     optimizer: str = "nsga2"
+    single_objective_optimizer: str | None = None
+    single_objective_options: Mapping[str, Any] = field(default_factory=dict)
     pop_size: int = 100
     n_gen: int = 200
     n_jobs: int = 2
@@ -88,8 +117,9 @@ class OptimizationOptions:
     def __post_init__(self) -> None:
         for k in ("p_targets", "strategies", "weights"):
             object.__setattr__(self, k, tuple(getattr(self, k)))
-        if not self.p_targets:
-            raise ValueError("p_targets = [] is not allowed: give at least one")
+        if not self.p_targets and not self.strategies:
+            raise ValueError("p_targets = [] is not allowed with strategies = []: give at least "
+                             "one run")
         for i, p in enumerate(self.p_targets):
             check_range(f"p_targets[{i}]", p, 0.0, 1.0, inclusive=False)
         if len(set(self.p_targets)) != len(self.p_targets):
@@ -107,7 +137,13 @@ class OptimizationOptions:
         for i, w in enumerate(self.weights):
             check_positive(f"weights[{i}]", w)
         check_choice("estimator", self.estimator, sorted(ESTIMATORS))
+        object.__setattr__(self, "estimator_options", dict(self.estimator_options))
         check_choice("optimizer", self.optimizer, sorted(OPTIMIZERS))
+        if self.single_objective_optimizer is not None:
+            check_choice("single_objective_optimizer", self.single_objective_optimizer,
+                         sorted(OPTIMIZERS))
+        object.__setattr__(self, "single_objective_options",
+                           dict(self.single_objective_options))
         check_int("n_theta", self.n_theta, minimum=2)
         check_int("pop_size", self.pop_size, minimum=2)
         check_int("n_gen", self.n_gen, minimum=1)
@@ -116,7 +152,43 @@ class OptimizationOptions:
             raise ValueError(f"eliminate_duplicates = {self.eliminate_duplicates!r} is not "
                              "allowed: must be true or false")
         object.__setattr__(self, "optimizer_options", dict(self.optimizer_options))
-        self.optimizer_config()  # every field of the optimiser's options, checked now
+        self._check_reliability()
+        for name, _ in self.runs:   # every field of the optimisers' options, checked now
+            self._check_run(name)
+
+    def _check_reliability(self) -> None:
+        check_choice("reliability_measure", self.reliability_measure, RELIABILITY_MEASURES)
+        check_choice("pf_bound", self.pf_bound, PF_BOUNDS)
+        if self.reliability_measure == "quantile" and self.estimator != "mc":
+            raise ValueError(f"reliability_measure = 'quantile' is not allowed with estimator = "
+                             f"{self.estimator!r}: the quantile of the common sample needs 'mc'")
+        if self.pf_bound == "upper" and self.estimator in NO_SAMPLING_ERROR:
+            raise ValueError(f"pf_bound = 'upper' is not allowed with estimator = "
+                             f"{self.estimator!r}: it has no sampling error to bound")
+        if self.reliability_measure == "quantile":
+            for pt in sorted({p for n, p in self.runs if FORMULATIONS.get(n).reliability}):
+                if quantile_rank(self.n_theta, pt, self.pf_bound, 0.95) < 1:
+                    raise ValueError(f"n_theta = {self.n_theta} is not allowed with "
+                                     f"reliability_measure = 'quantile', pf_bound = "
+                                     f"{self.pf_bound!r} and P_target = {pt}: fewer than one "
+                                     "failure allowed (raise n_theta)")
+
+    def _check_run(self, formulation: str) -> None:
+        opt = self.optimizer_name(formulation)
+        key = "single_objective_optimizer" if self._single(formulation) else "optimizer"
+        if getattr(OPTIMIZERS.get(opt), "single_objective", False):
+            if _n_obj(formulation) > 1:
+                raise ValueError(f"{key} = {opt!r} is not allowed with the {formulation} runs: "
+                                 "it minimises one objective (set single_objective_optimizer "
+                                 f"= {opt!r} for rbdo/deterministic and keep a multi-objective"
+                                 " optimizer)")
+            if FORMULATIONS.get(formulation).reliability and \
+                    self.reliability_measure == "probability" and self.estimator == "mc":
+                raise ValueError(f"{key} = {opt!r} is not allowed with reliability_measure = "
+                                 "'probability' and estimator = 'mc': the sample P_f is a "
+                                 "staircase in x (zero gradient); use reliability_measure = "
+                                 "'quantile' (or 'beta' with estimator = 'form')")
+        self.optimizer_config(formulation)
 
     @property
     def runs(self) -> tuple[tuple[str, float], ...]:
@@ -124,32 +196,47 @@ class OptimizationOptions:
         return (tuple(("rbrdo", p) for p in self.p_targets)
                 + tuple((s, self.strategy_p_target) for s in self.strategies))
 
-    def optimizer_config(self) -> Any:
-        """The optimiser's options dataclass, filled from these options."""
-        cls = optimizer_options_class(self.optimizer)
+    def _single(self, formulation: str) -> bool:
+        """Whether ``single_objective_optimizer`` takes ``formulation``'s runs."""
+        return self.single_objective_optimizer is not None and _n_obj(formulation) == 1
+
+    def optimizer_name(self, formulation: str = "rbrdo") -> str:
+        """The optimiser of the runs of ``formulation``."""
+        if self._single(formulation):
+            return self.single_objective_optimizer
+        return self.optimizer
+
+    def optimizer_config(self, formulation: str = "rbrdo") -> Any:
+        """The options dataclass of the optimiser of ``formulation``'s runs, filled from
+        these options."""
+        name = self.optimizer_name(formulation)
+        single = self._single(formulation)
+        where = "single_objective_options" if single else "optimizer_options"
+        extra = self.single_objective_options if single else self.optimizer_options
+        cls = optimizer_options_class(name)
         names = {f.name for f in dataclasses.fields(cls)}
         common = {"pop_size": self.pop_size, "n_gen": self.n_gen,
                   "eliminate_duplicates": self.eliminate_duplicates}
         kw = {k: v for k, v in common.items() if k in names}
-        unknown = sorted(set(self.optimizer_options) - names)
+        unknown = sorted(set(extra) - names)
         if unknown:
-            raise ValueError(f"optimizer_options has unknown key(s) {unknown} for optimizer "
-                             f"{self.optimizer!r}; allowed: {sorted(names)}")
-        clash = sorted(set(self.optimizer_options) & set(common))
+            raise ValueError(f"{where} has unknown key(s) {unknown} for optimizer "
+                             f"{name!r}; allowed: {sorted(names)}")
+        clash = sorted(set(extra) & set(common))
         if clash:
-            raise ValueError(f"optimizer_options.{clash[0]} is not allowed: set it in "
+            raise ValueError(f"{where}.{clash[0]} is not allowed: set it in "
                              "[optimization] itself")
         try:
-            return cls(**kw, **self.optimizer_options)
+            return cls(**kw, **extra)
         except ValueError as exc:
             key = str(exc).split(" ", 1)[0]
-            if key in self.optimizer_options:
-                raise ValueError(f"optimizer_options.{exc}") from None
+            if key in extra:
+                raise ValueError(f"{where}.{exc}") from None
             raise
 
-    def optimizer_function(self) -> Callable[..., Any]:
-        """The registered optimiser."""
-        return OPTIMIZERS.get(self.optimizer)
+    def optimizer_function(self, formulation: str = "rbrdo") -> Callable[..., Any]:
+        """The registered optimiser of ``formulation``'s runs."""
+        return OPTIMIZERS.get(self.optimizer_name(formulation))
 
 
 @dataclass(frozen=True)
@@ -167,6 +254,14 @@ class VerificationOptions:
         Worker processes of the FE Monte Carlo.
     chunk : int
         θ rows per FE task.
+    campbell_speeds : int
+        Speed grid of the FE Campbell diagram from which each chosen design's damped critical
+        speeds up to 1.5 × the top speed are found (0: no check).
+    front_designs : int
+        Up to this many designs of each RBRDO/RDO front are checked with the FE model too
+        (``study.fronts``; 0: none).
+    front_n_theta : int
+        Size of their fresh θ sample (one sample for all of them).
     """
 
     n_theta: int = 10_000
@@ -174,6 +269,9 @@ class VerificationOptions:
     is_samples: int = 2000
     n_jobs: int = 2
     chunk: int = 250
+    campbell_speeds: int = 24
+    front_designs: int = 0
+    front_n_theta: int = 300
 
     def __post_init__(self) -> None:
         check_int("n_theta", self.n_theta, minimum=2)
@@ -181,6 +279,11 @@ class VerificationOptions:
         check_int("is_samples", self.is_samples, minimum=10)
         check_int("n_jobs", self.n_jobs, minimum=1)
         check_int("chunk", self.chunk, minimum=1)
+        check_int("campbell_speeds", self.campbell_speeds, minimum=0)
+        if self.campbell_speeds == 1:
+            raise ValueError("campbell_speeds = 1 is not allowed: 0 (no check) or >= 2")
+        check_int("front_designs", self.front_designs, minimum=0)
+        check_int("front_n_theta", self.front_n_theta, minimum=2)
 
 
 __all__ = ["OptimizationOptions", "VerificationOptions", "optimizer_options_class"]

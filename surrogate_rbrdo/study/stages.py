@@ -29,6 +29,7 @@ from surrogate_rbrdo.core.counting import CallCounter, CountingDesigns, Counting
 from surrogate_rbrdo.core.protocols import Estimate
 from surrogate_rbrdo.estimators import get_estimator, mc_from_values
 from surrogate_rbrdo.formulations import FormulationOptions, make_formulation
+from surrogate_rbrdo.formulations.constraints import constraint_matrix
 from surrogate_rbrdo.optimization import (
     Compromise,
     OptimizationResult,
@@ -37,6 +38,8 @@ from surrogate_rbrdo.optimization import (
     select_compromise,
 )
 from surrogate_rbrdo.sampling.fe import sample_designs
+from surrogate_rbrdo.study.checks import campbell_critical_speeds
+from surrogate_rbrdo.study.fronts import FrontCheck, verify_fronts
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
 from surrogate_rbrdo.study.problem import Problem
 from surrogate_rbrdo.surrogates.refine import RefineOptions, refine_surrogate, select_designs
@@ -115,8 +118,12 @@ def formulation(problem: Problem, model: Any, design_model: Any, name: str, p_ta
     return make_formulation(
         name, response=model, inputs=problem.inputs, limit=problem.limit,
         deterministic=design_model, rng=np.random.default_rng(crn),
+        constraints=problem.constraints,
         options=FormulationOptions(p_target=p_target, n_theta=options.n_theta,
                                    estimator=options.estimator,
+                                   estimator_options=options.estimator_options,
+                                   reliability_measure=options.reliability_measure,
+                                   pf_bound=options.pf_bound,
                                    deterministic=problem.deterministic))
 
 
@@ -136,8 +143,9 @@ def _run_one(problem: Problem, trained: TrainedSurrogate, design_model: Any, run
         form = _TrackedFormulation(form, pbar)
     try:
         lo, hi = problem.design_bounds[:, 0], problem.design_bounds[:, 1]
-        res = options.optimizer_function()(form, lo, hi, rng=rng,
-                                           options=options.optimizer_config(), progress=False)
+        res = options.optimizer_function(run[0])(form, lo, hi, rng=rng,
+                                                 options=options.optimizer_config(run[0]),
+                                                 progress=False)
     finally:
         if pbar is not None:
             pbar.close()
@@ -226,7 +234,8 @@ class Verification:
         The model in the loop on the CRN sample (the first RBRDO formulation's).
     det_names : tuple of str
     G_det : ndarray (k, n_det)
-        Deterministic constraints from the design model.
+        Deterministic constraints: g_det from the design model, then the problem's design
+        constraints (practice checks, the exact separation guard, expressions).
     fe : Estimate
         Full-FE Monte Carlo on ``n_theta`` fresh θ.
     surrogate : Estimate or None
@@ -236,6 +245,12 @@ class Verification:
     pf_is : ndarray or None
         Importance-sampling P_f with the FE model (``pf_method = "is"``).
     n_theta : int
+    critical_rpm : tuple of ndarray
+        Damped forward critical speeds (rpm) of each design from its FE Campbell diagram,
+        up to 1.5 × the top speed (empty tuple: not checked, ``campbell_speeds = 0``).
+    fronts : FrontCheck or None
+        Front designs of every RBRDO/RDO run checked with the FE model
+        (``front_designs > 0``).
     calls : mapping
     """
 
@@ -250,6 +265,8 @@ class Verification:
     pf_is: np.ndarray | None
     n_theta: int
     calls: Mapping[str, int] = field(default_factory=dict)
+    critical_rpm: tuple[np.ndarray, ...] = ()
+    fronts: FrontCheck | None = None
 
 
 def chosen_designs(problem: Problem, optimisation: Optimisation,
@@ -275,8 +292,13 @@ def verify(problem: Problem, trained: TrainedSurrogate, design_model: Any,
     ref_form = formulation(problem, model, dm, *optimisation.runs[0], options, crn)
     crn_est = ref_form.assess(Xc)
     det_c = ref_form.constraints_det
-    det_names = det_c.names if det_c is not None else ()
-    G_det = det_c(Xc) if det_names else np.empty((Xc.shape[0], 0))
+    det_names = (det_c.names if det_c is not None else ()) + tuple(
+        c.name for c in problem.constraints)
+    G_det = np.column_stack([det_c(Xc) if det_c is not None and det_c.names
+                             else np.empty((Xc.shape[0], 0)),
+                             constraint_matrix(problem.constraints, Xc)])
+    crit = tuple(campbell_critical_speeds(problem.spindle, Xc, n_speeds=ver.campbell_speeds)) \
+        if ver.campbell_speeds else ()
     theta_v = problem.inputs.sample(ver.n_theta, rng=rng)
     fe_counter = CallCounter()
     y_fe = sample_designs(problem.fe_response(), Xc, theta_v, n_jobs=ver.n_jobs, chunk=ver.chunk,
@@ -296,12 +318,19 @@ def verify(problem: Problem, trained: TrainedSurrogate, design_model: Any,
             CountingResponse(problem.fe_response(), is_counter), problem.inputs,
             problem.limit, Xc, rng=rng.spawn(1)[0])
         pf_is = np.asarray(e.pf)
+    fronts = None
+    if ver.front_designs:
+        fronts = verify_fronts(problem, optimisation, ver.front_designs,
+                               problem.inputs.sample(ver.front_n_theta, rng=rng.spawn(1)[0]),
+                               n_jobs=ver.n_jobs, chunk=ver.chunk, cache=cache,
+                               progress=progress, label=label)
     calls = merge_calls({"fe": fe_counter.calls + is_counter.calls,
                          "design_model": dm.counter.calls},
-                        {trained.in_loop: model.counter.calls})
+                        {trained.in_loop: model.counter.calls},
+                        fronts.calls if fronts is not None else {})
     return Verification(names, Xc, _stored(crn_est), tuple(det_names), G_det, _stored(est_fe),
                         None if est_sv is None else _stored(est_sv), err,
-                        pf_is, ver.n_theta, calls)
+                        pf_is, ver.n_theta, calls, crit, fronts)
 
 
 __all__ = ["Optimisation", "Refinement", "Verification", "chosen_designs", "formulation",

@@ -13,6 +13,7 @@ True
 """
 
 from surrogate_rbrdo.uncertainty.base import RandomVector, standard_normal_sample
+from surrogate_rbrdo.uncertainty.box import marginal_box
 from surrogate_rbrdo.uncertainty.factors import FACTOR_DISTRIBUTIONS, stiffness_factors
 from surrogate_rbrdo.uncertainty.marginals import LogNormal, Normal, Uniform
 from surrogate_rbrdo.uncertainty.mvn import MultivariateNormal
@@ -28,6 +29,7 @@ __all__ = [
     "RandomVector",
     "Uniform",
     "fictitious_correlation",
+    "marginal_box",
     "standard_normal_sample",
     "stiffness_factors",
 ]

@@ -34,22 +34,33 @@ FACTOR_DISTRIBUTIONS = ("normal", "lognormal")
 
 def stiffness_factors(mean: Sequence[float], std: Sequence[float],
                       corr: np.ndarray | None = None, *, distribution: str = "normal"):
-    """A random vector of factors with the given moments: ``MultivariateNormal`` or lognormal
-    marginals (``LogNormal.from_moments``) coupled by Nataf to the Pearson correlation ``corr``
-    (independent when ``corr`` is ``None``)."""
+    """A random vector of positive factors with the given moments: ``MultivariateNormal``
+    (mean > 8 std, so P(θ ≤ 0) < 1e-15) or lognormal marginals (``LogNormal.from_moments``)
+    coupled by Nataf to the Pearson correlation ``corr`` (independent when ``corr`` is
+    ``None``)."""
     check_choice("distribution", distribution, FACTOR_DISTRIBUTIONS)
     mean = np.asarray(mean, dtype=float).reshape(-1)
     std = np.asarray(std, dtype=float).reshape(-1)
     if mean.shape != std.shape:
         raise ValueError(f"mean and std have shapes {mean.shape} and {std.shape}: must match")
-    if distribution == "normal":
-        return MultivariateNormal(mean, std=std, corr=corr)
     for i, (m, s) in enumerate(zip(mean, std, strict=True)):
-        check_positive(f"mean[{i}]", float(m))
         check_positive(f"std[{i}]", float(s))
+        if distribution == "normal" and not m > 8.0 * s:
+            raise ValueError(f"mean[{i}] = {m} is not allowed: a stiffness factor must stay "
+                             f"positive: need mean > 8 std = {8.0 * s:g} (or "
+                             "distribution = 'lognormal', mean > 0)")
+        check_positive(f"mean[{i}]", float(m))
+    if distribution == "normal":
+        try:
+            return MultivariateNormal(mean, std=std, corr=corr)
+        except ValueError as exc:
+            raise ValueError(f"corr: {exc}") from None
     marginals = [LogNormal.from_moments(float(m), float(s)) for m, s in zip(mean, std,
                                                                             strict=True)]
-    return Independent(marginals) if corr is None else Nataf(marginals, corr)
+    try:
+        return Independent(marginals) if corr is None else Nataf(marginals, corr)
+    except ValueError as exc:
+        raise ValueError(f"corr: {exc}") from None
 
 
 __all__ = ["FACTOR_DISTRIBUTIONS", "stiffness_factors"]

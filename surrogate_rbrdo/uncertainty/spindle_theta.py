@@ -4,7 +4,9 @@ Blocks, independent of each other (:class:`~surrogate_rbrdo.uncertainty.blocks.
 BlockIndependent`), in the spec's column order:
 
 * bearing stiffness factors: multivariate normal, mean 1, ``stiffness_std``,
-  ``stiffness_corr`` (identity if None);
+  ``stiffness_corr`` (identity if None), unless a ``stiffness`` random vector is given (e.g.
+  lognormal factors, :func:`~surrogate_rbrdo.uncertainty.factors.stiffness_factors`, or the
+  model of an identification);
 * thermal preload state ``τ ~ U(0, thermal_max)`` (only if ``thermal_max > 0``): anywhere
   between a cold start and the hot steady state, with nothing known to favour one;
 * unbalance magnitude fractions ``r_j``: radius of a point uniform over the tolerance disk
@@ -34,11 +36,18 @@ from surrogate_rbrdo.uncertainty.mvn import MultivariateNormal
 from surrogate_rbrdo.uncertainty.nataf import Independent
 
 
-def theta_random_vector(spec: Any) -> BlockIndependent:
-    """:class:`BlockIndependent` of ``spec`` (attributes as ``ThetaSpec``'s)."""
+def theta_random_vector(spec: Any, stiffness: Any = None) -> BlockIndependent:
+    """:class:`BlockIndependent` of ``spec`` (attributes as ``ThetaSpec``'s); ``stiffness``
+    replaces the default normal block of the stiffness factors (a random vector of the same
+    dimension, one factor per bearing of the spec)."""
     std = np.asarray(spec.stiffness_std, dtype=float)
-    corr = None if spec.stiffness_corr is None else np.asarray(spec.stiffness_corr, float)
-    blocks: list[Any] = [MultivariateNormal(np.ones(std.size), std=std, corr=corr)]
+    if stiffness is None:
+        corr = None if spec.stiffness_corr is None else np.asarray(spec.stiffness_corr, float)
+        stiffness = MultivariateNormal(np.ones(std.size), std=std, corr=corr)
+    elif int(stiffness.dim) != std.size:
+        raise ValueError(f"stiffness.dim = {stiffness.dim} is not allowed: need {std.size}, "
+                         "one factor per bearing of the spec")
+    blocks: list[Any] = [stiffness]
     rest = []
     if spec.thermal_max > 0:
         rest.append(Uniform(0.0, float(spec.thermal_max)))

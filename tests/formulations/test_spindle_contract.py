@@ -7,8 +7,10 @@ stiffness factors ~ N(1, Table 4 CoVs), failure ``y > 2.9 µm``. Two designs: th
 fails only near a resonance at θ₁ ≈ 0.22 (β ≈ 13: a design that "never fails", where subset and
 ais spend their levels and report an upper bound). A limit above every resonance peak
 (300 µm) is never reached for a physical θ: FORM, SORM and IS step towards θ ≤ 0, outside the
-model's domain, and must report a bound, not crash. The substructure-surrogate variant is
-added by the runner (issue 13: after the runner lands).
+model's domain, and must report a bound, not crash. Three responses: the FE model, a local
+Kriging of it, and the substructure surrogate (a Kriging of the rotor's condensed dynamic
+stiffness over the design box, bearings and θ coupled exactly), trained by
+``train_surrogate`` as the study does.
 """
 
 import warnings
@@ -28,9 +30,10 @@ from surrogate_rbrdo.formulations import (
     make_formulation,
 )
 from surrogate_rbrdo.optimization import NSGA2Options, run_nsga2
-from surrogate_rbrdo.spindle.evaluate import AtSpeedAmplitudeResponse
+from surrogate_rbrdo.spindle.evaluate import AtSpeedAmplitudeResponse, ResponseSpec
 from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.surrogates import KrgSE, KrigingOptions
+from surrogate_rbrdo.surrogates.structured import SubstructureOptions, train_surrogate
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 SPINDLE = reference_spindle()
@@ -68,16 +71,31 @@ def kriging():
     return KrigingResponse()
 
 
+@pytest.fixture(scope="module")
+def substructure():
+    """The substructure surrogate of the rated-speed response on 24 designs of the box."""
+    return train_surrogate(SPINDLE, INPUTS, LIMIT, SubstructureOptions(n_doe=24, n_start=1,
+                                                                       n_jobs=1),
+                           rng=np.random.default_rng(4),
+                           response=ResponseSpec("at_speed", 24000.0)).model.response
+
+
+def test_substructure_surrogate_outside_its_physical_domain_raises_model_error(substructure):
+    with pytest.raises(ModelError) as exc:
+        substructure(X[:1], np.array([[1.0, 1.0], [-0.1, 1.0], [1.0, 0.0]]))
+    assert isinstance(exc.value, OutsideDomainError) and exc.value.rows == (1, 2)
+
+
 def test_fe_model_outside_its_physical_domain_raises_model_error():
     with pytest.raises(ModelError, match="stiffness factors must be finite and > 0") as exc:
         FE(X[:1], np.array([[1.0, 1.0], [-0.1, 1.0], [1.0, 0.0]]))
     assert isinstance(exc.value, OutsideDomainError) and exc.value.rows == (1, 2)
 
 
-@pytest.mark.parametrize("which", ["fe", "kriging"])
+@pytest.mark.parametrize("which", ["fe", "kriging", "substructure"])
 @pytest.mark.parametrize("estimator", sorted(ESTIMATORS))
-def test_every_estimator_in_every_formulation(which, estimator, kriging):
-    response = FE if which == "fe" else kriging
+def test_every_estimator_in_every_formulation(which, estimator, kriging, substructure):
+    response = {"fe": FE, "kriging": kriging, "substructure": substructure}[which]
     for name in sorted(FORMULATIONS):
         form = make_formulation(
             name, response=response, inputs=INPUTS, limit=LIMIT, rng=np.random.default_rng(2),

@@ -122,6 +122,10 @@ def S(table: str, line: str) -> str:          # noqa: N802 - short names keep th
     return _set(STUDY, table, line)
 
 
+def PU(table: str, line: str) -> str:       # noqa: N802 - the random-unbalance peak
+    return _set(_set(STUDY, "response", "kind = 'peak_unbalance'"), table, line)
+
+
 def R(table: str, line: str) -> str:          # noqa: N802
     return _set(SPINDLE, table, line)
 
@@ -293,7 +297,7 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"unknown key report.n_speed; allowed: \['campbell_speeds', 'designs'"),
     # ------------------------------------------------------------------ [uncertainty]
     ("mean_negative", S("uncertainty", "mean = [-1.0, 1.0]"), {}, [],
-     r"uncertainty.mean\[0\] = -1.0 is not allowed: θ scales a bearing stiffness"),
+     r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay positive"),
     ("mean_str", S("uncertainty", "mean = '1,1'"), {}, [],
      r"uncertainty.mean = '1,1' is not allowed: " + ARR),
     ("mean_len", S("uncertainty", "mean = [1.0, 1.0, 1.0]"), {}, [],
@@ -310,6 +314,58 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"uncertainty.corr = 'none' is not allowed: " + ARR),
     ("uncertainty_key", S("uncertainty", "sigma = [0.1, 0.1]"), {}, [],
      r"unknown key uncertainty.sigma"),
+    ("distribution_bad", S("uncertainty", "distribution = 'weibull'"), {}, [],
+     r"uncertainty.distribution = 'weibull' is not allowed: must be one of"),
+    ("lognormal_mean_neg", S("uncertainty", "distribution = 'lognormal'\nmean = [-1.0, 1.0]"),
+     {}, [], r"uncertainty.mean\[0\] = -1.0 is not allowed"),
+    ("unbalance_wrong_kind", S("uncertainty", "unbalance = {magnitude = 'disk'}"), {}, [],
+     r"uncertainty.unbalance is not allowed with response.kind = 'peak'"),
+    ("thermal_wrong_kind", S("uncertainty", "thermal_max = 0.5"), {}, [],
+     r"uncertainty.thermal_max is not allowed with response.kind = 'peak'"),
+    ("thermal_neg", PU("uncertainty", "thermal_max = -0.5"), {}, [],
+     r"uncertainty.thermal_max = -0.5 is not allowed"),
+    ("thermal_str", PU("uncertainty", "thermal_max = 'hot'"), {}, [],
+     r"uncertainty.thermal_max = 'hot' is not allowed: " + NUM),
+    ("magnitude_bad", PU("uncertainty.unbalance", "magnitude = 'max'"), {}, [],
+     r"uncertainty.unbalance.magnitude = 'max' is not allowed: must be one of"),
+    ("relative_phase_str", PU("uncertainty.unbalance", "relative_phase = 'yes'"), {}, [],
+     r"uncertainty.unbalance.relative_phase = 'yes' is not allowed: " + BOOL),
+    ("planes_one", PU("uncertainty.unbalance", "planes = [{grade_mm_s = 2.5}]"), {}, [],
+     r"uncertainty.unbalance: .*1 planes, the geometry has 2"),
+    ("planes_disk", PU("uncertainty.unbalance", "planes = [{disks = ['spoke']}, {}]"), {}, [],
+     r"uncertainty.unbalance: .*'spoke' is not a disk"),
+    ("planes_grade", PU("uncertainty.unbalance", "planes = [{grade_mm_s = -2.5}, {}]"), {}, [],
+     r"uncertainty.unbalance.planes\[0\].grade_mm_s = -2.5 is not allowed"),
+    ("planes_rest_twice", PU("uncertainty.unbalance", "planes = [{}, {}]"), {}, [],
+     r"uncertainty.unbalance: .*at most one plane may take 'the rest of the rotor'"),
+    ("unbalance_key", PU("uncertainty.unbalance", "phase = 'random'"), {}, [],
+     r"unknown key uncertainty.unbalance.phase; allowed"),
+    ("pu_substructure", PU("surrogate", "structure = 'substructure'"), {}, [],
+     r"surrogate.structure = 'substructure' is not allowed with response.kind = "
+     r"'peak_unbalance'"),
+    ("pu_speed", PU("response", "speed_rpm = 20000.0"), {}, [],
+     r"response.speed_rpm = 20000.0 is not allowed with kind = 'peak_unbalance'"),
+    ("geometry_name", S("spindle", "geometry = 'credibel'"), {}, [],
+     r"spindle.geometry file '.*credibel' is not allowed: the suffix must be"),
+    ("credible_grade", S("spindle", "geometry = 'credible'\nbalance_grade_mm_s = 0.0"), {}, [],
+     r"spindle.balance_grade_mm_s = 0.0 is not allowed"),
+    # ------------------------------------------------------------------ [[constraints]]
+    ("constraint_expr", S("constraints", "") .replace("[constraints]", "[[constraints]]")
+     + "name = 'c'\nexpression = '__import__(1)'\n", {}, [],
+     r"constraints\[0\]: constraint 'c': expression '__import__\(1\)' is not allowed"),
+    ("constraint_name", STUDY + "[[constraints]]\nname = 'c'\nexpression = 'span / 9'\n", {},
+     [], r"constraints\[0\]: .*unknown name 'span' \(design variables: preload_N, span_mm"),
+    ("constraint_missing", STUDY + "[[constraints]]\nname = 'c'\n", {}, [],
+     r"constraints\[0\].expression is missing"),
+    ("constraint_scale", STUDY + "[[constraints]]\nname = 'c'\nexpression = 'span_mm <= 700'"
+     "\nscale = 0.0\n", {}, [], r"constraints\[0\]: .*scale = 0.0 is not allowed"),
+    ("constraint_dup", STUDY + "[[constraints]]\nname = 'c'\nexpression = 'span_mm <= 700'\n"
+     "[[constraints]]\nname = 'c'\nexpression = 'span_mm <= 600'\n", {}, [],
+     r"constraints\[1\].name = 'c' is not allowed: taken"),
+    ("constraint_key", STUDY + "[[constraints]]\nname = 'c'\nexpression = 'span_mm <= 7'\n"
+     "limit = 3.0\n", {}, [], r"unknown key constraints\[0\].limit"),
+    ("constraints_table", STUDY + "[constraints]\nname = 'c'\n", {}, [],
+     r"constraints = .* is not allowed: must be an array of tables"),
     # ------------------------------------------------------------------ [limit], [response]
     ("delta_neg", S("limit", "delta_lim_um = -1.5"), {}, [],
      r"limit.delta_lim_um = -1.5 is not allowed: must be a finite number > 0"),
@@ -317,7 +373,8 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"limit.delta_lim_um = '1.5 um' is not allowed: " + NUM),
     ("limit_key", S("limit", "delta_lim = 1.5"), {}, [], r"unknown key limit.delta_lim"),
     ("response_kind", S("response", "kind = 'rms'"), {}, [],
-     r"response.kind = 'rms' is not allowed: must be one of \['peak', 'at_speed'\]"),
+     r"response.kind = 'rms' is not allowed: must be one of \['peak', 'at_speed', "
+     r"'peak_unbalance'\]"),
     ("response_no_speed", S("response", "kind = 'at_speed'"), {}, [],
      r"response.speed_rpm = None is not allowed"),
     ("response_speed_str", S("response", "kind = 'at_speed'\nspeed_rpm = 'fast'"), {}, [],
@@ -381,13 +438,25 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"deterministic.yield_strength_pa = -1.0 is not allowed"),
     ("resonance_bad", _sub(STUDY, 'resonance = "none"', 'resonance = "campbell"'), {}, [],
      r"deterministic.resonance = 'campbell' is not allowed: must be one of"),
-    ("resonance_separation", _sub(STUDY, 'resonance = "none"', 'resonance = "separation"\n'
-                                  "operating_speeds_rpm = [20000.0]"), {}, [],
-     r"deterministic.resonance = 'separation' is not allowed in a study"),
-    ("speeds_str", S("deterministic", "operating_speeds_rpm = 'fast'"), {}, [],
-     r"deterministic.operating_speeds_rpm = 'fast' is not allowed: " + ARR),
-    ("speeds_neg", S("deterministic", "operating_speeds_rpm = [-5.0]"), {}, [],
-     r"deterministic.operating_speeds_rpm\[0\] = -5.0 is not allowed"),
+    ("search_factor_neg", S("deterministic", "search_factor = -1.5"), {}, [],
+     r"deterministic.search_factor = -1.5 is not allowed"),
+    ("practice_str", S("deterministic", "practice = 'yes'"), {}, [],
+     r"deterministic.practice = 'yes' is not allowed: " + BOOL),
+    ("practice_spec_off", S("deterministic", "practice_spec = {life_required_h = 3e4}"), {}, [],
+     r"deterministic.practice_spec is not allowed with practice = false"),
+    ("practice_spec_neg", S("deterministic", "practice = true\npractice_spec = "
+                            "{life_required_h = -1.0}"), {}, [],
+     r"deterministic.practice_spec.life_required_h = -1.0 is not allowed"),
+    ("practice_check_bad", S("deterministic", "practice = true\npractice_spec = "
+                             "{checks = ['speed']}"), {}, [],
+     r"deterministic.practice_spec.checks\[\] = 'speed' is not allowed: must be one of"),
+    ("practice_bearing_bad", S("deterministic", "practice = true\npractice_spec = "
+                               "{front_bearing = 'nose'}"), {}, [],
+     r"deterministic.practice_spec: .*nose"),
+    ("practice_key", S("deterministic", "practice = true\npractice_spec = {lifetime = 3.0}"),
+     {}, [], r"unknown key deterministic.practice_spec.lifetime"),
+    ("speeds_removed", S("deterministic", "operating_speeds_rpm = [20000.0]"), {}, [],
+     r"unknown key deterministic.operating_speeds_rpm; allowed"),
     ("omega_zero", S("deterministic", "omega_max_rpm = 0.0"), {}, [],
      r"deterministic.omega_max_rpm = 0.0 is not allowed"),
     ("factor_neg", S("deterministic", "factor = -1.2"), {}, [],
@@ -396,8 +465,9 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     # ------------------------------------------------------------------ [optimization]
     ("p_targets_scalar", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = 0.05"), {}, [],
      r"optimization.p_targets = 0.05 is not allowed: " + ARR),
-    ("p_targets_empty", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = []"), {}, [],
-     r"optimization.p_targets = \[\] is not allowed: give at least one"),
+    ("p_targets_empty", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = []\n"
+                             "strategies = []"), {}, [],
+     r"optimization.p_targets = \[\] is not allowed with strategies = \[\]"),
     ("p_targets_range", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 1.5]"), {},
      [], r"optimization.p_targets\[1\] = 1.5 is not allowed: must lie in \(0.0, 1.0\)"),
     ("p_targets_dup", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 0.1]"), {},
@@ -437,6 +507,35 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"optimization.eliminate_duplicates = 'true' is not allowed: " + BOOL),
     ("opt_key", S("optimization", "generations = 3"), {}, [],
      r"unknown key optimization.generations"),
+    ("quantile_n_small", S("optimization", "reliability_measure = 'quantile'\n"
+                           "pf_bound = 'upper'"), {}, [],
+     r"optimization.n_theta = 40 is not allowed with reliability_measure = 'quantile', "
+     r"pf_bound = 'upper' and P_target = 0.05"),
+    ("measure_bad", S("optimization", "reliability_measure = 'cdf'"), {}, [],
+     r"optimization.reliability_measure = 'cdf' is not allowed: must be one of"),
+    ("pf_bound_bad", S("optimization", "pf_bound = 'lower'"), {}, [],
+     r"optimization.pf_bound = 'lower' is not allowed: must be one of"),
+    ("pf_bound_form", S("optimization", "pf_bound = 'upper'\nestimator = 'form'"), {}, [],
+     r"optimization.pf_bound = 'upper' is not allowed with estimator = 'form'"),
+    ("quantile_is", S("optimization", "reliability_measure = 'quantile'\nestimator = 'is'"),
+     {}, [], r"optimization.reliability_measure = 'quantile' is not allowed with estimator"),
+    ("estimator_options_str", S("optimization", "estimator_options = 'fast'"), {}, [],
+     r"optimization.estimator_options = 'fast' is not allowed: " + TAB),
+    ("slsqp_fronts", S("optimization", "optimizer = 'slsqp'"), {}, [],
+     r"optimization.optimizer = 'slsqp' is not allowed with the rbrdo runs: it minimises one"),
+    ("slsqp_staircase", S("optimization", "single_objective_optimizer = 'slsqp'"), {}, [],
+     r"optimization.single_objective_optimizer = 'slsqp' is not allowed with "
+     r"reliability_measure = 'probability'"),
+    ("so_optimizer_bad", S("optimization", "single_objective_optimizer = 'bfgs'"), {}, [],
+     r"optimization.single_objective_optimizer = 'bfgs' is not allowed: must be one of"),
+    ("so_options_key", S("optimization", "single_objective_optimizer = 'slsqp'\n"
+                         "reliability_measure = 'quantile'\nsingle_objective_options = "
+                         "{n_start = 3}"), {}, [],
+     r"optimization.single_objective_options has unknown key\(s\) \['n_start'\]"),
+    ("so_options_value", S("optimization", "single_objective_optimizer = 'slsqp'\n"
+                           "reliability_measure = 'quantile'\nsingle_objective_options = "
+                           "{maxiter = 0}"), {}, [],
+     r"optimization.single_objective_options.maxiter = 0 is not allowed"),
     # ------------------------------------------------------------------ [verification]
     ("ver_n_theta_float", _sub(STUDY, "n_theta = 6", "n_theta = 1e11"), {}, [],
      r"verification.n_theta = 100000000000.0 is not allowed: " + INT),
@@ -446,6 +545,10 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"verification.pf_method = 'form' is not allowed: must be one of \['mc', 'is'\]"),
     ("chunk_zero", S("verification", "chunk = 0"), {}, [],
      r"verification.chunk = 0 is not allowed"),
+    ("campbell_one", S("verification", "campbell_speeds = 1"), {}, [],
+     r"verification.campbell_speeds = 1 is not allowed: 0 \(no check\) or >= 2"),
+    ("campbell_neg", S("verification", "campbell_speeds = -4"), {}, [],
+     r"verification.campbell_speeds = -4 is not allowed"),
     ("ver_key", S("verification", "n_thetas = 3"), {}, [],
      r"unknown key verification.n_thetas; allowed"),
     # ------------------------------------------------------------------ [report] (study)

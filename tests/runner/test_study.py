@@ -180,6 +180,103 @@ def test_substructure_surrogate_study_on_the_at_speed_response(tmp_path):
     assert info["structure"] == "substructure" and info["n_train"] == 40
 
 
+TINY_CREDIBLE = """
+[experiment]
+name = "tiny_credible"
+kind = "study"
+seed = 3
+
+[spindle]
+geometry = "credible"
+
+[uncertainty]
+std = [0.015, 0.033]
+
+[response]
+kind = "peak_unbalance"
+
+[limit]
+delta_lim_um = 1.0
+
+[surrogate]
+structure = "fe"
+
+[deterministic]
+stress = false
+resonance = "separation"
+practice = true
+
+[[constraints]]
+name = "slenderness"
+expression = "span_mm / diameter_mm <= 9"
+
+[optimization]
+p_targets = [0.05]
+strategies = ["rbdo"]
+n_theta = 120
+pop_size = 8
+n_gen = 3
+n_jobs = 1
+reliability_measure = "quantile"
+pf_bound = "upper"
+single_objective_optimizer = "slsqp"
+single_objective_options = { maxiter = 3, x0 = [237.5, 390.0, 74.0] }
+
+[verification]
+n_theta = 8
+n_jobs = 1
+campbell_speeds = 6
+front_designs = 2
+front_n_theta = 8
+
+[report]
+n_speeds = 20
+campbell_speeds = 4
+n_modes = 2
+"""
+
+
+def test_credible_problem_from_config(tmp_path):
+    """The credible problem end to end: 5 θ columns (stiffness, unbalance fractions, relative
+    phase), the practice checks, the exact API guard and an expression constraint in every
+    formulation, SLSQP for RBDO, no design model (nothing in g_det needs it), and each chosen
+    design checked by the FE peak search and its damped Campbell diagram."""
+    from surrogate_rbrdo.spindle.practice import PracticeConstraints
+    from surrogate_rbrdo.spindle.reference import credible_spindle
+    from surrogate_rbrdo.spindle.separation import ResonanceGuard
+
+    run = run_experiment(_write(tmp_path, TINY_CREDIBLE), results_dir=tmp_path / "res",
+                         run_id="c", progress=False)
+    meta = json.loads((run.path / "meta.json").read_text())
+    assert meta["response"] == "peak amplitude, random unbalance"
+    assert meta["fe_calls"]["design_model"] == 0
+    assert not (run.path / "design_model_validation.json").exists()
+    ver = list(csv.DictReader((run.path / "verification.csv").open()))
+    assert [r["design"] for r in ver] == ["baseline", "rbrdo 5%", "rbdo 5%"]
+    sp = credible_spindle()
+    X = np.array([[float(r[k]) for k in ("preload_N", "span_mm", "diameter_mm")] for r in ver])
+    # the verification's constraint columns are the library's checks at the same designs
+    np.testing.assert_allclose([float(r["g_speed_front"]) for r in ver],
+                               PracticeConstraints(sp)(X)[:, 0], rtol=1e-12)
+    np.testing.assert_allclose([float(r["g_resonance_separation"]) for r in ver],
+                               ResonanceGuard(sp)(X)[:, 0], rtol=1e-9)
+    np.testing.assert_allclose([float(r["g_slenderness"]) for r in ver],
+                               X[:, 1] / X[:, 2] - 9.0, rtol=1e-12)
+    # the baseline runs through its first critical speed (~21 800 rpm, damped Campbell)
+    assert ver[0]["criticals_in_range_fe"] == "1"
+    assert abs(float(ver[0]["first_critical_rpm_fe"]) / 21780.0 - 1) < 2e-3
+    comp = {r["run"]: r for r in csv.DictReader((run.path / "compromises.csv").open())}
+    assert set(comp) == {"rbrdo 5%", "rbdo 5%"}
+    cfg = json.loads((run.path / "config.json").read_text())
+    assert cfg["optimization"]["single_objective_optimizer"] == "slsqp"
+    # the RBRDO front checked by the FE model too: at most 2 of its designs, the FE moments
+    # of a design equal to the chosen one's where the two coincide
+    fv = list(csv.DictReader((run.path / "front_verification.csv").open()))
+    assert 1 <= len(fv) <= 2 and {r["run"] for r in fv} == {"rbrdo 5%"}
+    assert all(float(r["std_um_fe"]) > 0 for r in fv)
+    assert any(r["fe_nondominated"] == "True" for r in fv)
+
+
 @pytest.mark.slow
 def test_same_seed_same_compromises(tmp_path):
     a = run_experiment(_write(tmp_path, TINY), results_dir=tmp_path / "res", run_id="a")
@@ -200,7 +297,7 @@ def test_same_seed_same_compromises(tmp_path):
     ("n_gen = 4", "n_gen = 0", r"optimization.n_gen = 0 is not allowed"),
     ("n_doe = 24", "n_doe = 0", r"surrogate.n_doe = 0 is not allowed"),
     ("n_theta = 6", "n_theta = 6\nn_thetas = 3",
-     r"unknown key verification.n_thetas; allowed: \['chunk', 'is_samples'"),
+     r"unknown key verification.n_thetas; allowed: \['campbell_speeds', 'chunk'"),
     ('resonance = "none"', 'resonance = "campbell"', r"resonance = 'campbell' is not allowed"),
     ("n_modes = 2", "n_modes = 2\n[refine]\nrounds = 1\ntheta = 1",
      r"refine.theta = 1 is not allowed"),

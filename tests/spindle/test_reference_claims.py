@@ -19,6 +19,7 @@ from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse, ThetaSp
 from surrogate_rbrdo.spindle.practice import PracticeConstraints
 from surrogate_rbrdo.spindle.reference import credible_spindle
 from surrogate_rbrdo.spindle.separation import ResonanceGuard, forward_critical_speeds
+from surrogate_rbrdo.study.checks import campbell_critical_speeds
 from surrogate_rbrdo.uncertainty.spindle_theta import theta_random_vector
 
 CR = credible_spindle()
@@ -87,6 +88,21 @@ def test_a_one_percent_reliability_constraint_is_inactive_for_physical_limits(sc
     y_best = PeakUnbalanceResponse(CR, SPEC)(X[best][None], _theta(2000, 7))[0] * 1e6
     assert y_best.max() < 1.0
     assert np.mean(y_best > 1.0) == 0.0
+
+
+def test_the_feasible_optimum_crosses_no_critical_speed_in_the_range(scan):
+    """The least-μ feasible design (the one every RBRDO/RDO/RBDO run converges to) has no
+    damped critical speed inside 1 000–24 000 rpm on its FE Campbell diagram (an eigenproblem
+    independent of the guard's), its first one lies beyond the API margin (≥ 1.26 n_max for
+    AF ≥ 10.6): its y is a flank response, not a resonance."""
+    X, y = scan
+    best = X[np.argmin(y.mean(1))]
+    crit = campbell_critical_speeds(CR, best[None], n_speeds=18)[0]
+    assert crit.size and np.all(crit > 24000.0)
+    assert crit[0] >= 1.26 * 24000.0
+    exact = forward_critical_speeds(CR.model(best), 36000.0)
+    np.testing.assert_allclose(exact.speeds_rpm[0], crit[0], rtol=1e-3)
+    assert exact.amplification[0] > 10.6
 
 
 @pytest.mark.slow

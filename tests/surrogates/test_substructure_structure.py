@@ -28,7 +28,7 @@ from surrogate_rbrdo.surrogates.structured.substructure import (
 
 SP = reference_spindle()
 AT = ResponseSpec("at_speed", 24000.0)
-#: a design tuned to the tool-tip anti-resonance at 24 000 rpm (docs/paper-study.md), a
+#: a design tuned to the tool-tip cancellation notch at 24 000 rpm (docs/paper-study.md), a
 #: supercritical one, the baseline and two corners of the box
 DESIGNS = np.array([[3000.0, 442.5, 65.7], [3000.0, 594.5, 80.0], [2000.0, 500.0, 65.0],
                     [1000.0, 750.0, 50.0], [1500.0, 300.0, 80.0]])

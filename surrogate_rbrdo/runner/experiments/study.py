@@ -9,8 +9,9 @@ model, 2 the CRN sample, 3 optimisation, 4 verification, 5 refinement.
 Tables (every key optional; unknown keys raise): ``[spindle]``, ``[uncertainty]``,
 ``[limit]``, ``[response]`` (``ResponseSpec``), ``[surrogate]`` (``structure`` selects the
 options class: ``GlobalOptions``, ``ResonanceOptions``, ``SubstructureOptions``,
-``FEOptions``), ``[design_model]``, ``[deterministic]``, ``[optimization]``
-(``OptimizationOptions``), ``[verification]``, ``[report]``, ``[refine]``.
+``FEOptions``), ``[design_model]`` (fitted only when g_det needs it), ``[deterministic]``,
+``[[constraints]]`` (``name``, ``expression``, ``scale``: ``DesignConstraint``),
+``[optimization]`` (``OptimizationOptions``), ``[verification]``, ``[report]``, ``[refine]``.
 """
 
 from __future__ import annotations
@@ -29,14 +30,15 @@ from surrogate_rbrdo.runner.tables import (
     LimitTable,
     SpindleTable,
     UncertaintyTable,
-    build_inputs,
     build_spindle,
+    build_theta,
     require_memory,
 )
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
+from surrogate_rbrdo.study.constraints import expression_constraints
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
-from surrogate_rbrdo.study.problem import Problem
+from surrogate_rbrdo.study.problem import DESIGN_NAMES, Problem
 from surrogate_rbrdo.study.stages import optimise, refine, verify
 from surrogate_rbrdo.surrogates.design_model import DesignModelOptions, fit_design_model
 from surrogate_rbrdo.surrogates.refine import RefineOptions
@@ -59,6 +61,16 @@ class StudyReportTable:
 
 
 @dataclass(frozen=True)
+class ConstraintTable:
+    """``[[constraints]]``: ``g(x) <= 0`` over the design variables (``preload_N``,
+    ``span_mm``, ``diameter_mm``), e.g. ``expression = "span_mm / diameter_mm <= 9"``."""
+
+    name: str
+    expression: str
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
 class StudyConfig:
     """The tables of a ``study`` config."""
 
@@ -69,6 +81,7 @@ class StudyConfig:
     surrogate: dict[str, Any] = field(default_factory=dict)
     design_model: DesignModelOptions = field(default_factory=DesignModelOptions)
     deterministic: DeterministicTable = field(default_factory=DeterministicTable)
+    constraints: tuple[ConstraintTable, ...] = ()
     optimization: OptimizationOptions = field(default_factory=OptimizationOptions)
     verification: VerificationOptions = field(default_factory=VerificationOptions)
     report: StudyReportTable = field(default_factory=StudyReportTable)
@@ -125,18 +138,23 @@ def _memory(c: StudyConfig, sur: Any) -> None:
 
 def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
     spindle = build_spindle(c.spindle, base_dir)
-    inputs = build_inputs(c.uncertainty, spindle.theta_bearings)
-    g, r = spindle.geometry, c.response
+    inputs, r = build_theta(c.uncertainty, spindle, c.response)
+    g = spindle.geometry
     if r.kind == "at_speed" and not g.speed_min_rpm <= r.speed_rpm <= g.speed_max_rpm:
         raise ValueError(f"response.speed_rpm = {r.speed_rpm} is not allowed: must lie in the "
                          f"spindle's speed range [{g.speed_min_rpm}, {g.speed_max_rpm}] rpm "
                          "(the bearing laws are fitted there)")
     sur = surrogate_options(c.surrogate, r, "surrogate")
     det = c.deterministic.options(g.speed_max_rpm)
-    if det.resonance == "separation":
-        raise ValueError("deterministic.resonance = 'separation' is not allowed in a study: the "
-                         "g_det design model has no critical-speed surrogate; use 'paper' or "
-                         "'none'")
+    cons = c.deterministic.constraints(spindle)
+    for i, e in enumerate(c.constraints):
+        if e.name in {k.name for k in cons}:
+            raise ValueError(f"constraints[{i}].name = {e.name!r} is not allowed: taken by "
+                             f"{[k.name for k in cons]}")
+        try:
+            cons += expression_constraints([vars(e)], spindle.design_map.names)
+        except ValueError as exc:
+            raise ValueError(f"constraints[{i}]: {exc}") from None
     if c.refine.rounds and not STRUCTURES[sur.structure].refinable:
         why = ("there is no surrogate to refine" if sur.structure == "fe" else
                "the refinement loop adds (x, θ) points, and this surrogate is trained on "
@@ -145,7 +163,7 @@ def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
                          f"surrogate.structure = {sur.structure!r}: {why} (use rounds = 0)")
     base = c.report.baseline if c.report.baseline is not None else spindle.baseline
     try:
-        problem = Problem(spindle, inputs, c.limit.limit(), r, det, base)
+        problem = Problem(spindle, inputs, c.limit.limit(), r, det, base, cons)
     except ValueError as exc:
         raise ValueError(f"report.baseline: {exc}") from None
     _memory(c, sur)
@@ -161,6 +179,8 @@ def _surrogate(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
 
 
 def _design_model(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    if not p.problem.deterministic.names:       # no stress or paper guard: nothing to fit
+        return None
     return fit_design_model(p.problem.spindle, p.design_model, rng=ctx.stream(1),
                             progress=ctx.progress, label=ctx.label)
 
@@ -196,7 +216,8 @@ def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
     sur, opt = _final(done)
     ver, w = done["verify"], p.optimization.weights
     run.write_json("surrogate_info.json", {**sur.to_dict(), **dict(sur.model.info)})
-    run.write_json("design_model_validation.json", done["design_model"].validation)
+    if done["design_model"] is not None:
+        run.write_json("design_model_validation.json", done["design_model"].validation)
     if done["refine"].rounds:
         run.write_rows("refine.csv", tables.refine_rows(done["refine"].rounds))
     fronts = tables.front_rows(opt)
@@ -204,10 +225,13 @@ def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
         run.write_rows("pareto_fronts.csv", fronts)
     tables.front_figures(run, opt, w, quantity=p.problem.response.label,
                          model_in_loop=sur.in_loop, baseline=p.problem.baseline)
-    ver_rows = tables.verification_rows(ver)
+    g = p.problem.spindle.geometry
+    ver_rows = tables.verification_rows(ver, (g.speed_min_rpm, g.speed_max_rpm))
     run.write_rows("verification.csv", ver_rows)
+    if ver.fronts is not None:
+        run.write_rows("front_verification.csv", ver.fronts.rows(DESIGN_NAMES))
     run.write_rows("strategy_comparison.csv", tables.strategy_rows(opt, ver))
-    mbr = tables.mbr_rows(opt, ver, w)
+    mbr = tables.mbr_rows(opt, ver, w, sur.in_loop)
     if mbr:
         run.write_rows("mbr.csv", mbr)
     comp = tables.compromise_rows(opt, w)

@@ -20,6 +20,7 @@ from surrogate_rbrdo.core.validate import check_choice, check_int, check_positiv
 from surrogate_rbrdo.doe.infill import THETA_BOXES, joint_bounds
 from surrogate_rbrdo.surrogates.registry import SURROGATES
 from surrogate_rbrdo.surrogates.structured.base import SamplingOptions
+from surrogate_rbrdo.uncertainty.box import marginal_box
 
 
 @dataclass(frozen=True)
@@ -33,8 +34,11 @@ class JointDOEOptions(SamplingOptions):
     surrogate : str
         Name in ``SURROGATES`` (``krg_se``, ``krg_matern52``, ``gpr``).
     theta_box : {"sigma", "bounds"}
-        θ part of the DOE box: ``mean ± theta_sigmas·std`` of the θ distribution (default
-        ±4σ: the Monte Carlo samples live there) or ``theta_bounds`` for every component.
+        θ part of the DOE box: each component's marginal quantiles at ``Φ(∓theta_sigmas)``
+        (:func:`~surrogate_rbrdo.uncertainty.box.marginal_box`; ``mean ± theta_sigmas·std``
+        for a normal component, default ±4σ: the Monte Carlo samples live there; within the
+        support of a bounded one, e.g. an unbalance phase) or ``theta_bounds`` for every
+        component.
     theta_sigmas : float
     theta_bounds : (float, float)
     n_start : int
@@ -66,10 +70,12 @@ class JointDOEOptions(SamplingOptions):
 
     def bounds(self, spindle: Any, inputs: Any) -> np.ndarray:
         """The (d + m, 2) joint DOE box of ``spindle``'s designs and the θ of ``inputs``."""
+        if self.theta_box == "sigma":
+            return np.vstack([np.asarray(spindle.design_map.bounds, dtype=float),
+                              marginal_box(inputs, self.theta_sigmas)])
         std = np.sqrt(np.diag(np.asarray(inputs.cov, dtype=float)))
         return joint_bounds(spindle.design_map.bounds, inputs.mean, std,
-                            theta_box=self.theta_box, theta_sigmas=self.theta_sigmas,
-                            theta_bounds=self.theta_bounds)
+                            theta_box=self.theta_box, theta_bounds=self.theta_bounds)
 
 
 __all__ = ["JointDOEOptions"]

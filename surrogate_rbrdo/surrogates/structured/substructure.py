@@ -19,7 +19,7 @@ What is modelled
   (``spindle.coupling.coupled_tool_amplitude_theta``): all designs × 1 000 θ in
   milliseconds.
 
-So the only approximation is ``S`` over ``x``; the resonance and the tool-tip anti-resonance
+So the only approximation is ``S`` over ``x``; the resonance and the tool-tip cancellation notch
 of the assembled spindle, and the whole θ dependence, come out of the coupling algebra. A
 Kriging of ``y`` itself over ``(x, θ)`` has to learn them from 200 points and smooths them away
 (docs/surrogates.md, "Substructure surrogate").
@@ -320,6 +320,13 @@ class SubstructureOptions(SamplingOptions):
         check_int("n_doe", self.n_doe, minimum=7)
         check_int("n_start", self.n_start, minimum=1)
         check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
+
+    def check_response(self, response: ResponseSpec) -> None:
+        if response.kind == "peak_unbalance":
+            raise ValueError("structure = 'substructure' is not allowed with response.kind = "
+                             "'peak_unbalance': its coupling takes the geometry's fixed "
+                             "unbalance; the exact coupling of the random-unbalance peak is "
+                             "the FE model itself (structure = 'fe'), or use 'global'")
 
 
 @register_structure("substructure", SubstructureOptions, "Kriging of the rotor's condensed "
