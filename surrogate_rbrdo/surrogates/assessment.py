@@ -29,7 +29,8 @@ from surrogate_rbrdo.surrogates.validation import LOOSummary, MCComparison, comp
 class FETruth:
     """The FE side: test points ``Z`` and ``y``, the θ sample, designs ``X`` and their FE
     values ``y_fe`` (X × θ), optional resonance quantities ``(Z_t, Q_t, Z_d, Q_d)`` (test
-    points; designs × the first θ rows), counted FE calls (``test``, ``mc``)."""
+    points; designs × the first θ rows), counted FE calls (``test``, ``mc``) and the points
+    loaded from the FE cache instead (``cache_hits``, same keys)."""
 
     Z: np.ndarray
     y: np.ndarray
@@ -38,6 +39,7 @@ class FETruth:
     y_fe: np.ndarray
     resonance: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
     calls: dict[str, int] = field(default_factory=dict)
+    cache_hits: dict[str, int] = field(default_factory=dict)
 
 
 def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, n_test: int,
@@ -68,7 +70,8 @@ def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, 
         if Z_d.shape[0] != X.shape[0] * n:
             raise ValueError("FE resonance quantities failed at a validation design")
         res = (Z_t, Q_t, Z_d, Q_d)
-    return FETruth(Z, y, theta, X, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls})
+    return FETruth(Z, y, theta, X, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls},
+                   {"test": c_test.cached, "mc": c_mc.cached})
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,16 +17,19 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_int
+from surrogate_rbrdo.core.memory import check_memory
+from surrogate_rbrdo.core.validate import check_int, check_label
 from surrogate_rbrdo.reporting.spindle import (
     QUANTITY_HEADER,
     SpindleOverview,
+    overview_memory,
     quantity_rows,
     spindle_overview,
     write_overview,
 )
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle, require_memory
+from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
+from surrogate_rbrdo.spindle.modal import check_modes
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,8 @@ class ReportTable:
     def __post_init__(self) -> None:
         if self.designs is not None and not self.designs:
             raise ValueError("designs = {} is not allowed: give label = [F, L, D] entries")
+        for label in self.designs or ():
+            check_label("designs", label)
         check_int("n_speeds", self.n_speeds, minimum=2)
         check_int("campbell_speeds", self.campbell_speeds, minimum=2)
         check_int("n_modes", self.n_modes, minimum=1)
@@ -76,10 +81,12 @@ def build(c: SpindleReportConfig, base_dir: Path) -> Plan:
             designs["corner " + "".join("-+"[k] for k in corner)] = np.array(
                 [b[i, k] for i, k in enumerate(corner)])
         designs["centre"] = b.mean(axis=1)
-    require_memory("report.n_speeds", c.report.n_speeds,
-                   65536.0 * c.report.n_speeds * (1 + len(designs) / 100),
-                   "the unbalance responses (~64 kB per speed)")
-    return Plan(sp, designs, c.report)
+    r, model = c.report, sp.model(sp.baseline)
+    check_modes(model, r.n_modes, "report.n_modes")
+    check_memory({f"report.{k}": (getattr(r, k), b) for k, b in overview_memory(
+        model.n_dof, len(designs), n_speeds=r.n_speeds, campbell_speeds=r.campbell_speeds,
+        n_modes=r.n_modes).items()})
+    return Plan(sp, designs, r)
 
 
 def _designs(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> SpindleOverview:
