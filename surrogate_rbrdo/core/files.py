@@ -25,6 +25,7 @@ import contextvars
 import csv
 import hashlib
 import io
+import json
 import os
 import secrets
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -32,6 +33,8 @@ from contextlib import contextmanager
 from functools import cache
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 FILE_MODE = 0o644
 DIR_MODE = 0o755
@@ -101,6 +104,29 @@ def rows_text(rows: Sequence[Mapping[str, Any]], columns: Sequence[str] | None =
     return buf.getvalue()
 
 
+def json_default(o: Any) -> Any:
+    """``json.dumps`` ``default`` for numpy arrays and scalars, paths, mappings, tuples and
+    objects with ``to_dict``."""
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer, np.bool_)):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    if isinstance(o, Mapping):
+        return dict(o)
+    if isinstance(o, (tuple, set, frozenset)):
+        return list(o)
+    if hasattr(o, "to_dict"):
+        return o.to_dict()
+    raise TypeError(f"cannot serialise {type(o).__name__}")
+
+
+def json_text(data: Any) -> str:
+    """``data`` as indented JSON text (numpy values as plain numbers), ending in a newline."""
+    return json.dumps(data, indent=2, default=json_default) + "\n"
+
+
 def sha256(data: bytes) -> str:
     """Hex SHA-256 of ``data``."""
     return hashlib.sha256(data).hexdigest()
@@ -152,6 +178,24 @@ def input_changes(recorded: Mapping[str, str]) -> list[str]:
     return out
 
 
+def share_tree(root: str | Path) -> None:
+    """Make every folder under ``root`` 0755 and every file 0644 (caches that other libraries
+    write with the process's umask)."""
+    root = Path(root)
+    if not root.is_dir():
+        return
+    for dirpath, dirnames, filenames in os.walk(root):
+        for name, mode in [(d, DIR_MODE) for d in dirnames] + [(f, FILE_MODE)
+                                                               for f in filenames]:
+            p = os.path.join(dirpath, name)
+            try:
+                if os.stat(p, follow_symlinks=False).st_mode & 0o777 != mode:
+                    os.chmod(p, mode)
+            except OSError:
+                pass
+    os.chmod(root, DIR_MODE)
+
+
 @cache
 def source_digest() -> str:
     """SHA-256 (first 16 hex digits) of every ``.py`` file of the package, path and content:
@@ -165,4 +209,5 @@ def source_digest() -> str:
 
 
 __all__ = ["FILE_MODE", "atomic_write_bytes", "atomic_write_text", "csv_text", "input_changes",
-           "make_dirs", "read_input", "rows_text", "sha256", "source_digest", "tracked_inputs"]
+           "json_default", "json_text", "make_dirs", "read_input", "rows_text", "sha256",
+           "share_tree", "source_digest", "tracked_inputs"]

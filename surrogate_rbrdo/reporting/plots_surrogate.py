@@ -47,4 +47,15 @@ def parity_plot(y_true: np.ndarray, y_pred: np.ndarray, *, y_std: np.ndarray | N
     return fig
 
 
-__all__ = ["parity_plot"]
+def parity_figures(name: str, y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, Figure]:
+    """The two parity figures of a variant (file name → figure): peak amplitude in µm on
+    linear and on log axes (``y`` in m)."""
+    n = np.size(y_true)
+    args = (np.asarray(y_true) * 1e6, np.asarray(y_pred) * 1e6)
+    title = f"{name}: peak amplitude at {n} fresh LHS points"
+    return {f"parity_{name}.png": parity_plot(*args, title=title, label="peak amplitude [µm]"),
+            f"parity_log_{name}.png": parity_plot(*args, title=f"{title}, log scale",
+                                                  label="peak amplitude [µm]", log=True)}
+
+
+__all__ = ["parity_figures", "parity_plot"]

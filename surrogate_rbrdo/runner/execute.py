@@ -22,12 +22,13 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from surrogate_rbrdo.core.files import input_changes, tracked_inputs
+from surrogate_rbrdo.core.files import json_default, share_tree, tracked_inputs
 from surrogate_rbrdo.core.memory import check_memory, table_needs
+from surrogate_rbrdo.core.provenance import changes_since, first_difference
 from surrogate_rbrdo.core.schema import load_toml, parse
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.runner.kinds import Kind, StageContext, discover
-from surrogate_rbrdo.runner.runfolder import RunFolder, check_root, environment, json_default
+from surrogate_rbrdo.runner.runfolder import RunFolder, check_root
 from surrogate_rbrdo.runner.tables import ExperimentTable
 
 
@@ -98,28 +99,6 @@ def prepare(config_path: str | Path, *, seed: int | None = None) -> Prepared:
     return Prepared(path, exp, kind, config, plan, dict(seen))
 
 
-def _first_difference(a: Any, b: Any, where: str = "") -> str:
-    if isinstance(a, dict) and isinstance(b, dict):
-        for k in sorted(set(a) | set(b)):
-            if a.get(k) != b.get(k):
-                return _first_difference(a.get(k), b.get(k), f"{where}.{k}" if where else k)
-    return f"{where}: {a!r} then, {b!r} now"
-
-
-def _changes(run: RunFolder, prep: Prepared) -> list[str]:
-    """What differs from the session that started ``run``: input files, code, packages."""
-    out = input_changes(run.meta.get("inputs", {}))
-    out += [f"input file {p} (new)" for p in sorted(set(prep.inputs) -
-                                                    set(run.meta.get("inputs", {})))]
-    now = environment()
-    for key in ("source_sha256", "packages"):
-        then = run.meta.get(key)
-        if then is not None and then != now[key]:
-            out.append("the code (source hash)" if key == "source_sha256" else
-                       _first_difference(then, now[key], "package versions"))
-    return out
-
-
 def _open(prep: Prepared, results_dir: str | Path | None, run_id: str | None, *,
           resume: bool, overwrite: bool, accept_changes: bool) -> RunFolder:
     root = prep.results_root(results_dir)
@@ -134,10 +113,10 @@ def _open(prep: Prepared, results_dir: str | Path | None, run_id: str | None, *,
     except (OSError, ValueError):
         old = None
     if old != resolved:
-        diff = "no config.json" if old is None else _first_difference(old, resolved)
+        diff = "no config.json" if old is None else first_difference(old, resolved)
         raise ValueError(f"--resume: the config differs from the one {str(run.path)!r} "
                          f"started with ({diff}): run it under another --run-id")
-    changed = _changes(run, prep)
+    changed = changes_since(run.meta, prep.inputs)
     if changed and not accept_changes:
         raise ValueError(f"--resume: {'; '.join(changed)} changed since {str(run.path)!r} "
                          "started, so its finished stages rest on other inputs: run it under "
@@ -207,6 +186,8 @@ def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = 
     except BaseException as exc:
         run.stop("failed", error=f"{type(exc).__name__}: {exc}", failed_in=where[0])
         raise
+    finally:
+        share_tree(ctx.cache_dir)     # the FE cache is written with the process's umask
     return run
 
 

@@ -31,28 +31,23 @@ import re
 import secrets
 import shutil
 import socket
-import subprocess
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
-from importlib import metadata
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from surrogate_rbrdo.core.files import (
     atomic_write_bytes,
     atomic_write_text,
     csv_text,
+    json_text,
     make_dirs,
     rows_text,
-    source_digest,
 )
+from surrogate_rbrdo.core.provenance import environment
 
-PACKAGES = ("surrogate_rbrdo", "numpy", "scipy", "scikit-learn", "smt", "pymoo", "optuna",
-            "joblib", "matplotlib", "pydantic", "dask", "distributed")
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
 #: a file name inside a run folder: one path component, no control characters
 FILE_NAME = re.compile(r"[^/\\\x00-\x1f\x7f]{1,200}")
@@ -65,41 +60,6 @@ def check_name(where: str, value: Any) -> str:
                          "'.', '_' or '-', starting with a letter or digit (it names a folder "
                          "under the results root)")
     return value
-
-
-def git_sha(cwd: str | Path | None = None) -> str | None:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=cwd, capture_output=True,
-                             text=True, timeout=5, check=False)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return out.stdout.strip() or None
-
-
-def package_versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for p in PACKAGES:
-        try:
-            out[p] = metadata.version(p)
-        except metadata.PackageNotFoundError:
-            out[p] = None
-    return out
-
-
-def json_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer, np.bool_)):
-        return o.item()
-    if isinstance(o, Path):
-        return str(o)
-    if isinstance(o, Mapping):
-        return dict(o)
-    if isinstance(o, (tuple, set, frozenset)):
-        return list(o)
-    if hasattr(o, "to_dict"):
-        return o.to_dict()
-    raise TypeError(f"cannot serialise {type(o).__name__}")
 
 
 def read_meta(path: Path) -> dict[str, Any] | None:
@@ -234,7 +194,7 @@ class RunFolder:
         return atomic_write_text(self.file(name), text)
 
     def write_json(self, name: str, data: Any) -> Path:
-        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+        return self.write_text(name, json_text(data))
 
     def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Path:
         return self.write_text(name, csv_text(header, rows))
@@ -305,12 +265,4 @@ class RunFolder:
                         files=sorted(set(files) | {"meta.json"}), **info)
 
 
-def environment() -> dict[str, Any]:
-    """The code a run uses: ``git_sha``, ``source_sha256`` (the package's source,
-    :func:`~surrogate_rbrdo.core.files.source_digest`) and ``packages`` (versions)."""
-    return {"git_sha": git_sha(Path(__file__).parent), "source_sha256": source_digest(),
-            "packages": package_versions()}
-
-
-__all__ = ["AlreadyComplete", "RunFolder", "check_name", "check_root", "environment",
-           "json_default", "read_meta"]
+__all__ = ["AlreadyComplete", "RunFolder", "check_name", "check_root", "read_meta"]

@@ -25,6 +25,7 @@ ValueError: sections[0].outer_diameter_mm = '50' is not allowed: must be a numbe
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -278,6 +279,17 @@ class DesignMap:
     def bounds(self) -> np.ndarray:
         """Array of shape (3, 2): lower and upper bound per design variable."""
         return np.column_stack([self.lower, self.upper])
+
+    def corners(self) -> dict[str, np.ndarray]:
+        """The box's 8 corners (``"corner -+-"``: lower, upper, lower) and its ``"centre"``.
+
+        >>> list(DesignMap().corners())[:2], DesignMap().corners()["centre"].tolist()
+        (['corner ---', 'corner --+'], [2000.0, 525.0, 65.0])
+        """
+        b = self.bounds
+        out = {"corner " + "".join("-+"[k] for k in c): np.array(
+            [b[i, k] for i, k in enumerate(c)]) for c in itertools.product((0, 1), repeat=3)}
+        return {**out, "centre": b.mean(axis=1)}
 
     def check(self, x: np.ndarray) -> np.ndarray:
         """Validate a design vector (shape (3,)) against its bounds."""

@@ -165,10 +165,15 @@ class Campbell:
 
 def check_modes(model: SpindleModel, n_modes: int, name: str = "n_modes") -> int:
     """``n_modes`` if the model has that many modes (one per degree of freedom)."""
+    return check_modes_of(model.n_dof, n_modes, name)
+
+
+def check_modes_of(n_dof: int, n_modes: int, name: str = "n_modes") -> int:
+    """``n_modes`` if a model with ``n_dof`` degrees of freedom has that many modes."""
     check_int(name, n_modes, minimum=1)
-    if n_modes > model.n_dof:
-        raise ValueError(f"{name} = {n_modes} is not allowed: the model has {model.n_dof} "
-                         "modes (one per degree of freedom)")
+    if n_modes > n_dof:
+        raise ValueError(f"{name} = {n_modes} is not allowed: the model has {n_dof} modes "
+                         "(one per degree of freedom)")
     return n_modes
 
 

@@ -9,7 +9,6 @@ Tables: ``[spindle]`` (:class:`~surrogate_rbrdo.runner.tables.SpindleTable`) and
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,19 +16,17 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.memory import check_memory
 from surrogate_rbrdo.core.validate import check_int, check_label
 from surrogate_rbrdo.reporting.spindle import (
     QUANTITY_HEADER,
     SpindleOverview,
-    overview_memory,
+    check_overview,
     quantity_rows,
     spindle_overview,
     write_overview,
 )
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
-from surrogate_rbrdo.spindle.modal import check_modes
 
 
 @dataclass(frozen=True)
@@ -76,16 +73,10 @@ def build(c: SpindleReportConfig, base_dir: Path) -> Plan:
         except ValueError as exc:
             raise ValueError(f"report.designs.{label}: {exc}") from None
     if c.report.include_box:
-        b = sp.design_map.bounds
-        for corner in itertools.product(*[(0, 1)] * b.shape[0]):
-            designs["corner " + "".join("-+"[k] for k in corner)] = np.array(
-                [b[i, k] for i, k in enumerate(corner)])
-        designs["centre"] = b.mean(axis=1)
-    r, model = c.report, sp.model(sp.baseline)
-    check_modes(model, r.n_modes, "report.n_modes")
-    check_memory({f"report.{k}": (getattr(r, k), b) for k, b in overview_memory(
-        model.n_dof, len(designs), n_speeds=r.n_speeds, campbell_speeds=r.campbell_speeds,
-        n_modes=r.n_modes).items()})
+        designs.update(sp.design_map.corners())
+    r = c.report
+    check_overview(sp, designs, n_speeds=r.n_speeds, campbell_speeds=r.campbell_speeds,
+                   n_modes=r.n_modes, where="report")
     return Plan(sp, designs, r)
 
 

@@ -25,11 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.memory import check_memory, memory_needs
 from surrogate_rbrdo.core.validate import check_int, check_label, check_positive
 from surrogate_rbrdo.reporting import tables_surrogate as tab
-from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
+from surrogate_rbrdo.reporting.plots_surrogate import parity_figures
 from surrogate_rbrdo.runner.experiments.study import surrogate_options
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.tables import (
@@ -41,8 +40,13 @@ from surrogate_rbrdo.runner.tables import (
 )
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
-from surrogate_rbrdo.surrogates.assessment import Assessment, FETruth, assess, fe_truth
-from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions, train_surrogate
+from surrogate_rbrdo.surrogates.assessment import (
+    Assessment,
+    FETruth,
+    fe_truth,
+    train_and_assess,
+)
+from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions
 
 DEFAULT_DESIGNS = {
     "resonant": (2000.0, 650.0, 60.0),
@@ -154,86 +158,33 @@ def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
                     progress=ctx.progress, label=ctx.label)
 
 
-@dataclass(frozen=True, eq=False)
-class Variant:
-    """One variant's assessment and the FE evaluations its training used, counted at the
-    sampler: ``fe_calls`` computed, ``fe_cache_hits`` loaded from the FE cache."""
-
-    assessment: Assessment
-    fe_calls: int
-    fe_cache_hits: int
-
-
-def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Variant, ...]:
+def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Assessment, ...]:
     """Every variant trained from the same seed stream (same DOE settings, same DOE)."""
-    out = []
-    for name, options in p.variants.items():
-        counter = CallCounter()
-        trained = train_surrogate(
-            p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0), counter=counter,
-            cache=fe_cache(ctx.cache_dir), progress=ctx.progress, label=f"{ctx.label} {name}")
-        out.append(Variant(assess(name, trained, done["truth"], p.limit,
-                                  rel_tol=p.validation.rel_tol), counter.calls, counter.cached))
-    return tuple(out)
-
-
-def _rows(p: Plan, t: FETruth, v: Variant) -> dict[str, list[Any]]:
-    labels, a = list(p.designs), v.assessment
-    tr = a.trained
-    rows: dict[str, list[Any]] = {
-        "metrics": [tab.metrics_row(a.name, t.y, a.y_pred, p.limit.threshold)],
-        "loo": tab.loo_rows(a.name, a.loo), "mc": tab.mc_rows(a.name, labels, t.X, a.mc),
-        "cost": [tab.cost_row(a.name, getattr(tr.options, "active_learning", False),
-                              tr.structure, tr.model.info.get("transform", ""),
-                              v.fe_calls + v.fe_cache_hits, tr.model.n_train, a.mc)]}
-    if tr.structure == "resonance":
-        n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
-        rows["sub"], rows["nc"] = tab.resonance_rows(a.name, tr.model, *t.resonance, labels,
-                                                     n_th)
-    return rows
+    return tuple(train_and_assess(
+        name, p.spindle, p.inputs, p.limit, options, done["truth"], rng=ctx.stream(0),
+        cache=fe_cache(ctx.cache_dir), rel_tol=p.validation.rel_tol, progress=ctx.progress,
+        label=ctx.label) for name, options in p.variants.items())
 
 
 def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
-    t, variants = done["truth"], done["variants"]
-    rows = [_rows(p, t, v) for v in variants]
-    vs = [v.assessment for v in variants]
-    table = {k: [r for v in rows for r in v.get(k, [])] for k in
-             ("metrics", "loo", "mc", "cost", "sub", "nc")}
-    for name, key, header in (("metrics.csv", "metrics", tab.METRICS_HEADER),
-                              ("loo.csv", "loo", tab.LOO_HEADER),
-                              ("mc_comparison.csv", "mc", tab.MC_HEADER),
-                              ("cost.csv", "cost", tab.COST_HEADER),
-                              ("resonance_submodels.csv", "sub", tab.SUB_HEADER),
-                              ("nc_at_designs.csv", "nc", tab.NC_HEADER)):
-        if table[key] or key not in ("sub", "nc"):
-            run.write_csv(name, header, table[key])
-    n = t.y.size
+    t, vs = done["truth"], done["variants"]
+    tables = tab.validation_tables(list(p.designs), t, vs, p.limit.threshold,
+                                   p.validation.n_theta_nc)
+    for name, (header, rows) in tables.items():
+        run.write_csv(name, header, rows)
     for a in vs:
-        run.save_figure(f"parity_{a.name}.png", parity_plot(
-            t.y * 1e6, a.y_pred * 1e6, title=f"{a.name}: peak amplitude at {n} fresh LHS "
-            "points", label="peak amplitude [µm]"))
-        run.save_figure(f"parity_log_{a.name}.png", parity_plot(
-            t.y * 1e6, a.y_pred * 1e6, title=f"{a.name}: peak amplitude at {n} fresh LHS "
-            "points, log scale", label="peak amplitude [µm]", log=True))
+        for name, fig in parity_figures(a.name, t.y, a.y_pred).items():
+            run.save_figure(name, fig)
     run.write_json("surrogate_info.json", {a.name: {k: v for k, v in a.trained.to_dict().items()
                                                     if k != "options"} for a in vs})
-    fe = {**t.calls, **{f"train_{v.assessment.name}": v.fe_calls for v in variants}}
-    hits = {**t.cache_hits, **{f"train_{v.assessment.name}": v.fe_cache_hits
-                               for v in variants}}
-    sur = {a.name: a.surrogate_calls for a in vs}
-    meta = {"fe_calls": {**fe, "total": sum(fe.values())},
-            "fe_cache_hits": {**hits, "total": sum(hits.values())},
-            "surrogate_calls": {**sur, "total": sum(sur.values())},
-            "n_theta": p.validation.n_theta, "n_test": int(n),
-            "note": "fe_calls: FE points computed in this run; fe_cache_hits: loaded from the "
-                    "FE cache (both counted at the sampler); cost.csv's fe_calls_train is their "
-                    "sum per variant"}
+    meta = {**tab.validation_calls(t, vs), "n_theta": p.validation.n_theta,
+            "n_test": int(t.y.size)}
     run.write_json("calls.json", meta)
     keep = ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe", "pf_sur", "ok_mean",
             "ok_std", "ok_pf")
     return {"variants": [a.name for a in vs], "meta": meta,
             "summary": [{k: x for k, x in zip(tab.MC_HEADER, r, strict=True) if k in keep}
-                        for r in table["mc"]]}
+                        for r in tables["mc_comparison.csv"][1]]}
 
 
 register_kind(Kind(
