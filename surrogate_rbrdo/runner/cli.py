@@ -18,7 +18,7 @@ import secrets
 import sys
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 # one BLAS thread: the hot paths are many small solves, where threads only add overhead
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -44,12 +44,20 @@ def describe_kinds() -> str:
     return "\n\n".join(out)
 
 
+class _Parser(argparse.ArgumentParser):
+    """Command-line errors in one line (``rbrdo: error: ...``), exit code 2, like a bad
+    config (argparse would print the usage first)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"rbrdo: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="rbrdo",
         description="Reliability-based robust design optimisation of spindle-bearing systems.")
     parser.add_argument("--version", action="version", version=f"rbrdo {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p_run = sub.add_parser("run", help="run an experiment config (experiments/*.toml)")
     p_run.add_argument("config", help="path to the experiment TOML file")
     p_run.add_argument("--results", default=None,

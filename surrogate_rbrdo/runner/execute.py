@@ -157,7 +157,7 @@ def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = 
     error during the work: the folder is marked ``failed``).
     """
     if accept_changes and not resume:
-        raise ValueError("--accept-changes is not allowed without --resume")
+        raise ValueError("--accept-changes is not allowed: it needs --resume")
     prep = prepare(config_path, seed=seed)
     run = _open(prep, results_dir, run_id, resume=resume, overwrite=overwrite,
                 accept_changes=accept_changes)

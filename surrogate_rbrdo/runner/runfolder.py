@@ -141,7 +141,8 @@ class RunFolder:
         if path.exists():
             cls._check_reuse(path, meta, resume=resume, overwrite=overwrite)
         elif resume:
-            raise ValueError(f"--resume: there is no run folder {str(path)!r} to continue")
+            raise ValueError(f"--resume: there is no run folder {str(path)!r} to continue: "
+                             "it does not exist (start without --resume)")
         aside = None
         if overwrite and path.exists():
             aside = path.with_name(f".{run_id}.replaced-{secrets.token_hex(3)}")
