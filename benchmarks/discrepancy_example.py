@@ -21,9 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
 from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
-from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 
 
 def main() -> None:
@@ -32,14 +33,14 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     from surrogate_rbrdo.rig.campaign import run_campaign  # the virtual rig (issue 14)
-    from surrogate_rbrdo.rig.config import rig_config_from_dict
+    from surrogate_rbrdo.rig.config import RigTable
 
     cfg = tomllib.loads(Path(args.config).read_text())
     out = Path(args.out)
     seed = int(cfg["experiment"].get("seed", 0))
-    sp = spindle_from_config(cfg["spindle"])
+    sp = build_spindle(parse(SpindleTable, cfg["spindle"], "spindle"))
     t0 = time.perf_counter()
-    rig = rig_config_from_dict(cfg["rig"])
+    rig = parse(RigTable, cfg["rig"], "rig").config()
     run_campaign(rig.truth, rig.options, out / "rig", rng=np.random.default_rng(seed))
     t1 = time.perf_counter()
     data = data_from_folder(out / "rig")

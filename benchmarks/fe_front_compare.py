@@ -40,8 +40,8 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 from pymoo.indicators.hv import HV  # noqa: E402
 
+from surrogate_rbrdo.core.schema import parse  # noqa: E402
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
-from surrogate_rbrdo.runner.schema import parse  # noqa: E402
 from surrogate_rbrdo.runner.tables import (  # noqa: E402
     LimitTable,
     SpindleTable,

@@ -12,19 +12,37 @@ ValueError: length_mm = -1.0 is not allowed: must be a finite number > 0
 Traceback (most recent call last):
 ...
 ValueError: p_target = 1.5 is not allowed: must lie in (0.0, 1.0)
+>>> check_range("a", "0.1", 0.0, 0.9)
+Traceback (most recent call last):
+...
+ValueError: a = '0.1' is not allowed: must be a number in [0.0, 0.9]
+>>> check_label("design", "../x")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+ValueError: design = '../x' is not allowed: a label must be 1-64 letters, digits, spaces or ...
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
+#: a label: names a design, variant or curve, and files and CSV columns made from it
+LABEL = re.compile(r"[\w+=,()%#-][\w .+=,()%#-]{0,63}")
+
 
 def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
+def _not_a_number(name: str, value: Any, what: str) -> None:
+    """Raise ``must be a number ...`` for a value of the wrong type (a string, a bool, ...)."""
+    if not _is_number(value):
+        raise ValueError(f"{name} = {value!r} is not allowed: must be a number {what}".rstrip())
 
 
 def check_finite(name: str, value: Any) -> float:
@@ -36,6 +54,7 @@ def check_finite(name: str, value: Any) -> float:
 
 def check_positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """Return ``float(value)`` if it is finite and > 0 (or >= 0 with ``allow_zero``)."""
+    _not_a_number(name, value, ">= 0" if allow_zero else "> 0")
     ok = _is_number(value) and math.isfinite(float(value))
     ok = ok and (float(value) >= 0 if allow_zero else float(value) > 0)
     if not ok:
@@ -48,6 +67,7 @@ def check_range(
     name: str, value: Any, lo: float, hi: float, *, inclusive: bool = True
 ) -> float:
     """Return ``float(value)`` if it lies in ``[lo, hi]`` (or ``(lo, hi)``)."""
+    _not_a_number(name, value, f"in [{lo}, {hi}]" if inclusive else f"in ({lo}, {hi})")
     ok = _is_number(value) and math.isfinite(float(value))
     if ok:
         v = float(value)
@@ -63,6 +83,25 @@ def check_int(name: str, value: Any, *, minimum: int = 0) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise ValueError(f"{name} = {value!r} is not allowed: must be an integer >= {minimum}")
     return int(value)
+
+
+def check_text(name: str, value: Any) -> str:
+    """Return ``value`` if it is a non-empty string without leading or trailing spaces."""
+    if not isinstance(value, str) or not value or value != value.strip():
+        raise ValueError(f"{name} = {value!r} is not allowed: must be a non-empty string "
+                         "without leading or trailing spaces")
+    return value
+
+
+def check_label(name: str, value: Any) -> str:
+    """Return ``value`` if it is a label that can name a file and a CSV column: 1-64
+    letters, digits, spaces or ``._+-=,()%#``, not starting with ``.`` or a space, not
+    ending with a space (so never ``..``, a path or a control character)."""
+    if not isinstance(value, str) or not LABEL.fullmatch(value) or value != value.rstrip():
+        raise ValueError(f"{name} = {value!r} is not allowed: a label must be 1-64 letters, "
+                         "digits, spaces or ._+-=,()%#, not starting with '.' or a space (it "
+                         "names files and columns)")
+    return value
 
 
 def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:

@@ -6,7 +6,7 @@ The runner (``rbrdo run experiments/discrepancy.toml``) is expected to do, in or
 1. the model: ``spindle_from_config(cfg["spindle"])`` → its geometry at the baseline design and
    its effects;
 2. the data: with ``[rig] effects = [...]``, the virtual rig's campaign into ``<run>/rig``
-   (``rig.config.rig_config_from_dict`` then ``rig.campaign.run_campaign``); with ``[data] path``
+   (``rig.config.RigTable(...).config()`` then ``rig.campaign.run_campaign``); with ``[data] path``
    a folder of the user's measurements; either way :func:`data_from_folder`;
 3. :func:`analyse` with :func:`options_from_dict` of ``[discrepancy]`` and the experiment's seed;
 4. the figures: ``reporting.plots_discrepancy.plot_all(result, <run>)``.

@@ -11,6 +11,7 @@ ValueError: unknown estimator 'nope'; known: ais, form, fosm, is, mc, sorm, subs
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from surrogate_rbrdo.core.registry import Registry
@@ -24,8 +25,6 @@ def get_estimator(name: str, **options: Any) -> Any:
     An unknown name raises ``ValueError`` listing the known ones; an unknown option raises
     ``ValueError`` listing the allowed ones.
     """
-    import dataclasses
-
     cls = ESTIMATORS.get(name)
     allowed = [f.name for f in dataclasses.fields(cls) if f.init]
     unknown = sorted(set(options) - set(allowed))

@@ -17,12 +17,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from joblib import Parallel, delayed
+from threadpoolctl import threadpool_limits
+
 from surrogate_rbrdo.core.validate import check_int
 
 
 def _call_pinned(task: Callable[[], Any], blas_threads: int) -> Any:
-    from threadpoolctl import threadpool_limits
-
     with threadpool_limits(limits=blas_threads, user_api="blas"):
         return task()
 
@@ -45,7 +46,5 @@ def run_many(tasks: Sequence[Callable[[], Any]], *, n_jobs: int = 1,
     tasks = list(tasks)
     if n_jobs == 1 or len(tasks) <= 1:
         return [_call_pinned(t, blas_threads) for t in tasks]
-    from joblib import Parallel, delayed
-
     return list(Parallel(n_jobs=min(n_jobs, len(tasks)), backend="loky")(
         delayed(_call_pinned)(t, blas_threads) for t in tasks))

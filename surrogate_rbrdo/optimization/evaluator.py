@@ -8,6 +8,7 @@ and writes a one-line history entry. Optionally advances a tqdm progress bar.
 from __future__ import annotations
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from surrogate_rbrdo.optimization.pareto import feasible_pareto
 from surrogate_rbrdo.optimization.result import (
@@ -42,8 +43,6 @@ class RecordingEvaluator:
         self.history: list[dict] = []
         self._bar = None
         if progress:
-            from tqdm.auto import tqdm
-
             self._bar = tqdm(total=total, desc=desc, unit="gen", leave=False)
 
     def __call__(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

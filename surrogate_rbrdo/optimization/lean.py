@@ -32,7 +32,7 @@ from surrogate_rbrdo.optimization.pareto import total_violation
 def _rank_crowding(F: np.ndarray, n_survive: int, rng: np.random.Generator, nds, crowd
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Survivor indices of feasible ``F`` plus their rank and crowding (pymoo's rule)."""
-    from pymoo.util.randomized_argsort import randomized_argsort
+    from pymoo.util.randomized_argsort import randomized_argsort  # heavy: see lean_nsga2
 
     fronts = nds.do(F, n_stop_if_ranked=n_survive)
     surv, rank, cd = [], [], []
@@ -110,6 +110,7 @@ def lean_nsga2(evaluate, lo: np.ndarray, hi: np.ndarray, *, pop_size: int, n_gen
                mutation_prob_var: float, mutation_eta: float, eliminate_duplicates: bool,
                seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Run NSGA-II; ``evaluate(X) -> (F, G)``. Returns the final population ``(X, F, G)``."""
+    # pymoo (~1.5 s of imports) only when NSGA-II runs, not on `import surrogate_rbrdo`
     from pymoo.operators.crossover.sbx import SBX
     from pymoo.operators.mutation.pm import PM
     from pymoo.operators.sampling.lhs import sampling_lhs

@@ -37,6 +37,7 @@ from surrogate_rbrdo.core.registry import Registry
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 from surrogate_rbrdo.optimization.evaluator import RecordingEvaluator
+from surrogate_rbrdo.optimization.lean import lean_nsga2
 from surrogate_rbrdo.optimization.result import OptimizationResult
 
 OPTIMIZERS = Registry("optimizer")
@@ -116,6 +117,8 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
     progress : bool
         Show a tqdm bar (one tick per generation).
     """
+    # pymoo is imported where NSGA-II runs: ~1.5 s of imports that `rbrdo kinds`, a rejected
+    # config and every library user who never optimises would otherwise pay
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
     from pymoo.operators.crossover.sbx import SBX
@@ -171,8 +174,6 @@ def run_nsga2(formulation, lower, upper, *, rng: np.random.Generator,
 
 def _run_lean(formulation, evaluator, lo, hi, options, seed, prob, prob_var
               ) -> OptimizationResult:
-    from surrogate_rbrdo.optimization.lean import lean_nsga2
-
     n_obj, n_con = formulation.n_obj, formulation.n_con
     t0 = time.perf_counter()
     try:

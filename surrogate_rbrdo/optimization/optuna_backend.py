@@ -63,7 +63,7 @@ def run_optuna(formulation, lower, upper, *, rng: np.random.Generator,
                options: OptunaOptions | None = None, progress: bool = False
                ) -> OptimizationResult:
     """Minimise a formulation with optuna's NSGA-II; same result type as :func:`run_nsga2`."""
-    import optuna
+    import optuna  # heavy (with its storage and sampler modules): only when optuna is chosen
     from optuna.samplers import NSGAIISampler
     from optuna.samplers.nsgaii import PolynomialMutation, SBXCrossover
 

@@ -15,9 +15,7 @@ its Table 6 numbers are Δσ_y); Δμ_y is reported alongside.
 
 from __future__ import annotations
 
-import csv
 import os
-import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.files import atomic_write_text, rows_text
 from surrogate_rbrdo.optimization.pareto import asf_compromise, feasible_pareto
 from surrogate_rbrdo.optimization.result import OptimizationResult
 
@@ -161,22 +160,7 @@ def front_table(result: OptimizationResult, *, design_names: Sequence[str] | Non
 
 def write_csv(path: str | os.PathLike, rows: Sequence[Mapping[str, Any]],
               columns: Sequence[str] | None = None) -> Path:
-    """Write ``rows`` to ``path`` atomically (temporary file in the same folder + ``os.replace``).
-
-    Columns default to the union of keys in first-seen order.
-    """
-    path = Path(path)
-    if columns is None:
-        columns = list(dict.fromkeys(k for r in rows for k in r))
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(columns), extrasaction="raise")
-            w.writeheader()
-            w.writerows(rows)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    """Write ``rows`` to ``path`` through the toolkit's one atomic writer
+    (``core.files.atomic_write_text``: a temporary file in the same folder, mode 0644, then
+    ``os.replace``). Columns default to the union of keys in first-seen order."""
+    return atomic_write_text(path, rows_text(rows, columns))

@@ -19,6 +19,7 @@ from scipy.optimize import brentq
 from scipy.stats import norm
 
 from surrogate_rbrdo.core.protocols import LimitState
+from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 
 @dataclass(frozen=True)
@@ -40,8 +41,6 @@ class LinearMixToy:
         return a * theta[:, 0][None, :] + (1.0 - a) * theta[:, 1][None, :]
 
     def inputs(self):
-        from surrogate_rbrdo.uncertainty import MultivariateNormal
-
         return MultivariateNormal(np.array(self.mu), std=np.array(self.sigma))
 
     @property

@@ -1,8 +1,9 @@
 """Saving figures written straight to a path (the library's rig and identification reports).
 
 Run folders save figures themselves (``RunFolder.save_figure``); library functions that write
-a report into a folder use :func:`save_figure`: the file is written atomically (a temporary
-name, then ``os.replace``) and the figure is closed.
+a report into a folder use :func:`save_figure`: the file goes through the toolkit's one atomic
+writer (``core.files.atomic_write_bytes``: a temporary name, mode 0644, then ``os.replace``)
+and the figure is closed.
 
 >>> import tempfile, pathlib
 >>> plt = pyplot()
@@ -16,9 +17,10 @@ True
 
 from __future__ import annotations
 
-import os
-import secrets
+import io
 from pathlib import Path
+
+from surrogate_rbrdo.core.files import atomic_write_bytes
 
 
 def pyplot():
@@ -34,9 +36,8 @@ def pyplot():
 def save_figure(fig, path: str | Path, *, dpi: int = 120) -> Path:
     """Save ``fig`` to ``path`` atomically (format from the suffix) and close it."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    fig.savefig(tmp, dpi=dpi, format=path.suffix[1:] or "png")
-    os.replace(tmp, path)
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=dpi, format=path.suffix[1:] or "png")
+    atomic_write_bytes(path, buf.getvalue())
     pyplot().close(fig)
     return path

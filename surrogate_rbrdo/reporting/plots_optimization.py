@@ -51,11 +51,14 @@ def plot_pareto_fronts(fronts: Mapping[str, np.ndarray], *,
         ax = fig.subplots()
     else:
         fig = ax.figure
+    cloud_label = "feasible designs evaluated (faint, in each front's colour)"
     for i, (label, F) in enumerate(fronts.items()):
         color = f"C{i}"
         if clouds is not None and label in clouds and len(clouds[label]):
             C = np.asarray(clouds[label], dtype=float) * scale
-            ax.scatter(C[:, 0], C[:, 1], s=3, color=color, alpha=0.12, linewidths=0)
+            ax.scatter(C[:, 0], C[:, 1], s=3, color=color, alpha=0.12, linewidths=0,
+                       label=cloud_label)
+            cloud_label = "_" + cloud_label          # one legend entry for all the clouds
         F = np.asarray(F, dtype=float)
         F = F[np.argsort(F[:, 0])] * scale
         ax.plot(F[:, 0], F[:, 1], "o-", ms=3, lw=1.2, color=color, label=label)

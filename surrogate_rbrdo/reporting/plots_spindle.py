@@ -29,7 +29,7 @@ def plot_campbell(campbells: dict[str, object], *, speed_max_rpm: float | None =
     the 1x line and the critical speeds (circles). ``campbells`` maps a label to a
     :class:`~surrogate_rbrdo.spindle.modal.Campbell`; ``of_total``: how many designs there
     were if only these were computed (the title says "first N of M")."""
-    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
+    fig = Figure(figsize=(9.0, 5.0), layout="constrained")
     ax = fig.subplots()
     top, f_max = 0.0, 0.0
     for c_i, (label, c) in enumerate(campbells.items()):
@@ -57,15 +57,23 @@ def plot_campbell(campbells: dict[str, object], *, speed_max_rpm: float | None =
     ax.set_title(f"Campbell diagram, {_designs(len(campbells), of_total)}\n"
                  "solid: forward whirl, dashed: backward; o: 1x critical speeds [rpm]",
                  fontsize=10)
-    ax.legend(fontsize=8)
+    _outside_legend(ax)
     return fig
+
+
+def _outside_legend(ax) -> None:
+    """The legend right of the axes (constrained layout makes room), so it never hides a
+    curve."""
+    n = len(ax.get_legend_handles_labels()[1])
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+              ncols=2 if n > 18 else 1)
 
 
 def plot_unbalance_response(curves: dict[str, tuple[np.ndarray, np.ndarray]], *,
                             limit_um: float | None = None,
                             bands: dict[str, tuple[np.ndarray, np.ndarray]] | None = None):
     """Tool-tip amplitude (µm) vs speed (rpm), log scale; optional ±2σ bands and δ_lim."""
-    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
+    fig = Figure(figsize=(9.0, 5.0), layout="constrained")
     ax = fig.subplots()
     for label, (sp, amp_um) in curves.items():
         line, = ax.semilogy(sp, amp_um, lw=1.3, label=label)
@@ -79,7 +87,7 @@ def plot_unbalance_response(curves: dict[str, tuple[np.ndarray, np.ndarray]], *,
     ax.set_title(f"tool-tip unbalance response (nominal θ), {_designs(len(curves), None)}",
                  fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, ncols=2 if len(curves) > 6 else 1)
+    _outside_legend(ax)
     return fig
 
 

@@ -14,10 +14,44 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from surrogate_rbrdo.core.memory import check_memory
 from surrogate_rbrdo.reporting.plots_spindle import plot_campbell, plot_unbalance_response
 from surrogate_rbrdo.spindle.evaluate import design_quantities
 from surrogate_rbrdo.spindle.harmonic import tool_amplitude
-from surrogate_rbrdo.spindle.modal import campbell
+from surrogate_rbrdo.spindle.modal import campbell, check_modes_of
+
+#: peak bytes per speed and degree of freedom of one design's unbalance response (measured
+#: with tracemalloc on the reference spindle: ~390 B; with margin)
+BYTES_PER_SPEED_DOF = 512.0
+
+
+def overview_memory(n_dof: int, n_designs: int, *, n_speeds: int, campbell_speeds: int,
+                    n_modes: int) -> dict[str, float]:
+    """Peak bytes of :func:`spindle_overview`'s arrays per size field (for
+    ``core.memory.check_memory``): the unbalance response of one design at a time and every
+    design's curve; the Campbell arrays (frequency, damping, whirl) of every design and one
+    state-space eigenproblem.
+
+    >>> overview_memory(80, 4, n_speeds=10 ** 12, campbell_speeds=25, n_modes=8)["n_speeds"] > 1e16
+    True
+    """
+    return {"n_speeds": BYTES_PER_SPEED_DOF * n_speeds * n_dof + 8.0 * n_speeds * n_designs,
+            "campbell_speeds": 24.0 * campbell_speeds * n_modes * n_designs
+            + 64.0 * (2 * n_dof) ** 2}
+
+
+def check_overview(spindle: Any, designs: Mapping[str, np.ndarray], *, n_speeds: int,
+                   campbell_speeds: int, n_modes: int, where: str = "") -> None:
+    """Refuse (before any work) more modes than the model has and sizes whose arrays would
+    not fit in the memory available now; messages name ``<where>.<field>``."""
+    pre = f"{where}." if where else ""
+    n_dof = spindle.model(np.asarray(next(iter(designs.values())), float)).n_dof
+    check_modes_of(n_dof, n_modes, f"{pre}n_modes")
+    sizes = {"n_speeds": n_speeds, "campbell_speeds": campbell_speeds}
+    check_memory({f"{pre}{k}": (sizes[k], b) for k, b in overview_memory(
+        n_dof, len(designs), n_speeds=n_speeds, campbell_speeds=campbell_speeds,
+        n_modes=n_modes).items()})
+
 
 #: columns of :func:`quantity_rows`
 QUANTITY_HEADER = ["design", "preload_N", "span_mm", "diameter_mm", "rotor_mass_kg",
@@ -43,7 +77,10 @@ def spindle_overview(spindle: Any, designs: Mapping[str, np.ndarray], *, n_speed
                      quantities: bool = False, progress: bool = False, label: str = ""
                      ) -> SpindleOverview:
     """Response curves over the spindle's speed range, Campbell diagrams over 0..top speed
-    (``n_campbell`` designs, default all) and optionally the design quantities."""
+    (``n_campbell`` designs, default all) and optionally the design quantities. Sizes whose
+    arrays would not fit, or more modes than the model has, are refused before any work."""
+    check_overview(spindle, designs, n_speeds=n_speeds, campbell_speeds=campbell_speeds,
+                   n_modes=n_modes)
     g = spindle.geometry
     speeds = np.linspace(g.speed_min_rpm, g.speed_max_rpm, n_speeds)
     camp_speeds = np.linspace(0.0, g.speed_max_rpm, campbell_speeds)
@@ -102,5 +139,5 @@ def write_overview(out: Any, ov: SpindleOverview, *, n_modes: int, speed_max_rpm
         {k: (ov.speeds_rpm, v) for k, v in ov.amplitude_um.items()}, limit_um=limit_um))
 
 
-__all__ = ["QUANTITY_HEADER", "SpindleOverview", "quantity_rows", "spindle_overview",
-           "write_overview"]
+__all__ = ["QUANTITY_HEADER", "SpindleOverview", "check_overview", "overview_memory",
+           "quantity_rows", "spindle_overview", "write_overview"]

@@ -121,6 +121,47 @@ def cost_row(name: str, active_learning: bool, structure: str, transform: str, f
             int(cmp.ok_pf.sum()), int(cmp.ok_mean.sum()), int(cmp.ok_std.sum()), cmp.x.shape[0]]
 
 
+def validation_tables(labels: list[str], truth: Any, assessments: Any, limit: float,
+                      n_theta_nc: int) -> dict[str, tuple[list[str], list[list[Any]]]]:
+    """The tables of a surrogate validation, file name → (header, rows): ``metrics.csv``,
+    ``loo.csv``, ``mc_comparison.csv``, ``cost.csv`` (the training's FE evaluations, computed
+    or loaded from the cache: the same on a rerun) and, with a resonance variant,
+    ``resonance_submodels.csv`` and ``nc_at_designs.csv``."""
+    out: dict[str, tuple[list[str], list[list[Any]]]] = {
+        "metrics.csv": (METRICS_HEADER, []), "loo.csv": (LOO_HEADER, []),
+        "mc_comparison.csv": (MC_HEADER, []), "cost.csv": (COST_HEADER, [])}
+    for a in assessments:
+        tr = a.trained
+        fe = a.fe_calls + a.fe_cache_hits if a.fe_calls is not None else tr.fe_calls
+        out["metrics.csv"][1].append(metrics_row(a.name, truth.y, a.y_pred, limit))
+        out["loo.csv"][1].extend(loo_rows(a.name, a.loo))
+        out["mc_comparison.csv"][1].extend(mc_rows(a.name, labels, truth.X, a.mc))
+        out["cost.csv"][1].append(cost_row(
+            a.name, getattr(tr.options, "active_learning", False), tr.structure,
+            tr.model.info.get("transform", ""), fe, tr.model.n_train, a.mc))
+        if tr.structure == "resonance":
+            sub, nc = resonance_rows(a.name, tr.model, *truth.resonance, labels,
+                                     min(n_theta_nc, truth.theta.shape[0]))
+            out.setdefault("resonance_submodels.csv", (SUB_HEADER, []))[1].extend(sub)
+            out.setdefault("nc_at_designs.csv", (NC_HEADER, []))[1].extend(nc)
+    return out
+
+
+def validation_calls(truth: Any, assessments: Any) -> dict[str, Any]:
+    """Counted model calls of a surrogate validation (``calls.json``): FE calls computed and
+    FE cache hits per stage and variant, surrogate calls per variant."""
+    fe = {**truth.calls, **{f"train_{a.name}": a.fe_calls or 0 for a in assessments}}
+    hits = {**truth.cache_hits, **{f"train_{a.name}": a.fe_cache_hits or 0
+                                   for a in assessments}}
+    sur = {a.name: a.surrogate_calls for a in assessments}
+    return {"fe_calls": {**fe, "total": sum(fe.values())},
+            "fe_cache_hits": {**hits, "total": sum(hits.values())},
+            "surrogate_calls": {**sur, "total": sum(sur.values())},
+            "note": "fe_calls: FE points computed in this run; fe_cache_hits: loaded from the "
+                    "FE cache (both counted at the sampler); cost.csv's fe_calls_train is their "
+                    "sum per variant"}
+
+
 __all__ = ["COST_HEADER", "LOO_HEADER", "MC_HEADER", "METRICS_HEADER", "NC_HEADER",
            "SUB_HEADER", "cost_row", "loo_rows", "mc_rows", "metrics_row", "rel_row",
-           "resonance_rows"]
+           "resonance_rows", "validation_calls", "validation_tables"]

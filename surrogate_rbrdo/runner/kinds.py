@@ -6,7 +6,7 @@ module in ``surrogate_rbrdo/runner/experiments/`` (every module there is importe
 
 * ``schema``: a frozen dataclass with one field per config table (each a frozen dataclass
   whose annotations and ``__post_init__`` are the table's schema); the runner validates the
-  whole config against it before any work (:func:`~surrogate_rbrdo.runner.schema.parse`).
+  whole config against it before any work (:func:`~surrogate_rbrdo.core.schema.parse`).
 * ``build(config, base_dir) -> plan``: turns the validated tables into the objects the stages
   use (a spindle, a problem, options); raises ``ValueError`` naming the dotted path; runs
   before the run folder exists, so a rejected config leaves nothing behind. Default: the

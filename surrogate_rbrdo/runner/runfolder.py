@@ -2,22 +2,26 @@
 
 Rules (tested in ``tests/runner/test_runfolder.py``):
 
-* a run id and an experiment name are one folder name each (letters, digits, ``._-``), so a
-  run folder never lies outside the results root;
+* a run id and an experiment name are one folder name each (letters, digits, ``._-``), and
+  every file name a kind writes is one path component (:meth:`RunFolder.file`), so nothing is
+  written outside the run folder;
 * a folder that holds a run is never reused silently: a finished run is replaced only with
-  ``overwrite``, an unfinished one is continued with ``resume`` (or replaced);
+  ``overwrite`` (renamed aside, deleted when the new run completes), an unfinished one is
+  continued with ``resume`` (or replaced); a symbolic link is never a run folder;
 * ``meta.json`` says ``status``: ``running`` (with the pid), ``complete`` (written last),
   ``failed`` (with the error) or ``interrupted`` (with the signal); only ``complete`` is
   finished;
 * every stage's frozen result is pickled to ``stages/<n>-<name>.pkl`` when the stage ends, so
   a resumed run loads it instead of recomputing;
 * every file is written to a temporary name in the same folder, made 0644 and moved into
-  place with ``os.replace``, so a crash never leaves a half-written table.
+  place with ``os.replace`` (``core.files``), so a crash never leaves a half-written table;
+  folders are 0755, whatever the umask;
+* every session (start or resume) records the code it ran (git SHA, source hash, package
+  versions).
 """
 
 from __future__ import annotations
 
-import csv
 import io
 import json
 import os
@@ -27,21 +31,26 @@ import re
 import secrets
 import shutil
 import socket
-import subprocess
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from surrogate_rbrdo.core.files import (
+    atomic_write_bytes,
+    atomic_write_text,
+    csv_text,
+    json_text,
+    make_dirs,
+    rows_text,
+)
+from surrogate_rbrdo.core.provenance import environment
 
-PACKAGES = ("surrogate_rbrdo", "numpy", "scipy", "scikit-learn", "smt", "pymoo", "optuna",
-            "joblib", "matplotlib", "pydantic", "dask", "distributed")
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
-FILE_MODE = 0o644
+#: a file name inside a run folder: one path component, no control characters
+FILE_NAME = re.compile(r"[^/\\\x00-\x1f\x7f]{1,200}")
 
 
 def check_name(where: str, value: Any) -> str:
@@ -51,81 +60,6 @@ def check_name(where: str, value: Any) -> str:
                          "'.', '_' or '-', starting with a letter or digit (it names a folder "
                          "under the results root)")
     return value
-
-
-def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically (temporary file + ``os.replace``), mode 0644."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    try:
-        tmp.write_bytes(data)
-        os.chmod(tmp, FILE_MODE)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
-
-
-def atomic_write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically, mode 0644."""
-    return atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def csv_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
-    """CSV with ``\\n`` line ends."""
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    w.writerows(rows)
-    return buf.getvalue()
-
-
-def rows_text(rows: Sequence[Mapping[str, Any]]) -> str:
-    """CSV of dict rows (columns: the union of keys in first-seen order; the csv module's
-    default ``\\r\\n`` line ends, as the study's tables always had)."""
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(dict.fromkeys(k for r in rows for k in r)),
-                       extrasaction="raise")
-    w.writeheader()
-    w.writerows(rows)
-    return buf.getvalue()
-
-
-def git_sha(cwd: str | Path | None = None) -> str | None:
-    try:
-        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=cwd, capture_output=True,
-                             text=True, timeout=5, check=False)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return out.stdout.strip() or None
-
-
-def package_versions() -> dict[str, str | None]:
-    out: dict[str, str | None] = {}
-    for p in PACKAGES:
-        try:
-            out[p] = metadata.version(p)
-        except metadata.PackageNotFoundError:
-            out[p] = None
-    return out
-
-
-def json_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer, np.bool_)):
-        return o.item()
-    if isinstance(o, Path):
-        return str(o)
-    if isinstance(o, Mapping):
-        return dict(o)
-    if isinstance(o, (tuple, set, frozenset)):
-        return list(o)
-    if hasattr(o, "to_dict"):
-        return o.to_dict()
-    raise TypeError(f"cannot serialise {type(o).__name__}")
 
 
 def read_meta(path: Path) -> dict[str, Any] | None:
@@ -155,9 +89,26 @@ class AlreadyComplete(Exception):
     """``resume`` of a run that has finished: nothing to do."""
 
 
+def check_root(value: Any, where: str = "--results") -> Path:
+    """A results root: a folder (existing or to be created), not a file, not ``""``."""
+    if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
+        raise ValueError(f"{where} = {value!r} is not allowed: give a folder (e.g. results)")
+    root = Path(value)
+    p = root
+    while not p.exists() and p.parent != p:
+        p = p.parent
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"{where} = {str(value)!r} is not allowed: {str(p)!r} is a file, "
+                         "not a folder")
+    return root
+
+
 @dataclass
 class RunFolder:
-    """One run's folder: files, stage results and ``meta.json``."""
+    """One run's folder: files, stage results and ``meta.json``.
+
+    ``replaced``: where an overwritten run waits (renamed aside) until this one completes.
+    """
 
     path: Path
     experiment: str
@@ -165,6 +116,7 @@ class RunFolder:
     meta: dict[str, Any] = field(default_factory=dict)
     started: float = field(default_factory=time.time)
     timings: dict[str, float] = field(default_factory=dict)
+    replaced: Path | None = None
 
     @classmethod
     def open(cls, root: str | Path, experiment: str, run_id: str | None = None, *,
@@ -173,25 +125,35 @@ class RunFolder:
 
         Raises ``ValueError`` naming ``--overwrite``/``--resume``/a new id when the folder
         holds a run that may not be reused, :class:`AlreadyComplete` when ``resume`` finds a
-        finished run.
+        finished run. With ``overwrite`` the old run is renamed aside and deleted when the
+        new one completes (:meth:`stop`).
         """
+        root = check_root(root)
         check_name("experiment.name", experiment)
         if run_id is None:
             run_id = f"{datetime.now(UTC).strftime('%Y%m%dT%H%M%SZ')}-{secrets.token_hex(3)}"
         check_name("--run-id", run_id)
-        path = Path(root) / experiment / run_id
+        path = root / experiment / run_id
+        if path.is_symlink():
+            raise ValueError(f"{str(path)!r} is a symbolic link, not a run folder: choose "
+                             "another --run-id")
         meta = read_meta(path) if path.exists() else None
         if path.exists():
             cls._check_reuse(path, meta, resume=resume, overwrite=overwrite)
         elif resume:
-            raise ValueError(f"--resume: there is no run folder {str(path)!r} to continue")
+            raise ValueError(f"--resume: there is no run folder {str(path)!r} to continue: "
+                             "it does not exist (start without --resume)")
+        aside = None
         if overwrite and path.exists():
-            shutil.rmtree(path)
+            aside = path.with_name(f".{run_id}.replaced-{secrets.token_hex(3)}")
+            os.replace(path, aside)
         if meta is None or overwrite:
-            path.parent.mkdir(parents=True, exist_ok=True)
+            make_dirs(path.parent)
             path.mkdir()
-            meta = {}
-        return cls(path=path, experiment=experiment, run_id=run_id, meta=dict(meta))
+            os.chmod(path, 0o755)
+            meta = {"replaced_run": str(aside)} if aside else {}
+        return cls(path=path, experiment=experiment, run_id=run_id, meta=dict(meta),
+                   replaced=aside)
 
     @staticmethod
     def _check_reuse(path: Path, meta: Mapping[str, Any] | None, *, resume: bool,
@@ -218,6 +180,12 @@ class RunFolder:
 
     # ------------------------------------------------------------------ files
     def file(self, name: str) -> Path:
+        """``name`` inside the run folder: one path component (no separator, no control
+        character, not ``.``/``..``), so nothing is written outside the folder."""
+        if not isinstance(name, str) or not FILE_NAME.fullmatch(name) or name in (".", "..") \
+                or name != name.strip():
+            raise ValueError(f"file name {name!r} is not allowed: must be one file name inside "
+                             f"the run folder {str(self.path)!r} (no '/', no control characters)")
         return self.path / name
 
     def write_bytes(self, name: str, data: bytes) -> Path:
@@ -227,7 +195,7 @@ class RunFolder:
         return atomic_write_text(self.file(name), text)
 
     def write_json(self, name: str, data: Any) -> Path:
-        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+        return self.write_text(name, json_text(data))
 
     def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence[Any]]) -> Path:
         return self.write_text(name, csv_text(header, rows))
@@ -268,27 +236,34 @@ class RunFolder:
         self.meta.update(update)
         return self.write_json("meta.json", self.meta)
 
-    def start(self, *, kind: str, seeds: Mapping[str, Any]) -> None:
-        """Mark the run ``running`` (this process) with the environment it runs in."""
-        sessions = list(self.meta.get("sessions", []))
+    def start(self, *, kind: str, seeds: Mapping[str, Any], **info: Any) -> None:
+        """Mark the run ``running`` (this process) with the environment it runs in; every
+        start or resume adds a session with its code version and package versions."""
         now = datetime.fromtimestamp(self.started, UTC).isoformat()
-        sessions.append(now)
+        env = environment()
+        sessions = [s if isinstance(s, dict) else {"started_utc": s}
+                    for s in self.meta.get("sessions", [])]
+        sessions.append({"started_utc": now, "pid": os.getpid(), **env})
         self.write_meta(
             experiment=self.experiment, run_id=self.run_id, kind=kind, status="running",
             pid=os.getpid(), host=socket.gethostname(),
             started_utc=self.meta.get("started_utc", now), sessions=sessions,
-            git_sha=git_sha(Path(__file__).parent), python=platform.python_version(),
-            platform=platform.platform(), packages=package_versions(), seeds=dict(seeds))
+            python=platform.python_version(), platform=platform.platform(), **env,
+            seeds=dict(seeds), **info)
 
     def stop(self, status: str, **info: Any) -> None:
-        """Mark the run ``complete``, ``failed`` or ``interrupted``."""
+        """Mark the run ``complete``, ``failed`` or ``interrupted``; a complete run deletes
+        the run it replaced."""
         files = sorted(p.name for p in self.path.iterdir() if p.is_file()
                        and not p.name.startswith("."))
+        if status == "complete" and self.replaced is not None:
+            shutil.rmtree(self.replaced, ignore_errors=True)
+            self.meta.pop("replaced_run", None)
+            self.replaced = None
         self.write_meta(status=status, finished_utc=datetime.now(UTC).isoformat(),
                         wall_time_s=time.time() - self.started,
                         timings_s={**self.meta.get("timings_s", {}), **self.timings},
                         files=sorted(set(files) | {"meta.json"}), **info)
 
 
-__all__ = ["AlreadyComplete", "RunFolder", "atomic_write_bytes", "atomic_write_text",
-           "check_name", "csv_text", "json_default", "read_meta", "rows_text"]
+__all__ = ["AlreadyComplete", "RunFolder", "check_name", "check_root", "read_meta"]

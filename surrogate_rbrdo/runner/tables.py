@@ -4,14 +4,12 @@
 :func:`build_spindle`), ``[uncertainty]`` (→ :func:`build_inputs`), ``[limit]``,
 ``[response]`` and ``[deterministic]``; :func:`require_memory` refuses sizes whose arrays would
 not fit before any work starts. Each table is a frozen dataclass checked by
-:func:`~surrogate_rbrdo.runner.schema.parse`; the builders raise ``ValueError`` naming the
+:func:`~surrogate_rbrdo.core.schema.parse`; the builders raise ``ValueError`` naming the
 dotted path of the field.
 """
 
 from __future__ import annotations
 
-import json
-import os
 import shutil
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -19,15 +17,15 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.memory import available_memory
 from surrogate_rbrdo.core.protocols import LimitState
 from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.formulations import DeterministicOptions
 from surrogate_rbrdo.runner.runfolder import check_name
-from surrogate_rbrdo.runner.schema import load_toml
 from surrogate_rbrdo.spindle.assembly import RPM
-from surrogate_rbrdo.spindle.effects import effect_from_dict
+from surrogate_rbrdo.spindle.effects import effects_from_data
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
-from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry
+from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry, check_balance_grade
 from surrogate_rbrdo.spindle.practice import PracticeSpec
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
 from surrogate_rbrdo.study.constraints import spindle_constraints
@@ -43,19 +41,20 @@ from surrogate_rbrdo.uncertainty import stiffness_factors
 @dataclass(frozen=True)
 class ExperimentTable:
     """``[experiment]``: ``name`` (the results sub-folder), ``kind``, ``seed``,
-    ``results_dir`` (the results root, default ``results``), ``description``."""
+    ``results_dir`` (the results root, relative to the config file; default ``results`` in
+    the working directory), ``description``."""
 
     name: str
     kind: str
     seed: int = 0
-    results_dir: str = "results"
+    results_dir: str | None = None
     description: str = ""
 
     def __post_init__(self) -> None:
         check_name("name", self.name)
         check_int("seed", self.seed, minimum=0)
-        if not self.results_dir:
-            raise ValueError("results_dir = '' is not allowed: give a folder")
+        if self.results_dir is not None and not self.results_dir.strip():
+            raise ValueError(f"results_dir = {self.results_dir!r} is not allowed: give a folder")
 
 
 @dataclass(frozen=True)
@@ -85,28 +84,17 @@ class SpindleTable:
     baseline: tuple[float, float, float] | None = None
     theta_bearings: tuple[str, ...] | None = None
 
+    def __post_init__(self) -> None:
+        if not self.geometry or self.geometry != self.geometry.strip():
+            raise ValueError(f"geometry = {self.geometry!r} is not allowed: give a built-in "
+                             "spindle (e.g. 'reference') or a .toml/.json file")
+        if self.balance_grade_mm_s is not None:
+            check_balance_grade("balance_grade_mm_s", self.balance_grade_mm_s)
+
 
 def _geometry_file(path: Path) -> SpindleGeometry:
     where = f"spindle.geometry file {str(path)!r}"
-    if path.suffix == ".toml":
-        data: Any = load_toml(path, "spindle.geometry file")
-    elif path.suffix == ".json":
-        if not path.is_file():
-            raise ValueError(f"{where} does not exist")
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise ValueError(f"{where} is not valid JSON: {exc}") from None
-    else:
-        raise ValueError(f"{where} is not allowed: the suffix must be .toml or .json")
-    if not isinstance(data, dict):
-        raise ValueError(f"{where} holds a {type(data).__name__}: must be a table (object)")
-    try:
-        geo = SpindleGeometry.from_dict(data.get("geometry", data))
-    except KeyError as exc:
-        raise ValueError(f"{where}: a required key {exc} is missing") from None
-    except (TypeError, AttributeError, ValueError) as exc:
-        raise ValueError(f"{where}: {exc}") from None
+    geo = SpindleGeometry.load(path, "spindle.geometry file")
     if not any(u.magnitude_kgm > 0 for u in geo.unbalances):
         raise ValueError(f"{where}: every unbalance is zero (or there is none): the unbalance "
                          "response would be 0 everywhere; give unbalances[].magnitude_kgm > 0")
@@ -128,13 +116,7 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
         sp = ReferenceSpindle(geometry, (), DesignMap(), np.array(DesignMap().lower))
         sp = replace(sp, baseline=np.mean(sp.design_map.bounds, axis=1))
     if t.effects is not None:
-        effects = []
-        for i, e in enumerate(t.effects):
-            try:
-                effects.append(effect_from_dict(e))
-            except (TypeError, ValueError) as exc:
-                raise ValueError(f"spindle.effects[{i}]: {exc}") from None
-        sp = replace(sp, effects=tuple(effects))
+        sp = replace(sp, effects=effects_from_data(t.effects, "spindle.effects"))
     if t.design_map is not None:
         try:
             sp = replace(sp, design_map=DesignMap(**vars(t.design_map)))
@@ -147,19 +129,10 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
             raise ValueError(f"spindle.baseline: {exc}") from None
     if t.theta_bearings is not None:
         sp = replace(sp, theta_bearings=tuple(t.theta_bearings))
-    # every check of DesignMap.apply (preload > 0, diameter > bore) is monotone in its
-    # variable, so the two corners stand for the whole box
-    dmap = sp.design_map
-    for name, corner in (("lower", dmap.lower), ("upper", dmap.upper)):
-        try:
-            sp.geometry_for(np.asarray(corner, dtype=float))
-        except ValueError as exc:
-            raise ValueError(f"[spindle.design_map] {name} = {list(corner)}: {exc}") from None
     try:
-        sp.model(np.asarray(dmap.lower, dtype=float))     # effects and theta_bearings
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"spindle: {exc}") from None
-    return sp
+        return sp.check()   # design map, effects and θ bearings against the geometry
+    except ValueError as exc:
+        raise ValueError(f"spindle.{exc}") from None
 
 
 @dataclass(frozen=True)
@@ -282,17 +255,6 @@ class DeterministicTable:
         except ValueError as exc:
             raise ValueError(f"deterministic.{str(exc).replace('practice:', 'practice_spec:')}"
                              ) from None
-
-
-def available_memory() -> int:
-    """Bytes of memory available now (``MemAvailable``; else the physical memory)."""
-    try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
 
 
 def require_memory(field: str, value: Any, nbytes: float, detail: str) -> None:

@@ -7,7 +7,9 @@
   whose result is already stored is loaded, not recomputed, so a rerun or an interrupted run
   picks up where it stopped: every finished point is written as soon as it is computed.
 * **Counted**: points that are actually computed (cache misses) are added to a
-  :class:`~surrogate_rbrdo.core.CallCounter`, once per point (one ``add`` per call).
+  :class:`~surrogate_rbrdo.core.CallCounter` (one ``add`` per call), loaded ones as
+  ``cached``; the count is taken where ``func`` runs (in the worker) and returned with the
+  value, so it is counted, never inferred from the cache.
 
 Cache key: joblib hashes the pickled ``func`` and the point. A module-level function is pickled
 by reference (module and name), so after changing its *code* point the cache at a new location;
@@ -103,12 +105,27 @@ class SampleResult:
         }
 
 
-def _call(func: Callable[[np.ndarray], float], point: np.ndarray) -> float:
-    return float(func(point))
+def _call(func: Callable[[np.ndarray], float], point: np.ndarray,
+          counter: CallCounter | None = None) -> float:
+    """``func(point)``; ``counter`` (not part of the cache key) counts it."""
+    value = float(func(point))
+    if counter is not None:
+        counter.add(1)
+    return value
 
 
-def _call_vector(func: Callable[[np.ndarray], np.ndarray], point: np.ndarray) -> np.ndarray:
-    return np.asarray(func(point), dtype=float).reshape(-1)
+def _call_vector(func: Callable[[np.ndarray], np.ndarray], point: np.ndarray,
+                 counter: CallCounter | None = None) -> np.ndarray:
+    value = np.asarray(func(point), dtype=float).reshape(-1)
+    if counter is not None:
+        counter.add(1)
+    return value
+
+
+def _point_task(target: Callable[..., Any], func: Any, point: np.ndarray) -> tuple[Any, int]:
+    """A worker's task: the value and 1 if ``func`` ran here (0: the cache answered)."""
+    counter = CallCounter()
+    return target(func, point, counter=counter), counter.calls
 
 
 def _parallel_config(backend: str, n_jobs: int, client: Any) -> tuple[Any, Any]:
@@ -197,7 +214,7 @@ def evaluate_points(
     base: Callable[..., Any] = _call if n_outputs is None else _call_vector
     target: Callable[..., Any] = base
     if cache is not None:
-        target = cache.cache(base)
+        target = cache.cache(base, ignore=["counter"])
         for i in range(n):
             if target.check_call_in_cache(func, X[i]):
                 y[i] = target(func, X[i])
@@ -206,8 +223,12 @@ def evaluate_points(
     if counter is not None and from_cache.any():
         counter.add_cached(int(from_cache.sum()))
 
+    n_evaluated = 0
     if todo.size:
-        done = _compute(target, func, X[todo], backend, n_jobs, client, counter, progress, desc)
+        done, computed = _compute(target, func, X[todo], backend, n_jobs, client, counter,
+                                  progress, desc)
+        from_cache[todo[computed == 0]] = True
+        n_evaluated = int(computed.sum())
         if n_outputs is not None:
             bad = [len(v) for v in done if len(v) != n_outputs]
             if bad:
@@ -223,7 +244,7 @@ def evaluate_points(
             f"({int((~ok).sum())} non-finite of {n}; pass on_nonfinite='exclude' to drop them)"
         )
     return SampleResult(points=X, y=y, ok_mask=ok, from_cache=from_cache,
-                        n_evaluated=int(todo.size), backend=backend,
+                        n_evaluated=n_evaluated, backend=backend,
                         wall_time_s=time.perf_counter() - t0)
 
 
@@ -246,28 +267,33 @@ def _check_args(func: Any, backend: str, on_nonfinite: str, n_jobs: Any, cache: 
 
 def _compute(target: Callable[..., Any], func: Any, points: np.ndarray, backend: str,
              n_jobs: int, client: Any, counter: CallCounter | None, progress: bool,
-             desc: str) -> list[Any]:
-    """``target(func, point)`` for every row, in this process or in parallel; counted (also
-    when a later point raises: the finished ones are cached already)."""
+             desc: str) -> tuple[list[Any], np.ndarray]:
+    """``target(func, point)`` for every row, in this process or in parallel: the values and
+    per point 1 if it was computed (0: the cache answered); counted (also when a later point
+    raises: the finished ones are cached already)."""
     done: list[Any] = []
     try:
         if backend == "sequential" or (backend != "dask" and n_jobs == 1):
-            _collect((target(func, p) for p in points), len(points), progress, done, desc)
+            _collect((_point_task(target, func, p) for p in points), len(points), progress,
+                     done, desc)
         else:
             ctx, closer = _parallel_config(backend, int(n_jobs), client)
             try:
                 with ctx:
                     par = joblib.Parallel(return_as="generator")
-                    it = par(joblib.delayed(target)(func, p) for p in points)
+                    it = par(joblib.delayed(_point_task)(target, func, p) for p in points)
                     _collect(it, len(points), progress, done, desc)
             finally:
                 if closer is not None and closer[0] is not None:
                     closer[1].close()
                     closer[0].close()
     finally:
-        if counter is not None and done:
-            counter.add(len(done))
-    return done
+        n = sum(c for _, c in done)
+        if counter is not None and n:
+            counter.add(n)
+        if counter is not None and len(done) > n:
+            counter.add_cached(len(done) - n)
+    return [v for v, _ in done], np.array([c for _, c in done], dtype=int)
 
 
 def _collect(it: Any, total: int, progress: bool, out: list[float], desc: str) -> None:

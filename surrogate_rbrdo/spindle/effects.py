@@ -27,15 +27,21 @@ np.True_
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 import numpy as np
+from pydantic import AllowInfNan
 
 from surrogate_rbrdo.core.registry import Registry
-from surrogate_rbrdo.core.validate import check_keys, check_positive, check_range
+from surrogate_rbrdo.core.schema import parse
+from surrogate_rbrdo.core.validate import check_positive, check_range, check_text
 
 EFFECTS = Registry("effect")
+
+#: a parameter whose off state is ``inf`` (a rigid housing or joint): ``inf`` is allowed in data
+InfOff = Annotated[float, AllowInfNan(True)]
 
 
 @dataclass(frozen=True)
@@ -70,11 +76,22 @@ class Effect:
     bearings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
+        if isinstance(self.bearings, str) or not isinstance(self.bearings, Iterable):
+            raise ValueError(f"bearings = {self.bearings!r} is not allowed: must be a sequence "
+                             f"of bearing names, e.g. ['front'] ({self.name})")
         object.__setattr__(self, "bearings", tuple(self.bearings))
+        for i, b in enumerate(self.bearings):
+            check_text(f"bearings[{i}]", b)
+        if len(set(self.bearings)) != len(self.bearings):
+            raise ValueError(f"bearings = {list(self.bearings)} is not allowed: a name appears "
+                             f"twice ({self.name})")
         for p, (lo, hi) in self.bounds.items():
             if p in self.off_params and getattr(self, p) == self.off_params[p]:
                 continue  # the off state may sit on an open bound (e.g. k_h = inf)
-            check_range(f"effects.{self.name}.{p}", getattr(self, p), lo, hi)
+            try:
+                check_range(p, getattr(self, p), lo, hi)
+            except ValueError as exc:
+                raise ValueError(f"{exc} ({self.name})") from None
 
     def applies_to(self, bearing: str) -> bool:
         return not self.bearings or bearing in self.bearings
@@ -111,14 +128,67 @@ class Effect:
         return None
 
 
-def effect_from_dict(data: dict[str, Any]) -> Effect:
-    """Build an effect from ``{"name": ..., <params>}`` (TOML/JSON)."""
-    data = dict(data)
-    cls = EFFECTS.get(data.pop("name", None))
-    check_keys(f"effects.{cls.name}", data, {f.name for f in dataclasses.fields(cls)})
-    if "bearings" in data:
-        data["bearings"] = tuple(data["bearings"])
-    return cls(**data)
+def effect_from_dict(data: Mapping[str, Any], where: str = "") -> Effect:
+    """Build an effect from ``{"name": ..., <params>}`` (TOML/JSON) through the strict
+    schema (``core.schema``): a parameter of the wrong type (``a = "0.1"``, ``bearings =
+    "front"``), an unknown key or a value out of bounds raises one line naming the path below
+    ``where`` (default ``effects.<name>``).
+
+    >>> effect_from_dict({"name": "speed_softening", "a": 0.1, "bearings": ["front"]}).a
+    0.1
+    >>> effect_from_dict({"name": "speed_softening", "bearings": "front"})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: effects.speed_softening.bearings = 'front' is not allowed: must be an array ...
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f"{where or 'effect'} = {data!r} is not allowed: must be a table "
+                         "{name = ..., <parameters>}")
+    d = dict(data)
+    name = d.pop("name", None)
+    if not isinstance(name, str) or name not in set(EFFECTS):
+        raise ValueError(f"{where + '.' if where else ''}name = {name!r} is not allowed: "
+                         f"unknown effect {name!r}; known: {', '.join(sorted(EFFECTS))}")
+    return parse(EFFECTS[name], d, where or f"effects.{name}")
+
+
+def effects_from_data(data: Sequence[Any], where: str = "effects") -> tuple[Effect, ...]:
+    """Effects from a list of ``{"name": ..., <params>}`` tables (:func:`effect_from_dict`,
+    errors name ``<where>[i]``); the same effect twice on one bearing is refused."""
+    if isinstance(data, (str, Mapping)) or not isinstance(data, Sequence):
+        raise ValueError(f"{where} = {data!r} is not allowed: must be an array of tables "
+                         "[{name = ..., <parameters>}]")
+    out = tuple(effect_from_dict(e, f"{where}[{i}]") for i, e in enumerate(data))
+    check_effects(out, None, where)
+    return out
+
+
+def check_effects(effects: Sequence[Effect], bearings: Sequence[str] | None,
+                  where: str = "effects") -> None:
+    """Refuse effects on bearings that do not exist (``bearings``: the geometry's names,
+    ``None``: not checked) and one effect applied twice to one bearing (they would
+    compound).
+
+    >>> check_effects([SpeedSoftening(a=0.1, bearings=("nose",))], ["front", "rear"])
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: effects[0].bearings = ['nose'] is not allowed: 'nose' is not a bearing; ...
+    """
+    prev: list[tuple[str, set[str]]] = []
+    for i, e in enumerate(effects):
+        if bearings is not None:
+            bad = [b for b in e.bearings if b not in bearings]
+            if bad:
+                raise ValueError(f"{where}[{i}].bearings = {list(e.bearings)} is not allowed: "
+                                 f"{bad[0]!r} is not a bearing; bearings are {list(bearings)}")
+        t = set(e.bearings) if e.bearings else set(bearings) if bearings is not None else {"*"}
+        for j, (name, tj) in enumerate(prev):
+            if name == e.name and (t & tj or "*" in t | tj):
+                on = sorted(t & tj - {"*"}) or "all bearings"
+                raise ValueError(f"{where}[{i}] = {e.name!r} is not allowed: {where}[{j}] "
+                                 f"already applies {e.name} to {on} (they would compound)")
+        prev.append((e.name, t))
 
 
 @EFFECTS.register("speed_softening")
@@ -138,7 +208,7 @@ class SpeedSoftening(Effect):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive(f"effects.{self.name}.omega_ref", self.omega_ref)
+        check_positive("omega_ref", self.omega_ref)
 
     def bearing(self, bearing: str, omega: np.ndarray, K: np.ndarray) -> np.ndarray:
         if not self.applies_to(bearing) or self.a == 0.0:
@@ -161,6 +231,10 @@ class ThermalPreload(Effect):
     b: float = 0.0
     q: float = 2.0
     omega_ref: float = 24000 * np.pi / 30
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_positive("omega_ref", self.omega_ref)
 
     def preload(self, bearing: str, omega: np.ndarray, F: np.ndarray) -> np.ndarray:
         if not self.applies_to(bearing) or self.b == 0.0:
@@ -225,7 +299,7 @@ class HousingFlexibility(Effect):
     bounds: ClassVar[dict[str, tuple[float, float]]] = {
         "k_N_per_m": (1e6, np.inf), "m_kg": (0.0, 1e3), "c_Ns_per_m": (0.0, 1e6)}
     off_params: ClassVar[dict[str, float]] = {"k_N_per_m": np.inf}
-    k_N_per_m: float = np.inf
+    k_N_per_m: InfOff = np.inf
     m_kg: float = 0.0
     c_Ns_per_m: float = 0.0
 
@@ -298,15 +372,15 @@ class ToolInterface(Effect):
         "k_t_N_per_m": (1e6, np.inf), "k_r_Nm_per_rad": (1e4, np.inf)}
     off_params: ClassVar[dict[str, float]] = {"k_t_N_per_m": np.inf, "k_r_Nm_per_rad": np.inf}
     position_mm: float = 0.0
-    k_t_N_per_m: float = np.inf
-    k_r_Nm_per_rad: float = np.inf
+    k_t_N_per_m: InfOff = np.inf
+    k_r_Nm_per_rad: InfOff = np.inf
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if np.isinf(self.k_t_N_per_m) != np.isinf(self.k_r_Nm_per_rad):
             raise ValueError(
-                f"effects.tool_interface: k_t_N_per_m = {self.k_t_N_per_m} and k_r_Nm_per_rad = "
-                f"{self.k_r_Nm_per_rad} are not allowed: both finite, or both inf (off)")
+                f"k_r_Nm_per_rad = {self.k_r_Nm_per_rad} is not allowed with k_t_N_per_m = "
+                f"{self.k_t_N_per_m}: both finite, or both inf (off) (tool_interface)")
 
     def joint(self) -> Joint | None:
         if self.is_off:

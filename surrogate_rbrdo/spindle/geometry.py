@@ -1,7 +1,10 @@
-"""The plain geometry description of a spindle, loadable from TOML or JSON.
+"""The plain geometry description of a spindle, loadable from TOML or JSON, and the design map.
 
 Units follow the field names (``_mm``, ``_kg``, ``_N``...) at input; everything is converted to SI
-when the model is assembled. The format is documented in ``docs/geometry-format.md``.
+when the model is assembled. The format is documented in ``docs/geometry-format.md``. A file is
+parsed by a strict schema (``core.schema``: the dataclasses of ``spindle.components`` are the
+schema): wrong types, unknown keys and bad values raise one line naming the path, e.g.
+``sections[1].length_mm = '100' is not allowed: must be a number``.
 
 >>> g = SpindleGeometry.from_dict({
 ...     "sections": [{"length_mm": 100, "outer_diameter_mm": 50, "elements": 4}],
@@ -12,14 +15,18 @@ when the model is assembled. The format is documented in ``docs/geometry-format.
 ...     "tool_tip_mm": 0.0})
 >>> g.total_length_mm, len(g.bearings)
 (100.0, 2)
+>>> SpindleGeometry.from_dict({"sections": [{"length_mm": 100, "outer_diameter_mm": "50"}],
+...                            "bearings": []})
+Traceback (most recent call last):
+...
+ValueError: sections[0].outer_diameter_mm = '50' is not allowed: must be a number
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
+import itertools
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -27,166 +34,22 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import (
-    check_choice,
-    check_finite,
-    check_int,
-    check_keys,
-    check_positive,
-    check_range,
+from surrogate_rbrdo.core.schema import load_data, parse
+from surrogate_rbrdo.core.validate import check_positive, check_range, check_text
+from surrogate_rbrdo.spindle.components import (
+    BALANCE_GRADES_MM_S,
+    LAWS,
+    MAX_ELEMENTS,
+    Bearing,
+    ConstantLaw,
+    Disk,
+    Material,
+    PreloadLaw,
+    ShaftSection,
+    Unbalance,
+    check_balance_grade,
+    law_name,
 )
-
-
-@dataclass(frozen=True)
-class Material:
-    """Isotropic linear-elastic material (SI)."""
-
-    E_Pa: float = 2.1e11
-    nu: float = 0.3
-    rho_kg_m3: float = 7850.0
-    yield_Pa: float = 930e6
-
-    def __post_init__(self) -> None:
-        check_positive("material.E_Pa", self.E_Pa)
-        check_range("material.nu", self.nu, -0.99, 0.49)
-        check_positive("material.rho_kg_m3", self.rho_kg_m3)
-        check_positive("material.yield_Pa", self.yield_Pa)
-
-
-@dataclass(frozen=True)
-class ShaftSection:
-    """A cylindrical (optionally hollow) shaft segment, from left to right."""
-
-    length_mm: float
-    outer_diameter_mm: float
-    inner_diameter_mm: float = 0.0
-    material: str = "steel"
-    elements: int = 1
-    tag: str = ""
-
-    def __post_init__(self) -> None:
-        check_positive("sections[].length_mm", self.length_mm)
-        check_positive("sections[].outer_diameter_mm", self.outer_diameter_mm)
-        check_positive("sections[].inner_diameter_mm", self.inner_diameter_mm, allow_zero=True)
-        if self.inner_diameter_mm >= self.outer_diameter_mm:
-            raise ValueError(
-                f"sections[].inner_diameter_mm = {self.inner_diameter_mm} is not allowed: must "
-                f"be smaller than outer_diameter_mm = {self.outer_diameter_mm}"
-            )
-        check_int("sections[].elements", self.elements, minimum=1)
-
-
-@dataclass(frozen=True)
-class Disk:
-    """A rigid disk (tool holder, motor rotor, ...) at an axial position."""
-
-    name: str
-    position_mm: float
-    mass_kg: float
-    polar_inertia_kgm2: float = 0.0
-    diametral_inertia_kgm2: float = 0.0
-
-    def __post_init__(self) -> None:
-        check_finite("disks[].position_mm", self.position_mm)
-        check_positive("disks[].mass_kg", self.mass_kg)
-        check_positive("disks[].polar_inertia_kgm2", self.polar_inertia_kgm2, allow_zero=True)
-        check_positive(
-            "disks[].diametral_inertia_kgm2", self.diametral_inertia_kgm2, allow_zero=True
-        )
-
-
-@dataclass(frozen=True)
-class ConstantLaw:
-    """Constant bearing coefficients: isotropic ``k_N_per_m`` or a full 2x2 matrix.
-
-    Damping is either a full 2x2 matrix ``c_Ns_per_m`` or ``η K`` (``damping_eta_s``).
-    """
-
-    k_N_per_m: float | None = None
-    k_matrix_N_per_m: tuple[tuple[float, float], tuple[float, float]] | None = None
-    c_matrix_Ns_per_m: tuple[tuple[float, float], tuple[float, float]] | None = None
-    damping_eta_s: float = 4e-6
-
-    def __post_init__(self) -> None:
-        if (self.k_N_per_m is None) == (self.k_matrix_N_per_m is None):
-            raise ValueError(
-                "bearing law 'constant' needs exactly one of k_N_per_m or k_matrix_N_per_m"
-            )
-        if self.k_N_per_m is not None:
-            check_positive("law.k_N_per_m", self.k_N_per_m)
-        for name in ("k_matrix_N_per_m", "c_matrix_Ns_per_m"):
-            val = getattr(self, name)
-            if val is not None:
-                arr = np.asarray(val, dtype=float)
-                if arr.shape != (2, 2) or not np.all(np.isfinite(arr)):
-                    raise ValueError(f"law.{name} = {val!r} is not allowed: must be a finite 2x2")
-        check_positive("law.damping_eta_s", self.damping_eta_s, allow_zero=True)
-
-    def stiffness_matrix(self) -> np.ndarray:
-        if self.k_matrix_N_per_m is not None:
-            return np.asarray(self.k_matrix_N_per_m, dtype=float)
-        return self.k_N_per_m * np.eye(2)
-
-
-@dataclass(frozen=True)
-class PreloadLaw:
-    """Hertzian preload law ``k(F) = k_ref (F / F_ref)^exponent`` (isotropic, at Ω = 0).
-
-    For angular-contact ball bearings under a rigid preload the radial stiffness grows as the
-    cube root of the axial preload (Hertz point contact, δ ∝ F^{2/3} ⇒ k = dF/dδ ∝ F^{1/3}).
-    Speed softening and thermal preload growth are separate, switchable effects.
-
-    >>> law = PreloadLaw(k_ref_N_per_m=3e8, preload_ref_N=2000, preload_N=2000 * 8)
-    >>> round(float(law.stiffness(law.preload_N)) / 3e8, 12)
-    2.0
-    """
-
-    k_ref_N_per_m: float
-    preload_ref_N: float
-    preload_N: float
-    exponent: float = 1.0 / 3.0
-    damping_eta_s: float = 4e-6
-
-    def __post_init__(self) -> None:
-        check_positive("law.k_ref_N_per_m", self.k_ref_N_per_m)
-        check_positive("law.preload_ref_N", self.preload_ref_N)
-        check_positive("law.preload_N", self.preload_N)
-        check_range("law.exponent", self.exponent, 0.0, 1.0)
-        check_positive("law.damping_eta_s", self.damping_eta_s, allow_zero=True)
-
-    def stiffness(self, preload: np.ndarray | float) -> np.ndarray:
-        return self.k_ref_N_per_m * (np.asarray(preload) / self.preload_ref_N) ** self.exponent
-
-
-LAWS = {"constant": ConstantLaw, "preload": PreloadLaw}
-
-
-@dataclass(frozen=True)
-class Bearing:
-    """A bearing (spring-damper to ground) at an axial position."""
-
-    name: str
-    position_mm: float
-    law: ConstantLaw | PreloadLaw
-
-    def __post_init__(self) -> None:
-        check_finite("bearings[].position_mm", self.position_mm)
-        if not isinstance(self.law, (ConstantLaw, PreloadLaw)):
-            raise ValueError(f"bearings[].law = {self.law!r} is not allowed: use {list(LAWS)}")
-
-
-@dataclass(frozen=True)
-class Unbalance:
-    """A residual unbalance ``U = m e`` (kg m) at an axial position, with a phase."""
-
-    position_mm: float
-    magnitude_kgm: float
-    phase_deg: float = 0.0
-
-    def __post_init__(self) -> None:
-        check_finite("unbalances[].position_mm", self.position_mm)
-        check_positive("unbalances[].magnitude_kgm", self.magnitude_kgm, allow_zero=True)
-        check_finite("unbalances[].phase_deg", self.phase_deg)
 
 
 @dataclass(frozen=True)
@@ -214,24 +77,26 @@ class SpindleGeometry:
             raise ValueError("sections = [] is not allowed: the shaft needs at least one section")
         if not self.bearings:
             raise ValueError("bearings = [] is not allowed: the rotor needs at least one bearing")
-        for s in self.sections:
+        for i, s in enumerate(self.sections):
             if s.material not in self.materials:
                 raise ValueError(
-                    f"sections[].material = {s.material!r} is not allowed: known materials "
+                    f"sections[{i}].material = {s.material!r} is not allowed: known materials "
                     f"{sorted(self.materials)}"
                 )
         total = self.total_length_mm
         for kind, items in (("bearings", self.bearings), ("disks", self.disks),
                             ("unbalances", self.unbalances)):
-            for it in items:
+            for i, it in enumerate(items):
                 if not (0.0 <= it.position_mm <= total):
                     raise ValueError(
-                        f"{kind}[].position_mm = {it.position_mm} is not allowed: must lie on "
-                        f"the shaft, in [0, {total}] mm"
+                        f"{kind}[{i}].position_mm = {it.position_mm} is not allowed: must lie "
+                        f"on the shaft, in [0, {total}] mm"
                     )
         names = [b.name for b in self.bearings]
         if len(set(names)) != len(names):
-            raise ValueError(f"bearings[].name = {names} is not allowed: names must be unique")
+            dup = next(n for n in names if names.count(n) > 1)
+            raise ValueError(f"bearings[{names.index(dup, names.index(dup) + 1)}].name = "
+                             f"{dup!r} is not allowed: bearing names must be unique")
         check_range("tool_tip_mm", self.tool_tip_mm, 0.0, total)
         check_positive("rayleigh_alpha_per_s", self.rayleigh_alpha_per_s, allow_zero=True)
         check_positive("rayleigh_beta_s", self.rayleigh_beta_s, allow_zero=True)
@@ -243,6 +108,28 @@ class SpindleGeometry:
             )
         if self.max_element_length_mm is not None:
             check_positive("max_element_length_mm", self.max_element_length_mm)
+        self._check_mesh()
+
+    def elements(self) -> list[int]:
+        """Finite elements per section (``elements``, more where ``max_element_length_mm``
+        asks for them; the mesh adds nodes at bearings, disks and unbalances)."""
+        m = self.max_element_length_mm
+        return [s.elements if m is None else max(s.elements, math.ceil(s.length_mm / m - 1e-9))
+                for s in self.sections]
+
+    def _check_mesh(self) -> None:
+        n = self.elements()
+        if sum(n) <= MAX_ELEMENTS:
+            return
+        if self.max_element_length_mm is not None and sum(
+                s.elements for s in self.sections) <= MAX_ELEMENTS:
+            where, value = "max_element_length_mm", self.max_element_length_mm
+        else:
+            i = int(np.argmax([s.elements for s in self.sections]))
+            where, value = f"sections[{i}].elements", self.sections[i].elements
+        raise ValueError(f"{where} = {value!r} is not allowed: the shaft would have {sum(n)} "
+                         f"finite elements, more than {MAX_ELEMENTS} (the dense solvers hold "
+                         "n_dof² complex matrices)")
 
     @property
     def total_length_mm(self) -> float:
@@ -262,41 +149,31 @@ class SpindleGeometry:
 
     # ------------------------------------------------------------------ loading
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> SpindleGeometry:
-        """Build from plain data (as read from TOML/JSON); unknown keys raise."""
-        top = {f.name for f in dataclasses.fields(cls)}
-        check_keys("geometry", data, top)
-        d = dict(data)
-        mats = {"steel": Material()}
-        for name, m in dict(d.get("materials", {})).items():
-            mats[name] = _build(Material, m, f"materials.{name}")
-        d["materials"] = mats
-        d["sections"] = tuple(_build(ShaftSection, s, "sections[]") for s in d.get("sections", ()))
-        d["disks"] = tuple(_build(Disk, s, "disks[]") for s in d.get("disks", ()))
-        d["unbalances"] = tuple(
-            _build(Unbalance, s, "unbalances[]") for s in d.get("unbalances", ())
-        )
-        bearings = []
-        for b in d.get("bearings", ()):
-            check_keys("bearings[]", b, {"name", "position_mm", "law"})
-            law = dict(b.get("law", {}))
-            kind = check_choice("bearings[].law.type", law.pop("type", None), LAWS)
-            lawobj = _build(LAWS[kind], law, f"bearings[].law ({kind})")
-            bearings.append(Bearing(name=b["name"], position_mm=b["position_mm"], law=lawobj))
-        d["bearings"] = tuple(bearings)
-        return cls(**d)
+    def from_dict(cls, data: Mapping[str, Any], where: str = "") -> SpindleGeometry:
+        """Build from plain data (as read from TOML/JSON) through the strict schema: types
+        checked (no string taken as a number), unknown keys refused, errors one line naming
+        the path below ``where`` (``sections[1].length_mm``). ``materials`` adds to (or
+        replaces) the default ``steel``."""
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{where or 'geometry'} = {_short(data)} is not allowed: must be a "
+                             "table (sections, bearings, ...)")
+        mats = data.get("materials")
+        if isinstance(mats, Mapping):
+            data = {**data, "materials": {"steel": {}, **mats}}
+        return parse(cls, data, where)
 
     @classmethod
-    def load(cls, path: str | Path) -> SpindleGeometry:
-        """Load a ``.toml`` or ``.json`` geometry file."""
-        path = Path(path)
-        if path.suffix == ".toml":
-            data = tomllib.loads(path.read_text())
-        elif path.suffix == ".json":
-            data = json.loads(path.read_text())
-        else:
-            raise ValueError(f"geometry file {str(path)!r}: suffix must be .toml or .json")
-        return cls.from_dict(data.get("geometry", data))
+    def load(cls, path: str | Path, what: str = "geometry file") -> SpindleGeometry:
+        """Load a ``.toml`` or ``.json`` geometry file (the geometry at the top level or in a
+        ``geometry`` table); every error names the file and the path inside it."""
+        data = load_data(path, what)
+        where = ""
+        if isinstance(data, Mapping) and "geometry" in data:
+            data, where = data["geometry"], "geometry"
+        try:
+            return cls.from_dict(data, where)
+        except ValueError as exc:
+            raise ValueError(f"{what} {str(path)!r}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data that :meth:`from_dict` reads back."""
@@ -304,29 +181,26 @@ class SpindleGeometry:
         out["materials"] = {k: dataclasses.asdict(v) for k, v in self.materials.items()}
         out["bearings"] = [
             {"name": b.name, "position_mm": b.position_mm,
-             "law": {"type": _law_name(b.law), **_drop_none(dataclasses.asdict(b.law))}}
+             "law": {"type": law_name(b.law), **_drop_none(dataclasses.asdict(b.law))}}
             for b in self.bearings
         ]
         return _drop_none(out)
 
 
-def _law_name(law: Any) -> str:
-    return next(k for k, v in LAWS.items() if isinstance(law, v))
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _drop_none(d: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in d.items() if v is not None}
 
 
-def _build(cls: type, data: Mapping[str, Any], where: str) -> Any:
-    check_keys(where, data, {f.name for f in dataclasses.fields(cls)})
-    try:
-        return cls(**data)
-    except TypeError as exc:  # a required field missing
-        raise ValueError(f"{where}: {exc}") from None
-
-
 # ---------------------------------------------------------------------- design vector
+#: a design box lies within this factor of the geometry's own preload, span and diameter
+BOX_FACTOR = 10.0
+
+
 @dataclass(frozen=True)
 class DesignMap:
     """Maps the design vector ``x = [F_f (N), L (mm), D (mm)]`` onto a geometry.
@@ -344,18 +218,78 @@ class DesignMap:
     upper: tuple[float, float, float] = (3000.0, 750.0, 80.0)
 
     def __post_init__(self) -> None:
+        check_text("preload_bearing", self.preload_bearing)
+        check_text("span_tag", self.span_tag)
         for i, name in enumerate(self.names):
-            if not (math.isfinite(self.lower[i]) and math.isfinite(self.upper[i])
-                    and self.lower[i] < self.upper[i]):
+            lo, hi = self.lower[i], self.upper[i]
+            if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi):
                 raise ValueError(
-                    f"design bounds for {name} = [{self.lower[i]}, {self.upper[i]}] are not "
-                    "allowed: lower must be finite and smaller than upper"
+                    f"design bounds for {name} = [{lo}, {hi}] are not allowed: lower must be "
+                    "finite, > 0 (a preload, a length, a diameter) and smaller than upper"
                 )
+
+    def check_geometry(self, geometry: SpindleGeometry) -> None:
+        """Refuse a map that does not fit ``geometry``: ``preload_bearing`` must be one of its
+        bearings with a preload law, ``span_tag`` must tag one contiguous run of sections, and
+        the box must be a neighbourhood of the geometry: each bound within a factor
+        :data:`BOX_FACTOR` of the geometry's own value (the law's reference preload, the span
+        length, the span's outer diameter) — beyond, the Hertz law k ∝ F^(1/3) fitted at the
+        reference preload and the span's mesh and parts are no longer that spindle — and the
+        diameter above the span's bore. Messages name the field (``lower[0]``, ...)."""
+        names = [b.name for b in geometry.bearings]
+        if self.preload_bearing not in names:
+            raise ValueError(f"preload_bearing = {self.preload_bearing!r} is not allowed: "
+                             f"bearings are {names}")
+        law = geometry.bearing(self.preload_bearing).law
+        if not isinstance(law, PreloadLaw):
+            raise ValueError(f"preload_bearing = {self.preload_bearing!r} is not allowed: its "
+                             f"law is {law_name(law)!r}; the design preload needs a 'preload' "
+                             "law")
+        idx = self._span(geometry)
+        span = [geometry.sections[i] for i in idx]
+        nominal = (law.preload_ref_N, sum(s.length_mm for s in span),
+                   max(s.outer_diameter_mm for s in span))
+        for i, name in enumerate(self.names):
+            for side, v in (("lower", self.lower[i]), ("upper", self.upper[i])):
+                if not nominal[i] / BOX_FACTOR <= v <= nominal[i] * BOX_FACTOR:
+                    raise ValueError(
+                        f"{side}[{i}] = {v} is not allowed: {name} must lie within a factor "
+                        f"{BOX_FACTOR:g} of the geometry's {nominal[i]:g} (a design box is a "
+                        "neighbourhood of the spindle it maps onto)")
+        bore = max(s.inner_diameter_mm for s in span)
+        if not self.lower[2] > bore:
+            raise ValueError(f"lower[2] = {self.lower[2]} is not allowed: the span diameter "
+                             f"must exceed the bore {bore} mm of the span sections")
+        for side in ("lower", "upper"):
+            try:
+                self.apply(geometry, np.asarray(getattr(self, side), dtype=float))
+            except ValueError as exc:
+                raise ValueError(f"{side} = {list(getattr(self, side))}: {exc}") from None
+
+    def _span(self, geometry: SpindleGeometry) -> list[int]:
+        """Indices of the sections tagged ``span_tag`` (one contiguous run)."""
+        idx = [i for i, s in enumerate(geometry.sections) if s.tag == self.span_tag]
+        if not idx or idx != list(range(idx[0], idx[-1] + 1)):
+            tags = sorted({s.tag for s in geometry.sections})
+            raise ValueError(f"span_tag = {self.span_tag!r} is not allowed: the geometry needs "
+                             f"one contiguous run of sections with this tag (tags: {tags})")
+        return idx
 
     @property
     def bounds(self) -> np.ndarray:
         """Array of shape (3, 2): lower and upper bound per design variable."""
         return np.column_stack([self.lower, self.upper])
+
+    def corners(self) -> dict[str, np.ndarray]:
+        """The box's 8 corners (``"corner -+-"``: lower, upper, lower) and its ``"centre"``.
+
+        >>> list(DesignMap().corners())[:2], DesignMap().corners()["centre"].tolist()
+        (['corner ---', 'corner --+'], [2000.0, 525.0, 65.0])
+        """
+        b = self.bounds
+        out = {"corner " + "".join("-+"[k] for k in c): np.array(
+            [b[i, k] for i, k in enumerate(c)]) for c in itertools.product((0, 1), repeat=3)}
+        return {**out, "centre": b.mean(axis=1)}
 
     def check(self, x: np.ndarray) -> np.ndarray:
         """Validate a design vector (shape (3,)) against its bounds."""
@@ -398,12 +332,7 @@ class DesignMap:
     def apply(self, geometry: SpindleGeometry, x: np.ndarray) -> SpindleGeometry:
         """Return the geometry of design ``x``."""
         preload, span, diam = self.check(x)
-        idx = [i for i, s in enumerate(geometry.sections) if s.tag == self.span_tag]
-        if not idx or idx != list(range(idx[0], idx[-1] + 1)):
-            raise ValueError(
-                f"span_tag = {self.span_tag!r}: the geometry needs one contiguous run of "
-                "sections with this tag"
-            )
+        idx = self._span(geometry)
         starts = np.concatenate([[0.0], np.cumsum([s.length_mm for s in geometry.sections])])
         z0, z1 = starts[idx[0]], starts[idx[-1] + 1]
         scale = span / (z1 - z0)
@@ -423,9 +352,9 @@ class DesignMap:
         def zmap(z: float) -> float:
             if z <= z0:
                 return z
-            if z <= z1:
-                return z0 + (z - z0) * scale
             # clamp: rounding must not push an item at the shaft end off the shaft
+            if z <= z1:
+                return min(z0 + (z - z0) * scale, new_total)
             return min(z + (z1 - z0) * (scale - 1.0), new_total)
 
         bearings = []
@@ -435,7 +364,7 @@ class DesignMap:
                 if not isinstance(law, PreloadLaw):
                     raise ValueError(
                         f"preload_bearing = {b.name!r} needs a 'preload' law, got "
-                        f"{_law_name(law)!r}"
+                        f"{law_name(law)!r}"
                     )
                 law = replace(law, preload_N=float(preload))
             bearings.append(replace(b, position_mm=zmap(b.position_mm), law=law))
@@ -451,3 +380,8 @@ class DesignMap:
             ),
             tool_tip_mm=zmap(geometry.tool_tip_mm),
         )
+
+
+__all__ = ["BALANCE_GRADES_MM_S", "BOX_FACTOR", "LAWS", "MAX_ELEMENTS", "Bearing", "ConstantLaw",
+           "DesignMap", "Disk", "Material", "PreloadLaw", "ShaftSection", "SpindleGeometry",
+           "Unbalance", "check_balance_grade"]

@@ -18,6 +18,7 @@ import scipy.linalg as sla
 from scipy.optimize import brentq
 
 from surrogate_rbrdo.core.errors import ModelError, SingularSystemError
+from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
 
 
@@ -162,6 +163,20 @@ class Campbell:
     critical_speeds_rpm: np.ndarray
 
 
+def check_modes(model: SpindleModel, n_modes: int, name: str = "n_modes") -> int:
+    """``n_modes`` if the model has that many modes (one per degree of freedom)."""
+    return check_modes_of(model.n_dof, n_modes, name)
+
+
+def check_modes_of(n_dof: int, n_modes: int, name: str = "n_modes") -> int:
+    """``n_modes`` if a model with ``n_dof`` degrees of freedom has that many modes."""
+    check_int(name, n_modes, minimum=1)
+    if n_modes > n_dof:
+        raise ValueError(f"{name} = {n_modes} is not allowed: the model has {n_dof} modes "
+                         "(one per degree of freedom)")
+    return n_modes
+
+
 def campbell(
     model: SpindleModel, speeds_rpm: np.ndarray, theta: np.ndarray | None = None,
     *, n_modes: int = 8, refine: bool = True,
@@ -172,6 +187,7 @@ def campbell(
         raise ValueError(
             "speeds_rpm is not allowed: need at least two strictly increasing speeds >= 0"
         )
+    check_modes(model, n_modes)
     S = sp.size
     f = np.full((S, n_modes), np.nan)
     z = np.full((S, n_modes), np.nan)

@@ -19,8 +19,13 @@ from importlib import resources
 import numpy as np
 
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel, build_model
-from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, SpeedSoftening
-from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry, Unbalance
+from surrogate_rbrdo.spindle.effects import Effect, Gyroscopics, SpeedSoftening, check_effects
+from surrogate_rbrdo.spindle.geometry import (
+    DesignMap,
+    SpindleGeometry,
+    Unbalance,
+    check_balance_grade,
+)
 
 #: speed-softening laws k(n) = k0 (1 - a (n / 24000 rpm)^p) least-squares fitted to the paper's
 #: Table 3 (max residual 0.39 % front, 0.21 % rear); k0 goes into the bearings' k_ref.
@@ -29,8 +34,6 @@ TABLE3_FIT = {"front": (3.1998e8, 0.19225, 1.2462), "rear": (2.7668e8, 0.18402, 
 #: ISO 21940-11 balance quality grade (mm/s) and the speed it refers to
 BALANCE_GRADE_MM_S = 2.5
 BALANCE_SPEED_RPM = 24000.0
-
-
 def default_effects() -> tuple[Effect, ...]:
     """Speed softening per Table 3 (front and rear) and gyroscopics on."""
     out: list[Effect] = [
@@ -69,6 +72,46 @@ class ReferenceSpindle:
         return build_model(self.geometry_for(x), self.effects if effects is None else effects,
                            theta_bearings=self.theta_bearings)
 
+    def check(self) -> ReferenceSpindle:
+        """Return ``self`` if its parts fit together, else raise ``ValueError`` naming the
+        field: ``design_map`` against the geometry (``DesignMap.check_geometry``), the
+        ``effects``' bearings, ``theta_bearings`` (non-empty, existing, distinct),
+        ``baseline`` inside the box, and the model of the box's corners.
+
+        >>> from dataclasses import replace
+        >>> replace(reference_spindle(), theta_bearings=("front", "nose")).check()
+        ... # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        ValueError: theta_bearings = ['front', 'nose'] is not allowed: 'nose' is not a bearing; ...
+        """
+        names = [b.name for b in self.geometry.bearings]
+        try:
+            self.design_map.check_geometry(self.geometry)
+        except ValueError as exc:
+            raise ValueError(f"design_map.{exc}") from None
+        check_effects(self.effects, names, "effects")
+        tb = list(self.theta_bearings)
+        bad = [b for b in tb if b not in names]
+        if not tb or bad or len(set(tb)) != len(tb):
+            why = ("give the bearings whose stiffness θ scales" if not tb else
+                   f"{bad[0]!r} is not a bearing; bearings are {names}" if bad else
+                   "a name appears twice")
+            raise ValueError(f"theta_bearings = {tb} is not allowed: {why}")
+        try:
+            self.design_map.check(self.baseline)
+        except ValueError as exc:
+            raise ValueError(f"baseline = {np.asarray(self.baseline).tolist()}: {exc}") from None
+        for side in ("lower", "upper", "baseline"):
+            x = getattr(self.design_map, side, self.baseline)
+            try:
+                self.model(np.asarray(x, dtype=float))
+            except ValueError as exc:
+                where = side if side == "baseline" else f"design_map.{side}"
+                raise ValueError(f"{where} = {np.asarray(x).tolist()}: the model cannot be "
+                                 f"built: {exc}") from None
+        return self
+
 
 def _load_geometry(name: str) -> SpindleGeometry:
     text = resources.files("surrogate_rbrdo.data").joinpath(name).read_text()
@@ -95,6 +138,7 @@ def reference_spindle(*, balance_grade_mm_s: float = BALANCE_GRADE_MM_S) -> Refe
     (The random-unbalance response, ``spindle.peak_response``, replaces it by each plane's
     ISO tolerance and a random phase.)
     """
+    check_balance_grade("balance_grade_mm_s", balance_grade_mm_s)
     geom = _load_geometry("reference_spindle.toml")
     dmap = DesignMap()
     baseline = np.array([2000.0, 500.0, 65.0])
@@ -121,6 +165,7 @@ def credible_spindle(*, balance_grade_mm_s: float = BALANCE_GRADE_MM_S) -> Refer
     >>> sp.design_map.bounds.tolist()
     [[190.0, 1140.0], [300.0, 750.0], [50.0, 80.0]]
     """
+    check_balance_grade("balance_grade_mm_s", balance_grade_mm_s)
     geom = _load_geometry("credible_spindle.toml")
     lo, hi = CREDIBLE_PRELOAD_BOUNDS
     dmap = DesignMap(lower=(lo, 300.0, 50.0), upper=(hi, 750.0, 80.0))

@@ -19,7 +19,7 @@ from surrogate_rbrdo.core.protocols import LimitState, Prediction
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling.fe import sample_designs, sample_positive
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse, ResponseSpec
-from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate
+from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate, train_surrogate
 from surrogate_rbrdo.surrogates.structured.joint import JointDOEOptions
 from surrogate_rbrdo.surrogates.structured.resonance_train import sample_resonance
 from surrogate_rbrdo.surrogates.validation import LOOSummary, MCComparison, compare_mc
@@ -29,7 +29,8 @@ from surrogate_rbrdo.surrogates.validation import LOOSummary, MCComparison, comp
 class FETruth:
     """The FE side: test points ``Z`` and ``y``, the θ sample, designs ``X`` and their FE
     values ``y_fe`` (X × θ), optional resonance quantities ``(Z_t, Q_t, Z_d, Q_d)`` (test
-    points; designs × the first θ rows), counted FE calls (``test``, ``mc``)."""
+    points; designs × the first θ rows), counted FE calls (``test``, ``mc``) and the points
+    loaded from the FE cache instead (``cache_hits``, same keys)."""
 
     Z: np.ndarray
     y: np.ndarray
@@ -38,6 +39,7 @@ class FETruth:
     y_fe: np.ndarray
     resonance: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
     calls: dict[str, int] = field(default_factory=dict)
+    cache_hits: dict[str, int] = field(default_factory=dict)
 
 
 def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, n_test: int,
@@ -68,13 +70,16 @@ def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, 
         if Z_d.shape[0] != X.shape[0] * n:
             raise ValueError("FE resonance quantities failed at a validation design")
         res = (Z_t, Q_t, Z_d, Q_d)
-    return FETruth(Z, y, theta, X, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls})
+    return FETruth(Z, y, theta, X, y_fe, res, {"test": c_test.calls, "mc": c_mc.calls},
+                   {"test": c_test.cached, "mc": c_mc.cached})
 
 
 @dataclass(frozen=True, eq=False)
 class Assessment:
     """One trained structure against :class:`FETruth`: ``y_pred`` at the test points, its
-    ``loo``, the Monte Carlo comparison ``mc`` and the counted surrogate calls."""
+    ``loo``, the Monte Carlo comparison ``mc``, the counted surrogate calls and the FE
+    evaluations its training used, counted at the sampler (``fe_calls`` computed,
+    ``fe_cache_hits`` loaded from the FE cache; ``None`` if not counted)."""
 
     name: str
     trained: TrainedSurrogate
@@ -82,6 +87,8 @@ class Assessment:
     loo: LOOSummary
     mc: MCComparison
     surrogate_calls: int
+    fe_calls: int | None = None
+    fe_cache_hits: int | None = None
 
 
 class _Grid:
@@ -96,15 +103,29 @@ class _Grid:
 
 
 def assess(name: str, trained: TrainedSurrogate, truth: FETruth, limit: LimitState, *,
-           rel_tol: float = 0.05) -> Assessment:
+           rel_tol: float = 0.05, counter: CallCounter | None = None) -> Assessment:
     """Compare ``trained`` with the FE side (μ, σ within ``rel_tol``; P_f within
-    max(1 point, 3 SE))."""
+    max(1 point, 3 SE)); ``counter``: the one its training counted FE calls with."""
     model = CountingResponse(trained.model.response)
     yp = trained.model.response_points(truth.Z)
     cmp = compare_mc(_Grid(model), truth.X, truth.theta, limit, y_true=truth.y_fe,
                      rel_tol=rel_tol)
     return Assessment(name, trained, yp, trained.model.loo_summary(), cmp,
-                      int(yp.size + model.counter.calls))
+                      int(yp.size + model.counter.calls),
+                      None if counter is None else counter.calls,
+                      None if counter is None else counter.cached)
 
 
-__all__ = ["Assessment", "FETruth", "assess", "fe_truth"]
+def train_and_assess(name: str, spindle: Any, inputs: Any, limit: LimitState, options: Any,
+                     truth: FETruth, *, rng: np.random.Generator, cache: Any = None,
+                     rel_tol: float = 0.05, progress: bool = False, label: str = ""
+                     ) -> Assessment:
+    """Train the structure of ``options`` (``train_surrogate``, its FE calls counted) and
+    :func:`assess` it against ``truth``."""
+    counter = CallCounter()
+    trained = train_surrogate(spindle, inputs, limit, options, rng=rng, counter=counter,
+                              cache=cache, progress=progress, label=f"{label} {name}".strip())
+    return assess(name, trained, truth, limit, rel_tol=rel_tol, counter=counter)
+
+
+__all__ = ["Assessment", "FETruth", "assess", "fe_truth", "train_and_assess"]

@@ -67,6 +67,17 @@ class DesignModelOptions:
         check_int("n_validate", self.n_validate, minimum=0)
         check_int("n_jobs", self.n_jobs, minimum=1)
 
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes per size field (``core.memory``): the Kriging fits hold a few
+        ``n_train × n_train`` matrices (~10, smt KRG), the designs and their FE quantities
+        a few rows each.
+
+        >>> DesignModelOptions(n_train=40).memory_bytes()["n_train"] < 1e6
+        True
+        """
+        n, v = float(self.n_train), float(self.n_validate)
+        return {"n_train": 8.0 * (10.0 * n * n + 16.0 * n), "n_validate": 8.0 * 16.0 * v}
+
 
 def fe_design_quantities(spindle, x: np.ndarray) -> np.ndarray:
     """FE quantities of designs ``x`` (P, 3) at nominal θ: columns ``QUANTITIES``.

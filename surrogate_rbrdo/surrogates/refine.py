@@ -70,6 +70,18 @@ class RefineOptions:
         check_positive("refine.tol", self.tol)
         check_choice("refine.hyper", self.hyper, ("warm", "keep", "refit"))
 
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): every round adds ``designs × theta`` (x, θ) points to
+        the surrogate, whose Kriging holds ~10 matrices of (points added)² (the DOE's own
+        points are the structure's share); blamed on the larger of ``designs`` and ``theta``.
+
+        >>> RefineOptions(rounds=1, theta=10 ** 11).memory_bytes()["theta"] > 1e20
+        True
+        """
+        n = float(self.rounds) * self.designs * self.theta
+        key = "theta" if self.theta >= self.designs else "designs"
+        return {key: 8.0 * (10.0 * n * n + 16.0 * n)}
+
 
 def select_designs(priority: Sequence[np.ndarray], fronts: Mapping[str, np.ndarray],
                    bounds: np.ndarray, n: int, *, min_dist: float = 0.02) -> np.ndarray:

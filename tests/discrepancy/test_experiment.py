@@ -10,8 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
-from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.rig.config import RigTable
+from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 
 from .conftest import campaign_data
 
@@ -24,9 +26,8 @@ def test_configs_parse(name):
     assert cfg["experiment"]["kind"] == "discrepancy"
     o = options_from_dict(cfg["discrepancy"])
     assert o.nuisance.gain_sd == 0.02 and "housing" in o.library
-    spindle_from_config(cfg["spindle"])
-    rig = pytest.importorskip("surrogate_rbrdo.rig.config")
-    truth = rig.rig_config_from_dict(cfg["rig"]).truth
+    build_spindle(parse(SpindleTable, cfg["spindle"], "spindle"))
+    truth = parse(RigTable, cfg["rig"], "rig").config().truth
     assert [e.name for e in truth.hidden] == ([] if "null" in name else ["housing"])
 
 

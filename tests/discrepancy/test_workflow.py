@@ -10,10 +10,11 @@ import tomllib
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.report import findings, write_run
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
-from surrogate_rbrdo.runner.config import spindle_from_config
+from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 from surrogate_rbrdo.spindle.effects import HousingFlexibility
 
 from .conftest import campaign_data
@@ -72,7 +73,7 @@ def test_findings_and_updated_spindle_load_back(housing_result, spindle, tmp_pat
     assert set(f["gap"]["before"]) == set(f["gap"]["after"]) == {"rmse", "max_abs", "chi2_dof"}
     assert set(f["effects"][0]["ci"]) == {"k_N_per_m", "m_kg", "c_Ns_per_m"}
     table = tomllib.loads(paths["spindle"].read_text())["spindle"]
-    updated = spindle_from_config(table)
+    updated = build_spindle(parse(SpindleTable, table, "spindle"))
     assert [e.name for e in updated.effects][-1] == "housing"
     assert updated.effects[-1].k_N_per_m == pytest.approx(
         housing_result.effects[0].fit.parameters["k_N_per_m"])

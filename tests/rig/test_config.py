@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.rig.campaign import CampaignOptions, SpeedGrid
 from surrogate_rbrdo.rig.config import RigTable, RigTruthTable
 from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
-from surrogate_rbrdo.runner.schema import parse
 
 CONFIG = Path(__file__).resolve().parents[2] / "experiments" / "rig_campaign.toml"
 
@@ -39,7 +39,8 @@ def test_the_campaign_sensors_are_the_rig_sensors():
 def test_unknown_keys_and_effects_are_named():
     with pytest.raises(ValueError, match=r"unknown key rig.campaign.repeat; allowed"):
         parse(RigTable, {"campaign": {"repeat": 3}}, "rig")
-    with pytest.raises(ValueError, match=r"rig.effects\[0\]: unknown effect 'nope'"):
+    with pytest.raises(ValueError, match=r"rig.effects\[0\]: name = 'nope' is not allowed: "
+                       r"unknown effect 'nope'"):
         parse(RigTable, {"effects": [{"name": "nope"}]}, "rig")
     with pytest.raises(ValueError, match=r"unknown key rig.sensors.daq.bit; allowed"):
         parse(RigTable, {"sensors": {"daq": {"bit": 12}}}, "rig")

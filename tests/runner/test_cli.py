@@ -58,11 +58,12 @@ BAD_CONFIGS = [
     (HEAD + "[spindle]\neffects=[{name='warp', a=1}]\n",
      r"unknown effect 'warp'; known: .*speed_softening"),
     (HEAD + "[spindle]\ndesign_map={lower=[1000.0, 300.0, 25.0]}\n",
-     r"\[spindle.design_map\] lower = \[1000.0, 300.0, 25.0\]: design diameter_mm = 25.0 is "
-     r"not allowed: must exceed the bore"),
+     r"spindle.design_map.lower\[2\] = 25.0 is not allowed: the span diameter must exceed the "
+     r"bore"),
     (HEAD + "[spindle]\ntheta_bearings=['front', 'front']\n",
      r"theta_bearings = \['front', 'front'\] is not allowed.*appears twice"),
-    (HEAD + "[spindle]\ntheta_bearings=['nose']\n", r"theta_bearings: 'nose' is not a bearing"),
+    (HEAD + "[spindle]\ntheta_bearings=['nose']\n",
+     r"spindle.theta_bearings = \['nose'\] is not allowed: 'nose' is not a bearing"),
     ("[experiment]\nname='t'\n", r"experiment.kind is missing: it is required"),
     ("[experiment\n", r"not valid TOML"),
 ]

@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.rig import store
 from surrogate_rbrdo.rig.campaign import run_campaign
 from surrogate_rbrdo.rig.config import RigTable
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.runfolder import read_meta
-from surrogate_rbrdo.runner.schema import parse
 
 SMALL = """
 [experiment]

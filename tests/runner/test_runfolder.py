@@ -10,7 +10,7 @@ import stat
 import pytest
 
 from surrogate_rbrdo.runner.cli import main
-from surrogate_rbrdo.runner.execute import run_experiment
+from surrogate_rbrdo.runner.execute import RunFailed, run_experiment
 from surrogate_rbrdo.runner.experiments import study as study_kind
 from surrogate_rbrdo.runner.runfolder import AlreadyComplete, RunFolder
 from surrogate_rbrdo.spindle.evaluate import PointwisePeak
@@ -127,11 +127,13 @@ def test_failed_run_is_marked_and_can_be_resumed(tmp_path, monkeypatch, capsys):
         raise RuntimeError("disk on fire")
 
     monkeypatch.setattr(study_kind, "verify", broken)
-    with pytest.raises(RuntimeError, match="disk on fire"):
+    with pytest.raises(RunFailed, match="RuntimeError: disk on fire") as info:
         run_experiment(cfg, results_dir=res, run_id="f", progress=False)
+    assert info.value.stage == "verify" and isinstance(info.value.__cause__, RuntimeError)
     run = res / "tiny" / "f"
     meta = _meta(run)
     assert meta["status"] == "failed" and "RuntimeError: disk on fire" in meta["error"]
+    assert meta["failed_in"] == "verify" and "disk on fire" in meta["traceback"]
     assert not (run / "summary.json").exists() and not (run / "verification.csv").exists()
     assert set(meta["stages"]) == {"surrogate", "design_model", "optimise", "refine"}
     # a plain rerun is refused, naming --resume

@@ -10,10 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.core.files import json_default
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.experiments import validation as kind
-from surrogate_rbrdo.runner.runfolder import json_default, read_meta
+from surrogate_rbrdo.runner.runfolder import read_meta
 from surrogate_rbrdo.validation import measure_designs, reference_family
 
 from .test_study import TINY

@@ -9,7 +9,6 @@ Tables: ``[spindle]`` (:class:`~surrogate_rbrdo.runner.tables.SpindleTable`) and
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,16 +16,17 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_int
+from surrogate_rbrdo.core.validate import check_int, check_label
 from surrogate_rbrdo.reporting.spindle import (
     QUANTITY_HEADER,
     SpindleOverview,
+    check_overview,
     quantity_rows,
     spindle_overview,
     write_overview,
 )
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle, require_memory
+from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 
 
 @dataclass(frozen=True)
@@ -43,6 +43,8 @@ class ReportTable:
     def __post_init__(self) -> None:
         if self.designs is not None and not self.designs:
             raise ValueError("designs = {} is not allowed: give label = [F, L, D] entries")
+        for label in self.designs or ():
+            check_label("designs", label)
         check_int("n_speeds", self.n_speeds, minimum=2)
         check_int("campbell_speeds", self.campbell_speeds, minimum=2)
         check_int("n_modes", self.n_modes, minimum=1)
@@ -71,15 +73,11 @@ def build(c: SpindleReportConfig, base_dir: Path) -> Plan:
         except ValueError as exc:
             raise ValueError(f"report.designs.{label}: {exc}") from None
     if c.report.include_box:
-        b = sp.design_map.bounds
-        for corner in itertools.product(*[(0, 1)] * b.shape[0]):
-            designs["corner " + "".join("-+"[k] for k in corner)] = np.array(
-                [b[i, k] for i, k in enumerate(corner)])
-        designs["centre"] = b.mean(axis=1)
-    require_memory("report.n_speeds", c.report.n_speeds,
-                   65536.0 * c.report.n_speeds * (1 + len(designs) / 100),
-                   "the unbalance responses (~64 kB per speed)")
-    return Plan(sp, designs, c.report)
+        designs.update(sp.design_map.corners())
+    r = c.report
+    check_overview(sp, designs, n_speeds=r.n_speeds, campbell_speeds=r.campbell_speeds,
+                   n_modes=r.n_modes, where="report")
+    return Plan(sp, designs, r)
 
 
 def _designs(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> SpindleOverview:

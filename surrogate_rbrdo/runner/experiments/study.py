@@ -21,10 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.reporting import study as tables
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
-from surrogate_rbrdo.runner.schema import parse
 from surrogate_rbrdo.runner.tables import (
     DeterministicTable,
     LimitTable,

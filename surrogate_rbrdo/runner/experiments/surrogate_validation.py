@@ -7,9 +7,13 @@ from the same seed stream, so variants with the same DOE settings get the same D
 FE cache is shared. Stages: ``truth`` (FE at ``n_test`` fresh LHS points of the joint box,
 full-FE MC at the ``designs`` on ``n_theta`` θ, FE resonance quantities if a resonance
 variant needs them) → ``variants`` (train, test points, LOO, MC comparison). Tables:
-``metrics.csv``, ``loo.csv``, ``mc_comparison.csv``, ``cost.csv`` (training FE calls and the
-P_f accuracy; no timings), ``resonance_submodels.csv`` and ``nc_at_designs.csv`` (resonance
-variants), parity figures per variant. ``y`` is the peak amplitude.
+``metrics.csv``, ``loo.csv``, ``mc_comparison.csv``, ``cost.csv`` (the FE evaluations each
+training used, counted at the sampler: computed now or loaded from the FE cache, so the table
+is the same on a rerun; and the P_f accuracy; no timings), ``resonance_submodels.csv`` and
+``nc_at_designs.csv`` (resonance variants), parity figures per variant. ``calls.json`` (and
+``meta.json``) split the counts into FE calls computed and cache hits, per stage and variant.
+Variant names and design labels are labels (``core.validate.check_label``: they name files).
+``y`` is the peak amplitude.
 """
 
 from __future__ import annotations
@@ -21,9 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_int, check_positive
+from surrogate_rbrdo.core.memory import check_memory, memory_needs
+from surrogate_rbrdo.core.validate import check_int, check_label, check_positive
 from surrogate_rbrdo.reporting import tables_surrogate as tab
-from surrogate_rbrdo.reporting.plots_surrogate import parity_plot
+from surrogate_rbrdo.reporting.plots_surrogate import parity_figures
 from surrogate_rbrdo.runner.experiments.study import surrogate_options
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.tables import (
@@ -32,12 +37,16 @@ from surrogate_rbrdo.runner.tables import (
     UncertaintyTable,
     build_inputs,
     build_spindle,
-    require_memory,
 )
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
-from surrogate_rbrdo.surrogates.assessment import Assessment, FETruth, assess, fe_truth
-from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions, train_surrogate
+from surrogate_rbrdo.surrogates.assessment import (
+    Assessment,
+    FETruth,
+    fe_truth,
+    train_and_assess,
+)
+from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions
 
 DEFAULT_DESIGNS = {
     "resonant": (2000.0, 650.0, 60.0),
@@ -68,6 +77,10 @@ class ValidationTable:
         check_int("n_theta_nc", self.n_theta_nc, minimum=2)
         if not self.designs:
             raise ValueError("designs = {} is not allowed: give at least one design")
+        for label in self.designs:
+            check_label("designs", label)
+        for name in self.variants:
+            check_label("variants", name)
         if "main" in self.variants:
             raise ValueError("variants.main is not allowed: 'main' is the [surrogate] table")
 
@@ -125,10 +138,13 @@ def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
     box = main if isinstance(main, JointDOEOptions) else JointDOEOptions(
         n_jobs=main.n_jobs, backend=main.backend)
     v = c.validation
-    require_memory("validation.n_theta", v.n_theta, 4 * 8.0 * len(designs) * v.n_theta *
-                   (1 + len(variants)), "designs × n_theta × 4 arrays per variant")
-    require_memory("validation.n_test", v.n_test, 8 * 8.0 * v.n_test * len(variants),
-                   "the test points")
+    m = 3 + inputs.dim
+    check_memory({"validation.n_theta": (v.n_theta, 8.0 * v.n_theta * (m + 4 * len(designs) * (
+        1 + len(variants)))), "validation.n_test": (v.n_test, 8.0 * v.n_test * (m + 4 * len(
+            variants)))})
+    for name, o in variants.items():        # structures that state their memory
+        check_memory(memory_needs(o, "surrogate" if name == "main" else
+                                  f"validation.variants.{name}"))
     return Plan(spindle, inputs, c.limit.limit(), variants, box, designs, v)
 
 
@@ -144,63 +160,31 @@ def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
 
 def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Assessment, ...]:
     """Every variant trained from the same seed stream (same DOE settings, same DOE)."""
-    return tuple(assess(name, train_surrogate(
-        p.spindle, p.inputs, p.limit, options, rng=ctx.stream(0), cache=fe_cache(ctx.cache_dir),
-        progress=ctx.progress, label=f"{ctx.label} {name}"), done["truth"], p.limit,
-        rel_tol=p.validation.rel_tol) for name, options in p.variants.items())
-
-
-def _rows(p: Plan, t: FETruth, a: Assessment) -> dict[str, list[Any]]:
-    labels, tr = list(p.designs), a.trained
-    rows: dict[str, list[Any]] = {
-        "metrics": [tab.metrics_row(a.name, t.y, a.y_pred, p.limit.threshold)],
-        "loo": tab.loo_rows(a.name, a.loo), "mc": tab.mc_rows(a.name, labels, t.X, a.mc),
-        "cost": [tab.cost_row(a.name, getattr(tr.options, "active_learning", False),
-                              tr.structure, tr.model.info.get("transform", ""),
-                              tr.model.n_train, tr.model.n_train, a.mc)]}
-    if tr.structure == "resonance":
-        n_th = min(p.validation.n_theta_nc, p.validation.n_theta)
-        rows["sub"], rows["nc"] = tab.resonance_rows(a.name, tr.model, *t.resonance, labels,
-                                                     n_th)
-    return rows
+    return tuple(train_and_assess(
+        name, p.spindle, p.inputs, p.limit, options, done["truth"], rng=ctx.stream(0),
+        cache=fe_cache(ctx.cache_dir), rel_tol=p.validation.rel_tol, progress=ctx.progress,
+        label=ctx.label) for name, options in p.variants.items())
 
 
 def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
     t, vs = done["truth"], done["variants"]
-    rows = [_rows(p, t, a) for a in vs]
-    table = {k: [r for v in rows for r in v.get(k, [])] for k in
-             ("metrics", "loo", "mc", "cost", "sub", "nc")}
-    for name, key, header in (("metrics.csv", "metrics", tab.METRICS_HEADER),
-                              ("loo.csv", "loo", tab.LOO_HEADER),
-                              ("mc_comparison.csv", "mc", tab.MC_HEADER),
-                              ("cost.csv", "cost", tab.COST_HEADER),
-                              ("resonance_submodels.csv", "sub", tab.SUB_HEADER),
-                              ("nc_at_designs.csv", "nc", tab.NC_HEADER)):
-        if table[key] or key not in ("sub", "nc"):
-            run.write_csv(name, header, table[key])
-    n = t.y.size
+    tables = tab.validation_tables(list(p.designs), t, vs, p.limit.threshold,
+                                   p.validation.n_theta_nc)
+    for name, (header, rows) in tables.items():
+        run.write_csv(name, header, rows)
     for a in vs:
-        run.save_figure(f"parity_{a.name}.png", parity_plot(
-            t.y * 1e6, a.y_pred * 1e6, title=f"{a.name}: peak amplitude at {n} fresh LHS "
-            "points", label="peak amplitude [µm]"))
-        run.save_figure(f"parity_log_{a.name}.png", parity_plot(
-            np.log10(t.y), np.log10(a.y_pred), title=f"{a.name}: log10 of the peak amplitude "
-            f"at {n} fresh LHS points", label="log10(y / 1 m)"))
+        for name, fig in parity_figures(a.name, t.y, a.y_pred).items():
+            run.save_figure(name, fig)
     run.write_json("surrogate_info.json", {a.name: {k: v for k, v in a.trained.to_dict().items()
                                                     if k != "options"} for a in vs})
-    fe = {**t.calls, **{f"train_{a.name}": a.trained.fe_calls for a in vs}}
-    sur = {a.name: a.surrogate_calls for a in vs}
-    meta = {"fe_calls": {**fe, "total": sum(fe.values())},
-            "surrogate_calls": {**sur, "total": sum(sur.values())},
-            "n_theta": p.validation.n_theta, "n_test": int(n),
-            "note": "fe_calls are computed points (cache misses); cost.csv has the training "
-                    "sizes"}
+    meta = {**tab.validation_calls(t, vs), "n_theta": p.validation.n_theta,
+            "n_test": int(t.y.size)}
     run.write_json("calls.json", meta)
     keep = ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe", "pf_sur", "ok_mean",
             "ok_std", "ok_pf")
     return {"variants": [a.name for a in vs], "meta": meta,
             "summary": [{k: x for k, x in zip(tab.MC_HEADER, r, strict=True) if k in keep}
-                        for r in table["mc"]]}
+                        for r in tables["mc_comparison.csv"][1]]}
 
 
 register_kind(Kind(

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.reporting.plots_validation import write_validation_report
 from surrogate_rbrdo.reporting.study import verification_fe
@@ -30,7 +31,6 @@ from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.runner.experiments.study import StudyConfig
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.runfolder import read_meta
-from surrogate_rbrdo.runner.schema import parse
 from surrogate_rbrdo.runner.tables import (
     SpindleTable,
     UncertaintyTable,

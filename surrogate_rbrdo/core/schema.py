@@ -1,12 +1,16 @@
-"""Config files → validated frozen dataclasses, with one-line errors naming the dotted path.
+"""Plain data (TOML/JSON) → validated frozen dataclasses, with one-line errors naming the
+dotted path.
 
-The schema of a config table *is* an options dataclass (its annotations give the types, its
-``__post_init__`` the ranges and choices), so there is one source of truth for Python and
-TOML. pydantic (v2, strict) checks a table against it: no string is taken as a number or a
-boolean or split into characters, no float is truncated to an integer, no NaN/inf passes, and
-unknown keys are refused — in every table of every kind. The TOML data is validated in JSON
-mode (TOML arrays are JSON arrays, so a tuple field takes ``[a, b]``; strict Python mode would
-refuse any list for a tuple). Errors come back as ``ValueError`` with one line::
+The schema of a config table, a geometry file or an effect *is* its dataclass (the
+annotations give the types, ``__post_init__`` the ranges and choices), so there is one source
+of truth for Python, config files and data files. pydantic (v2, strict) checks data against
+it: no string is taken as a number or a boolean or split into characters, no float is
+truncated to an integer, no NaN/inf passes, and unknown keys are refused. The data is
+validated in JSON mode (TOML arrays are JSON arrays, so a tuple field takes ``[a, b]``; strict
+Python mode would refuse any list for a tuple). The runner checks every config table with
+:func:`parse`; the library parses geometry files (``SpindleGeometry.from_dict``) and effects
+(``spindle.effects.effect_from_dict``) the same way. Errors come back as ``ValueError`` with
+one line::
 
     optimization.weights = '0.5,0.5' is not allowed: must be an array, e.g. [1.0, 2.0]
 
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import tomllib
 import types
 import typing
@@ -38,6 +43,8 @@ from typing import Any
 
 from pydantic import ConfigDict, TypeAdapter, ValidationError, create_model
 
+from surrogate_rbrdo.core.files import read_input
+
 WHAT = {
     "int_type": "an integer", "int_from_float": "an integer", "int_parsing": "an integer",
     "float_type": "a number", "float_parsing": "a number", "bool_type": "true or false",
@@ -48,15 +55,33 @@ WHAT = {
 SCALARS = {str: "a string", float: "a number", int: "an integer", bool: "true or false"}
 
 
+#: a message that starts with a path below the failing value: ``k_N_per_m = ...``
+SUBPATH = re.compile(r"([A-Za-z_]\w*(?:\[\d+\])*(?:\.[A-Za-z_]\w*(?:\[\d+\])*)*) = ")
+
+
 def load_toml(path: str | Path, what: str = "config file") -> dict[str, Any]:
-    """Read a TOML file; a missing file or a syntax error names the file."""
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"{what} {str(path)!r} does not exist")
+    """Read a TOML file; a missing, unreadable or non-UTF-8 file or a syntax error names the
+    file (:func:`~surrogate_rbrdo.core.files.read_input`, so the file's hash is tracked)."""
+    data = read_input(path, what)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(data.decode("utf-8-sig"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+
+
+def load_data(path: str | Path, what: str = "file") -> Any:
+    """Read a ``.toml`` or ``.json`` data file (errors name ``what`` and the file)."""
+    path = Path(path)
+    if path.suffix not in (".toml", ".json"):
+        raise ValueError(f"{what} {str(path)!r} is not allowed: the suffix must be .toml or "
+                         ".json")
+    if path.suffix == ".toml":
+        return load_toml(path, what)
+    data = read_input(path, what)
+    try:
+        return json.loads(data.decode("utf-8-sig"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{what} {str(path)!r} is not valid JSON: {exc}") from None
 
 
 def dotted(loc: tuple[Any, ...]) -> str:
@@ -212,10 +237,16 @@ def _message(cls: type, err: Mapping[str, Any], where: str, union: bool = False)
     if kind == "value_error":
         msg = str(err["ctx"]["error"])
         last = str(shown[-1]) if shown else where.rsplit(".", 1)[-1]
+        if msg.startswith(f"unknown key {last}.") and path:     # from a nested parse
+            return f"unknown key {path}{msg[len('unknown key ') + len(last):]}"
         if msg.startswith(f"{last}."):
             msg = msg[len(last) + 1:]
         first = msg.split(" ", 1)[0].split("[", 1)[0].split(".", 1)[0]
-        if first in (fields_at(cls, loc) or []) or first.startswith("unknown"):
+        head = SUBPATH.match(msg)
+        fields = fields_at(cls, loc) or []
+        if head is not None and head.group(1) == last and path and first not in fields:
+            return f"{path}{msg[len(last):]}"          # "law = ..." raised at law
+        if first in fields or first.startswith("unknown") or head:
             return f"{path}.{msg}" if path and not first.startswith("unknown") else msg
         return f"{path}: {msg}" if path else msg
     what = _array(cls, loc) if kind in ("tuple_type", "list_type") else WHAT.get(kind)
@@ -262,4 +293,4 @@ def parse(cls: type, data: Any, where: str = "") -> Any:
         raise ValueError(_message(cls, (fits or errors)[0], where, union=not fits)) from None
 
 
-__all__ = ["dotted", "fields_at", "load_toml", "parse", "type_at"]
+__all__ = ["dotted", "fields_at", "load_data", "load_toml", "parse", "type_at"]

@@ -1,0 +1,82 @@
+"""Memory a configuration would need, checked before any work.
+
+Options dataclasses whose sizes make arrays may say what they need with a method
+``memory_bytes() -> {field: bytes}``: the peak bytes of the arrays each size field makes (the
+largest term names the field to blame). :func:`check_memory` refuses a need larger than the
+memory available now, naming the field, its value and the need; the runner calls it for every
+config table that has ``memory_bytes`` (``runner.execute.prepare``), so a size that would not
+fit is refused before a run folder exists, not after hours of work.
+
+>>> from dataclasses import dataclass
+>>> @dataclass(frozen=True)
+... class Grid:
+...     n: int = 10
+...     def memory_bytes(self):
+...         return {"n": 8.0 * self.n ** 2}
+>>> check_memory(memory_needs(Grid(10), "grid"))
+>>> check_memory(memory_needs(Grid(10 ** 9), "grid"))   # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+ValueError: grid.n = 1000000000 is not allowed: the arrays it sizes need ~8e+09 GB of memory...
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+
+def available_memory() -> int:
+    """Bytes of memory available now (``MemAvailable``; else the physical memory)."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def memory_needs(options: Any, where: str) -> dict[str, tuple[Any, float]]:
+    """``{"<where>.<field>": (value, bytes)}`` from ``options.memory_bytes()`` (empty if it
+    has none)."""
+    method = getattr(options, "memory_bytes", None)
+    if method is None:
+        return {}
+    return {f"{where}.{k}" if where else k: (getattr(options, k, None), float(b))
+            for k, b in method().items()}
+
+
+def table_needs(config: Any, where: str = "") -> list[dict[str, tuple[Any, float]]]:
+    """The memory needs of every dataclass in ``config`` (itself and nested fields), one dict
+    per dataclass that has ``memory_bytes``."""
+    out = []
+    if dataclasses.is_dataclass(config) and not isinstance(config, type):
+        need = memory_needs(config, where)
+        if need:
+            out.append(need)
+        for f in dataclasses.fields(config):
+            sub = f"{where}.{f.name}" if where else f.name
+            out += table_needs(getattr(config, f.name), sub)
+    return out
+
+
+def check_memory(needs: Mapping[str, tuple[Any, float]], *, have: float | None = None) -> None:
+    """Refuse ``needs`` (``{field: (value, bytes)}``, arrays alive at once) if their sum
+    exceeds the memory available now; the message names the field needing most."""
+    if not needs:
+        return
+    total = sum(b for _, b in needs.values())
+    have = available_memory() if have is None else have
+    if total > have:
+        field, (value, nbytes) = max(needs.items(), key=lambda kv: kv[1][1])
+        share = "" if nbytes >= 0.999 * total else f" (of ~{total / 1e9:.3g} GB in all)"
+        raise ValueError(f"{field} = {value!r} is not allowed: the arrays it sizes need "
+                         f"~{nbytes / 1e9:.3g} GB of memory{share}, more than the "
+                         f"{have / 1e9:.3g} GB available")
+
+
+__all__ = ["available_memory", "check_memory", "memory_needs", "table_needs"]
