@@ -32,7 +32,13 @@ from surrogate_rbrdo.rig.store import (
     read_record,
     write_record,
 )
-from surrogate_rbrdo.rig.truth import Truth, TruthState, Variability, reference_truth
+from surrogate_rbrdo.rig.truth import (
+    Truth,
+    TruthState,
+    Variability,
+    reference_truth,
+    spindle_truth,
+)
 
 __all__ = [
     "Calibration",
@@ -57,6 +63,7 @@ __all__ = [
     "read_phasors",
     "read_record",
     "reference_truth",
+    "spindle_truth",
     "run_campaign",
     "sample_phasors",
     "track_1x",

@@ -242,12 +242,20 @@ def _effect_dict(e: Effect) -> dict[str, Any]:
     return d
 
 
+def spindle_truth(spindle: Any, hidden: Sequence[Effect | dict[str, Any]] = (),
+                  variability: Variability = Variability(),
+                  x: np.ndarray | None = None) -> Truth:
+    """A parametric spindle (``reference_spindle()``, ``credible_spindle()``, …; design ``x``,
+    default its baseline) as a truth: the model's effects, plus ``hidden`` effects (objects or
+    ``{"name": ..., <params>}``)."""
+    geom = spindle.geometry_for(spindle.baseline if x is None else np.asarray(x, float))
+    hid = tuple(e if isinstance(e, Effect) else effect_from_dict(dict(e)) for e in hidden)
+    return Truth(geom, spindle.effects, hid, variability, spindle.theta_bearings)
+
+
 def reference_truth(hidden: Sequence[Effect | dict[str, Any]] = (),
                     variability: Variability = Variability(),
                     x: np.ndarray | None = None) -> Truth:
-    """The reference spindle (design ``x``, default the baseline) as a truth: the model's
-    default effects, plus ``hidden`` effects (objects or ``{"name": ..., <params>}``)."""
-    sp = reference_spindle()
-    geom = sp.geometry_for(sp.baseline if x is None else np.asarray(x, float))
-    hid = tuple(e if isinstance(e, Effect) else effect_from_dict(dict(e)) for e in hidden)
-    return Truth(geom, sp.effects, hid, variability, sp.theta_bearings)
+    """The reference spindle (design ``x``, default the baseline) as a truth
+    (:func:`spindle_truth` of ``reference_spindle()``)."""
+    return spindle_truth(reference_spindle(), hidden, variability, x)

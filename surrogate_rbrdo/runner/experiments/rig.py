@@ -38,12 +38,18 @@ class Plan:
 
 
 def build(c: RigCampaignConfig, base_dir: Path) -> Plan:
-    cfg = c.rig.config()
+    return rig_plan(c.rig.config(), c.rig.effects)
+
+
+def rig_plan(cfg: RigConfig, effects: Any = ()) -> Plan:
+    """The checks before work (the nominal truth stable at the campaign's speeds, memory) and
+    the disk the campaign needs, for a truth and campaign made into objects (``[rig]``'s
+    ``effects`` named in the error)."""
     sp = stability_speeds(cfg.options)       # the campaign checks them all for each tool
     try:
         check_nominal_stable(cfg.truth, np.linspace(sp[0], sp[-1], 12))
     except ModelError as exc:
-        raise ValueError(f"rig.effects = {list(c.rig.effects)} is not allowed: {exc}") from None
+        raise ValueError(f"rig.effects = {list(effects)} is not allowed: {exc}") from None
     o, fp = cfg.options, footprint(cfg.options)
     require_memory(f"rig.campaign.{fp.memory_by}", getattr(o, fp.memory_by), fp.memory_bytes,
                    "its records (a run's steady records, a ramp or an impact held at once)")

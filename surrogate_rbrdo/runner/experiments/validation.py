@@ -28,6 +28,7 @@ from surrogate_rbrdo.reporting.plots_validation import write_validation_report
 from surrogate_rbrdo.reporting.study import verification_fe
 from surrogate_rbrdo.rig.config import RigTruthTable
 from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.truth import Truth
 from surrogate_rbrdo.runner.experiments.study import StudyConfig
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.runfolder import read_meta
@@ -39,6 +40,7 @@ from surrogate_rbrdo.runner.tables import (
     require_memory,
 )
 from surrogate_rbrdo.validation import (
+    ModelSpec,
     Moments,
     TruthFamily,
     ValidationOptions,
@@ -147,32 +149,50 @@ def _study(c: ValidationConfig, o: ValidationOptions) -> tuple[Any, ...]:
     return designs, spindle, build_inputs(sc.uncertainty, spindle.theta_bearings), known, source
 
 
-def build(c: ValidationConfig, base_dir: Path) -> Plan:
-    if c.validation.sensors != SensorSet():
+def validation_options(rig: RigTruthTable, options: ValidationOptions) -> ValidationOptions:
+    """``[validation]`` with the sensors of ``[rig.sensors]`` (its own must stay default)."""
+    if options.sensors != SensorSet():
         raise ValueError("validation.sensors is not allowed: the sensors are [rig.sensors]")
     try:
-        o = replace(c.validation, sensors=c.rig.sensors)
+        return replace(options, sensors=rig.sensors)
     except ValueError as exc:
         raise ValueError(f"rig.{exc}") from None
-    designs, spindle, inputs, known, source = (_study(c, o) if "from" in c.designs
-                                               else _given(c, base_dir))
+
+
+def validation_plan(template: Truth, spindle: Any, designs: dict[str, tuple[float, ...]],
+                    o: ValidationOptions, model: ModelSpec | None, source: dict[str, Any]
+                    ) -> Plan:
+    """The checks before measuring (designs, a truth stable at each, memory) and the plan of
+    the stages: ``template`` is the rig's truth, ``spindle`` the design map's owner."""
     try:
         check_designs(designs, o.baseline)
-        family = TruthFamily(c.rig.truth(), spindle.design_map)
+        family = TruthFamily(template, spindle.design_map)
         check_nominal_designs(family, designs, o)
     except ValueError as exc:
         raise ValueError(exc if str(exc).startswith("designs.") else f"designs: {exc}") from None
     except ModelError as exc:
         raise ValueError(f"rig.effects: {exc}") from None
-    m = c.model
     require_memory("validation.n_replications", o.n_replications, 64.0 * len(designs)
                    * o.n_replications * len(o.speeds_rpm) * len(o.sensors.probe_channels),
                    "the phasors of every replication, speed and probe")
-    require_memory("model.n_samples", m.n_samples, 64.0 * len(designs) * m.n_samples
-                   * max(o.peak.n_grid, len(o.speeds_rpm)), "the model's responses")
-    model = spindle_model_spec(spindle, inputs, n_samples=m.n_samples, known=known,
-                               rated_speed_rpm=o.rated_speed_rpm) if m.compare else None
+    if model is not None:
+        require_memory("model.n_samples", model.n_samples, 64.0 * len(designs)
+                       * model.n_samples * max(o.peak.n_grid, len(o.speeds_rpm)),
+                       "the model's responses")
     return Plan(family, designs, o, model, source)
+
+
+def build(c: ValidationConfig, base_dir: Path) -> Plan:
+    o = validation_options(c.rig, c.validation)
+    designs, spindle, inputs, known, source = (_study(c, o) if "from" in c.designs
+                                               else _given(c, base_dir))
+    model = spindle_model_spec(spindle, inputs, n_samples=c.model.n_samples, known=known,
+                               rated_speed_rpm=o.rated_speed_rpm) if c.model.compare else None
+    try:
+        template = c.rig.truth()
+    except ModelError as exc:
+        raise ValueError(f"rig.effects: {exc}") from None
+    return validation_plan(template, spindle, designs, o, model, source)
 
 
 def _measure(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:

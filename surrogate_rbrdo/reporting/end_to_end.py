@@ -1,0 +1,219 @@
+"""``report.md`` of the end-to-end loop: a results section in the paper's order (rig campaign →
+identification → the study's θ → RBRDO → validation on the rig → discrepancy) with this run's
+numbers, each with the file (and stage) it comes from, and the figures embedded by relative
+path.
+
+The inputs are the stages' frozen results; the parts' own files (``rig/``, ``identification/``,
+``study/``, ``validation/``, ``discrepancy/``) are written here too, from the same results,
+so every number in ``report.md`` can be found again in a table of the run folder.
+
+>>> _fmt(0.000123456), _fmt(12345.678), _fmt(float("nan"))
+('0.000123', '1.235e+04', '—')
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.files import atomic_write_text
+from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
+from surrogate_rbrdo.reporting.plots_identification import write_identification_figures
+from surrogate_rbrdo.reporting.plots_rig import write_rig_report
+from surrogate_rbrdo.reporting.plots_validation import write_validation_report
+from surrogate_rbrdo.validation.table7 import table7_rows
+
+
+def _fmt(v: float, digits: int = 3) -> str:
+    """A number to ``digits`` significant figures (``—`` for NaN/None)."""
+    if v is None or not np.isfinite(v):
+        return "—"
+    return f"{float(v):.{digits}g}"
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return out + ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+
+
+def _figures(folder: Path, root: Path, names: Sequence[str] | None = None) -> list[str]:
+    """Markdown image lines for the PNGs of ``folder`` (relative to ``root``)."""
+    pngs = sorted(folder.rglob("*.png")) if names is None else [folder / n for n in names]
+    return [f"![{p.stem}]({p.relative_to(root).as_posix()})" for p in pngs if p.is_file()]
+
+
+def _rig_section(campaign: Any, options: Any, rig_summary: Mapping[str, Any], variability: Any,
+                 root: Path) -> list[str]:
+    o = options
+    trial = o.trial_unbalance
+    lines = ["## 1. Rig campaign (stage `campaign`)", "",
+             f"{campaign.n_records} records on the virtual rig's truth (the model's spindle "
+             f"at its baseline with the hidden effects of `[rig]`): {len(o.speeds_rpm)} speeds "
+             f"{_fmt(min(o.speeds_rpm), 5)}–{_fmt(max(o.speeds_rpm), 5)} rpm × {o.repeats} "
+             f"repeats of {o.duration_s:g} s"
+             + (f", each speed also with a trial mass of {trial[1] * 1e6:g} g mm at "
+                f"{trial[0]:g} mm (phase {trial[2]:g}°)" if trial is not None else "")
+             + ". Source: `campaign/phasors.csv`, `campaign/dataset/`.", "",
+             f"The hidden variability the identification has to find (`[rig.variability]`): "
+             f"bearing stiffness CoV {variability.bearing_k_cov:.1%} per build, thermal "
+             f"preload CoV {variability.thermal_preload_cov:.1%} per run (stiffness ∝ F^1/3)."]
+    crit = {k: v for k, v in rig_summary.items() if k.startswith(("critical_speeds",
+                                                                  "model_critical"))}
+    if crit:
+        lines += ["", "Critical speeds (`rig/rig_summary.json`): " + "; ".join(
+            f"{k} = {[round(float(x)) for x in v]}" for k, v in crit.items())]
+    return lines + [""] + _figures(root / "rig", root) + [""]
+
+
+def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) -> list[str]:
+    mvn = theta.stiffness
+    mean, sd = np.asarray(mvn.mean, float), np.sqrt(np.diag(np.asarray(mvn.cov, float)))
+    used = np.asarray(ident.campaign.table.get("used", []), bool)
+    prov = theta.provenance
+    rows = [(b, _fmt(m, 4), f"{s:.2%}") for b, m, s in zip(bearings, mean, sd, strict=True)]
+    speeds = np.asarray(prov.get("speeds_rpm", []), float)
+    return ["## 2. Identification and the study's θ (stages `identification`, `uncertainty`)",
+            "",
+            f"{int(used.sum())} of {used.size} identified coefficient vectors used "
+            "(`identification/identified.csv`, column `used`; flags in "
+            "`identification/summary.json`); trend, physical scatter and systematic "
+            "uncertainty in `identification/uncertainty.json`.",
+            "",
+            "θ of the study — stiffness factors relative to the model's nominal bearing "
+            "stiffness, the moment-matched mixture over the identified speeds "
+            + (f"{_fmt(speeds.min(), 5)}–{_fmt(speeds.max(), 5)} rpm ({speeds.size} speeds)"
+               if speeds.size else "") + " (stage `uncertainty`; `theta.json`):", "",
+            *_table(["bearing", "mean factor", "SD"], rows), "",
+            *_figures(root / "identification", root), ""]
+
+
+def _study_section(ver: Any, limit_um: float, root: Path) -> list[str]:
+    rows = []
+    for i, n in enumerate(ver.names):
+        fe = ver.fe
+        lo, hi = (float(v) for v in np.asarray(fe.pf_ci)[i])
+        rows.append((n, ", ".join(_fmt(v, 5) for v in ver.X[i]), _fmt(fe.mean[i] * 1e6),
+                     _fmt(fe.std[i] * 1e6), f"{fe.pf[i]:.3g} [{lo:.3g}, {hi:.3g}]"))
+    return ["## 3. RBRDO on the identified θ (stages `surrogate` … `verify`)", "",
+            f"The chosen designs, checked with the FE model on {ver.n_theta} fresh θ samples "
+            f"(`study/verification.csv`, columns `*_fe`); y = peak tool-tip amplitude over the "
+            f"range, failure y > {limit_um:g} µm.", "",
+            *_table(["design", "x = [F N, L mm, D mm]", "μ_y µm", "σ_y µm",
+                     "P_f [95 % CI]"], rows), "",
+            "Fronts, strategy comparison and compromises: `study/pareto_fronts.csv`, "
+            "`study/strategy_comparison.csv`, `study/compromises.csv`.", "",
+            *_figures(root / "study", root), ""]
+
+
+def _validation_section(res: Any, root: Path) -> list[str]:
+    n = res.options.n_replications
+    rows = []
+    for c in res.comparisons:
+        if c.quantity != "peak":
+            continue
+        for r in table7_rows(c):
+            ci = (f" [{_fmt(r.relative_ci_low)}, {_fmt(r.relative_ci_high)}]"
+                  if np.isfinite(r.relative_ci_low) else "")
+            rows.append((r.design, r.metric, _fmt(r.before), _fmt(r.after),
+                         _fmt(r.relative_change) + ci, f"{r.test} {_fmt(r.statistic)}",
+                         _fmt(r.p_value), f"{r.effect_name} {_fmt(r.effect)}"))
+    verdicts = [(v.design, v.quantity, v.metric, _fmt(v.measured * (1e6 if v.metric != "pf"
+                                                                     else 1)),
+                 _fmt(v.model * (1e6 if v.metric != "pf" else 1)), _fmt(v.p_holm),
+                 "agree" if v.agree else "**disagree**") for v in res.verdicts]
+    out = ["## 4. Validation on the rig (stages `measure`, `model`)", "",
+           f"Each design built on the rig's truth and measured over {n} paired replications "
+           f"(fresh assembly and run each; baseline `{res.baseline}`). Table 7's analogue for "
+           "y, the peak over the range (`validation/table7.csv`; amplitudes in µm, P_f as a "
+           "fraction, relative change as a fraction with its interval):", "",
+           *_table(["design", "metric", "baseline", "design value", "relative change [CI]",
+                    "test", "p", "effect size"], rows), ""]
+    if verdicts:
+        out += ["Model (the study's FE verification) against measurement, Holm-corrected "
+                "(`validation/model_vs_measured.csv`; µm, P_f as a fraction):", "",
+                *_table(["design", "quantity", "metric", "measured", "model", "p (Holm)",
+                         "verdict"], verdicts), ""]
+    out += ["The full section: [validation/validation.md](validation/validation.md).", "",
+            *_figures(root / "validation", root), ""]
+    return out
+
+
+def _discrepancy_section(stage: Any, root: Path) -> list[str]:
+    out = ["## 5. Discrepancy (stage `discrepancy`)", ""]
+    if not stage.ran:
+        return out + [f"Not run: {stage.reason}. The model is unchanged; no re-optimisation.",
+                      ""]
+    r = stage.result
+    named = [getattr(e, "name", str(e)) for e in r.named_effects]
+    out += [f"Run because {stage.reason}. On the campaign's phasors "
+            f"(`campaign/phasors.csv`) the workflow's verdict is **{r.verdict}**"
+            + (f": {', '.join(named)}" if named else "") + " (`discrepancy/findings.json`, "
+            "`discrepancy/candidates.csv`)."]
+    if named:
+        out += ["", "The updated spindle (the model's effects plus the named ones, fitted) is "
+                "written to `discrepancy/spindle_updated.toml`. **Re-optimisation with it is "
+                "not done by this run**: pass it as `[spindle]` of a new study."]
+    else:
+        out += ["", "No effect is named, so the model is not updated and nothing is "
+                "re-optimised."]
+    return out + [""] + _figures(root / "discrepancy", root) + [""]
+
+
+def _timings_section(timings: Mapping[str, float]) -> list[str]:
+    rows = [(k, f"{v:.1f}") for k, v in timings.items()]
+    total = sum(timings.values())
+    return ["## Stage timings (`meta.json`, `stages`)", "",
+            *_table(["stage", "seconds"], rows + [("**total of the stages**",
+                                                   f"{total:.1f}")]), ""]
+
+
+def write_loop_report(out_dir: str | Path, *, truth: Any, campaign: Any, campaign_options: Any,
+                      model: Any, identification: Any, identification_figures: bool,
+                      convergence_speed_rpm: float, theta: Any, theta_bearings: Sequence[str],
+                      verification: Any, limit_um: float, validation: Any, discrepancy: Any,
+                      timings: Mapping[str, float], rig_figures: bool = True
+                      ) -> dict[str, Any]:
+    """Write the parts' files and ``report.md`` into ``out_dir``; return the headline
+    numbers (the runner's summary)."""
+    root = Path(out_dir)
+    rig_summary = write_rig_report(campaign, truth, root / "rig") if rig_figures else {}
+    if identification_figures:
+        write_identification_figures(model, identification, root / "identification",
+                                     convergence_speed_rpm=convergence_speed_rpm)
+    mvn = theta.stiffness
+    atomic_write_text(root / "theta.json", json.dumps(
+        {"names": list(theta_bearings), "mean": np.asarray(mvn.mean).tolist(),
+         "cov": np.asarray(mvn.cov).tolist(), "provenance": theta.provenance},
+        indent=1, default=str))
+    write_validation_report(validation, root / "validation")
+    if discrepancy.ran:
+        plot_all(discrepancy.result, root / "discrepancy")
+    lines = ["# Results: the data-driven loop on the virtual rig", "",
+             "One run of `rbrdo run` (experiment kind `end_to_end`): every number below is "
+             "this run's, and names the file of the run folder it comes from.", ""]
+    lines += _rig_section(campaign, campaign_options, rig_summary, truth.variability, root)
+    lines += _theta_section(identification, theta, theta_bearings, root)
+    lines += _study_section(verification, limit_um, root)
+    lines += _validation_section(validation, root)
+    lines += _discrepancy_section(discrepancy, root)
+    lines += _timings_section(timings)
+    atomic_write_text(root / "report.md", "\n".join(lines) + "\n")
+    return _headline(verification, validation, discrepancy, theta)
+
+
+def _headline(ver: Any, res: Any, disc: Any, theta: Any) -> dict[str, Any]:
+    rows = [{"design": d.name, "mu_peak_um": round(d.moments["peak"].mean * 1e6, 4),
+             "sigma_peak_um": round(d.moments["peak"].std * 1e6, 4),
+             "pf_peak": d.moments["peak"].pf} for d in res.designs]
+    bad = [f"{v.design} {v.quantity} {v.metric}" for v in res.disagreements]
+    meta = {"theta_mean": np.asarray(theta.stiffness.mean).round(5).tolist(),
+            "disagreements": bad, "discrepancy_ran": disc.ran,
+            "discrepancy_verdict": disc.result.verdict if disc.ran else None}
+    return {"summary": rows, "meta": meta}
+
+
+__all__ = ["write_loop_report"]

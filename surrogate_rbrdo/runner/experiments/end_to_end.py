@@ -1,0 +1,339 @@
+"""Experiment kind ``end_to_end``: the paper's data-driven loop in one run folder
+(``docs/validation.md``, "The loop end to end").
+
+Stages, each one library call or another kind's stage function:
+
+``campaign`` (the ``rig`` kind's: ``rig.run_campaign`` on the truth of ``[spindle]`` at its
+baseline, with trial-weight runs) → ``identification`` (``identification.run_identification``
+on that campaign) → ``uncertainty`` (the study's θ: the identified stiffness block, plus the
+``[uncertainty]`` unbalance block) → ``surrogate`` → ``design_model`` → ``optimise`` →
+``refine`` → ``verify`` (the ``study`` kind's, on the identified θ) → ``measure`` → ``model``
+(the ``validation`` kind's: the chosen designs against the baseline on the rig; the model's
+moments are the study's FE verification) → ``discrepancy`` (``discrepancy.experiment.analyse``
+on the campaign's phasors when the validation names a disagreement, ``[loop] discrepancy``).
+The report writes each part's files into its subfolder (``rig/``, ``identification/``,
+``study/``, ``validation/``, ``discrepancy/``) and ``report.md``
+(:mod:`surrogate_rbrdo.reporting.end_to_end`).
+
+Tables: the ``study`` kind's (``[spindle]`` … ``[refine]``), ``[rig]`` (``RigTable`` without
+``design``: the campaign's rotor is ``[spindle]``'s baseline), ``[identification]``
+(``IdentificationOptions``; the source is this run's campaign), ``[validation]``, ``[model]``
+and ``[loop]``. Each part draws from its own child of the seed (``part_context``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_choice
+from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.identification.experiment import IdentificationOptions, run_identification
+from surrogate_rbrdo.identification.study import study_uncertainty
+from surrogate_rbrdo.reporting.end_to_end import write_loop_report
+from surrogate_rbrdo.rig.config import RigTable
+from surrogate_rbrdo.rig.truth import spindle_truth
+from surrogate_rbrdo.runner.experiments import rig as rig_kind
+from surrogate_rbrdo.runner.experiments import study as study_kind
+from surrogate_rbrdo.runner.experiments import validation as validation_kind
+from surrogate_rbrdo.runner.experiments.study import StudyConfig, StudyPlan
+from surrogate_rbrdo.runner.experiments.validation import (
+    ModelTable,
+    validation_options,
+    validation_plan,
+)
+from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
+from surrogate_rbrdo.runner.runfolder import RunFolder
+from surrogate_rbrdo.study.problem import peak_unbalance_inputs
+from surrogate_rbrdo.validation import ModelSpec, Moments, ValidationOptions
+from surrogate_rbrdo.validation.campaign import file_label
+
+#: the parts of the loop, in order: each draws from its own child of the experiment's seed
+PARTS = ("rig", "identification", "study", "validation", "discrepancy")
+DISCREPANCY_WHEN = ("on_disagreement", "always", "never")
+
+
+@dataclass(frozen=True)
+class LoopTable:
+    """``[loop]``: which of the study's chosen designs are validated (default: the baseline
+    and every RBRDO compromise) and when the discrepancy workflow runs
+    (``"on_disagreement"``: when the validation finds model and rig disagreeing beyond
+    uncertainty; ``"always"``; ``"never"``)."""
+
+    designs: tuple[str, ...] = ()
+    discrepancy: str = "on_disagreement"
+
+    def __post_init__(self) -> None:
+        check_choice("discrepancy", self.discrepancy, DISCREPANCY_WHEN)
+        if len(set(self.designs)) != len(self.designs):
+            raise ValueError(f"designs = {list(self.designs)} is not allowed: a name appears "
+                             "twice")
+
+
+@dataclass(frozen=True)
+class EndToEndConfig(StudyConfig):
+    """The study's tables plus the rig, identification, validation and the loop's."""
+
+    rig: RigTable = field(default_factory=RigTable)
+    identification: dict[str, Any] = field(default_factory=dict)
+    validation: ValidationOptions = field(default_factory=ValidationOptions)
+    model: ModelTable = field(default_factory=ModelTable)
+    discrepancy: dict[str, Any] = field(default_factory=dict)
+    loop: LoopTable = field(default_factory=LoopTable)
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The validated objects of every part (the study's with the configured θ, replaced by
+    the identified one in stage ``uncertainty``)."""
+
+    config: EndToEndConfig
+    rig: Any
+    study: StudyPlan
+    identification: IdentificationOptions
+    validation: Any
+    discrepancy: Any
+    disk_need: tuple[str, Any, float, str]
+
+
+@dataclass(frozen=True, eq=False)
+class DiscrepancyStage:
+    """Whether the discrepancy workflow ran, why, its result and files."""
+
+    ran: bool
+    reason: str
+    result: Any = None
+    files: Mapping[str, str] = field(default_factory=dict)
+
+
+def part_context(ctx: StageContext, part: str) -> StageContext:
+    """The context a part's stages get: the same run folder and cache, and its own child of
+    the experiment's seed (so the rig's assemblies, the study's samples and the validation's
+    replications never share random numbers)."""
+    seed = np.random.SeedSequence(ctx.seed, spawn_key=(1000 + PARTS.index(part),))
+    return replace(ctx, seed=int(seed.generate_state(1, np.uint64)[0]))
+
+
+def _identification_options(table: Mapping[str, Any]) -> IdentificationOptions:
+    if "source" in table:
+        raise ValueError(f"identification.source = {table['source']!r} is not allowed: the "
+                         "source is this run's campaign")
+    try:
+        return IdentificationOptions.from_dict(dict(table))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"identification.{exc}") from None
+
+
+def _check_agreement(c: EndToEndConfig, o: Any, spindle: Any) -> None:
+    """The validation measures what the study optimised: its δ_lim and speed range."""
+    g = spindle.geometry
+    if o.delta_lim_um != c.limit.delta_lim_um:
+        raise ValueError(f"validation.delta_lim_um = {o.delta_lim_um} is not allowed: the study "
+                         f"has limit.delta_lim_um = {c.limit.delta_lim_um}")
+    if tuple(o.speed_range_rpm) != (g.speed_min_rpm, g.speed_max_rpm):
+        raise ValueError(f"validation.speed_range_rpm = {list(o.speed_range_rpm)} is not allowed:"
+                         f" the study's y is the peak over [{g.speed_min_rpm}, "
+                         f"{g.speed_max_rpm}] rpm")
+    if c.response.kind == "at_speed":
+        raise ValueError("response.kind = 'at_speed' is not allowed: the loop validates the "
+                         "peak over the range (use 'peak_unbalance' or 'peak')")
+
+
+def build(c: EndToEndConfig, base_dir: Path) -> Plan:
+    study = study_kind.build(c, base_dir)
+    spindle = study.problem.spindle
+    if c.rig.design is not None:
+        raise ValueError(f"rig.design = {list(c.rig.design)} is not allowed: the campaign's "
+                         "rotor is [spindle]'s baseline (report.baseline)")
+    cfg = c.rig.config()
+    truth = spindle_truth(spindle, c.rig.hidden(), c.rig.variability, study.problem.baseline)
+    rig = rig_kind.rig_plan(replace(cfg, truth=truth), c.rig.effects)
+    if cfg.options.trial_unbalance is None and c.identification.get("excitation",
+                                                                     "trial") == "trial":
+        raise ValueError("rig.campaign.trial_unbalance is not allowed to be unset: the "
+                         "identification uses trial-weight differences (e.g. [0.0, 5e-5, 0.0])")
+    ident = _identification_options(c.identification)
+    o = validation_options(c.rig, c.validation)
+    _check_agreement(c, o, spindle)
+    try:
+        disc = options_from_dict(c.discrepancy)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"discrepancy: {exc}") from None
+    return Plan(c, rig, study, ident, o, disc, rig.disk_need)
+
+
+# ---------------------------------------------------------------- rig and identification
+def _campaign(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return rig_kind._campaign(p.rig, done, part_context(ctx, "rig"))
+
+
+def _model_at_baseline(p: Plan) -> Any:
+    """The experimenter's model of the campaign's rotor: ``[spindle]`` at its baseline."""
+    return p.study.problem.spindle.model(p.study.problem.baseline)
+
+
+def _identification(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    c = part_context(ctx, "identification")
+    with ctx.bar("identification", "part") as progress:
+        progress(0, 1, "demodulation, trial pairs, coefficients, uncertainty")
+        return run_identification(_model_at_baseline(p), ctx.run_dir / "campaign",
+                                  ctx.run_dir / "identification", p.identification,
+                                  rng=c.stream(0))
+
+
+@dataclass(frozen=True, eq=False)
+class IdentifiedTheta:
+    """The study's θ: the identified stiffness block (``stiffness``), the full random vector
+    (``inputs``, with the ``[uncertainty]`` unbalance block for ``peak_unbalance``), the
+    response carrying θ's columns, and the provenance (file, SHA-256, speeds)."""
+
+    stiffness: Any
+    inputs: Any
+    response: Any
+    provenance: Mapping[str, Any]
+
+
+def _uncertainty(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> IdentifiedTheta:
+    pr, u = p.study.problem, p.config.uncertainty
+    g = pr.spindle.geometry
+    lo, hi = done["identification"].uncertainty.speed_range_rpm
+    sp = np.asarray(p.rig.rig.options.speeds_rpm, float)     # the campaign's, where identified
+    sp = sp[(sp >= max(lo, g.speed_min_rpm)) & (sp <= min(hi, g.speed_max_rpm))]
+    su = study_uncertainty(ctx.run_dir / "identification", sp.tolist(),
+                           theta_bearings=pr.spindle.theta_bearings,
+                           reference=_model_at_baseline(p))
+    block = su.random_vector
+    if pr.response.kind == "peak_unbalance":
+        inputs, response = peak_unbalance_inputs(pr.spindle, block, thermal_max=u.thermal_max,
+                                                 unbalance=u.unbalance)
+    else:
+        inputs, response = block, pr.response
+    return IdentifiedTheta(block, inputs, response, dict(su.provenance))
+
+
+# ---------------------------------------------------------------- the study on identified θ
+def study_plan(p: Plan, done: Mapping[str, Any]) -> StudyPlan:
+    """The study's plan with the identified θ of stage ``uncertainty``."""
+    th = done["uncertainty"]
+    return replace(p.study, problem=replace(p.study.problem, inputs=th.inputs,
+                                            response=th.response))
+
+
+def _study_stage(func: Any) -> Any:
+    def stage(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+        return func(study_plan(p, done), done, part_context(ctx, "study"))
+    stage.__name__ = func.__name__
+    return stage
+
+
+# ---------------------------------------------------------------- validation on the rig
+def validated_designs(p: Plan, done: Mapping[str, Any]) -> dict[str, int]:
+    """The study's chosen designs that are validated: name → row of the verification."""
+    names = done["verify"].names
+    want = p.config.loop.designs or ("baseline",) + tuple(
+        n for n in names if n.startswith("rbrdo"))
+    for n in want:
+        if n not in names:
+            raise ValueError(f"loop.designs: {n!r} is not a chosen design of the study; its "
+                             f"designs: {list(names)}")
+    if want[0] != "baseline":
+        want = ("baseline",) + tuple(n for n in want if n != "baseline")
+    return {n: names.index(n) for n in want}
+
+
+def _validation_plan(p: Plan, done: Mapping[str, Any]) -> Any:
+    ver, o, c = done["verify"], p.validation, p.config
+    rows = validated_designs(p, done)
+    labels = {n: file_label(n) for n in rows}
+    designs = {labels[n]: tuple(float(v) for v in ver.X[i]) for n, i in rows.items()}
+    spindle = p.study.problem.spindle
+    model = None
+    if c.model.compare:
+        known = {labels[n]: {"peak": Moments.from_estimate(ver.fe, i, ver.n_theta,
+                                                           o.confidence)}
+                 for n, i in rows.items()}
+        sur, _ = study_kind._final(done)
+        model = ModelSpec({"peak": sur.model.response}, done["uncertainty"].inputs,
+                          c.model.n_samples, spindle_model=spindle.model, known=known)
+    template = spindle_truth(spindle, c.rig.hidden(), c.rig.variability)
+    source = {"designs": "stage verify (study/verification.csv)", "study_labels": labels,
+              "known_from_study": "peak: the study's FE verification (n_theta fresh θ)"}
+    o = replace(o, baseline=labels["baseline"])
+    return validation_plan(template, spindle, designs, o, model, source)
+
+
+def _measure(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return validation_kind._measure(_validation_plan(p, done), done,
+                                    part_context(ctx, "validation"))
+
+
+def _model(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return validation_kind._model(_validation_plan(p, done), done,
+                                  part_context(ctx, "validation"))
+
+
+# ---------------------------------------------------------------- discrepancy
+def _discrepancy(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> DiscrepancyStage:
+    bad = done["model"].disagreements
+    when = p.config.loop.discrepancy
+    if when == "never" or (when == "on_disagreement" and not bad):
+        why = ("loop.discrepancy = 'never'" if when == "never" else
+               "the validation found no disagreement beyond uncertainty")
+        return DiscrepancyStage(False, why)
+    why = ("loop.discrepancy = 'always'" if when == "always" else
+           f"{len(bad)} model-vs-rig disagreement(s): "
+           + "; ".join(f"{v.design} {v.quantity} {v.metric}" for v in bad))
+    pr = p.study.problem
+    section = {k: v for k, v in dataclasses.asdict(p.config.spindle).items() if v is not None}
+    section["baseline"] = [float(v) for v in pr.baseline]
+    with ctx.bar("discrepancy", "part") as progress:
+        progress(0, 1, "naming what the model misses")
+        res, paths = analyse(data_from_folder(ctx.run_dir / "campaign"),
+                             pr.spindle.geometry_for(pr.baseline), tuple(pr.spindle.effects),
+                             spindle_section=section, options=p.discrepancy,
+                             rng=part_context(ctx, "discrepancy").stream(0),
+                             out_dir=ctx.run_dir / "discrepancy")
+    return DiscrepancyStage(True, why, res, {k: str(v) for k, v in paths.items()})
+
+
+# ---------------------------------------------------------------- report
+def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
+    sub = RunFolder(path=run.path / "study", experiment=run.experiment, run_id=run.run_id)
+    sub.path.mkdir(exist_ok=True)
+    study_kind._report(study_plan(p, done), done, sub, part_context(ctx, "study"))
+    pr, c = p.study.problem, p.config
+    timings = {k: float(v.get("time_s", 0.0)) for k, v in run.meta.get("stages", {}).items()}
+    out = write_loop_report(
+        run.path, truth=p.rig.rig.truth, campaign=done["campaign"],
+        campaign_options=p.rig.rig.options, model=_model_at_baseline(p),
+        identification=done["identification"], identification_figures=p.identification.figures,
+        convergence_speed_rpm=p.identification.convergence_speed_rpm,
+        theta=done["uncertainty"], theta_bearings=pr.spindle.theta_bearings,
+        verification=done["verify"], limit_um=c.limit.delta_lim_um, validation=done["model"],
+        discrepancy=done["discrepancy"], timings=timings, rig_figures=p.rig.rig.figures)
+    return out
+
+
+register_kind(Kind(
+    name="end_to_end",
+    summary="the data-driven loop in one run: rig campaign with trial weights → "
+            "identification → the study's θ → RBRDO at every P_target → validation of the "
+            "chosen designs on the rig → discrepancy when model and rig disagree → report.md",
+    schema=EndToEndConfig,
+    stages=(Stage("campaign", _campaign), Stage("identification", _identification),
+            Stage("uncertainty", _uncertainty),
+            Stage("surrogate", _study_stage(study_kind._surrogate)),
+            Stage("design_model", _study_stage(study_kind._design_model)),
+            Stage("optimise", _study_stage(study_kind._optimise)),
+            Stage("refine", _study_stage(study_kind._refine)),
+            Stage("verify", _study_stage(study_kind._verify)),
+            Stage("measure", _measure), Stage("model", _model),
+            Stage("discrepancy", _discrepancy)),
+    report=_report,
+    build=build,
+))
