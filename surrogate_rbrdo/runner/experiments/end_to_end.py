@@ -56,6 +56,10 @@ from surrogate_rbrdo.validation.campaign import file_label
 #: the parts of the loop, in order: each draws from its own child of the experiment's seed
 PARTS = ("rig", "identification", "study", "validation", "discrepancy")
 DISCREPANCY_WHEN = ("on_disagreement", "always", "never")
+#: repeats per speed the discrepancy workflow needs (``discrepancy.observables``)
+MIN_REPEATS_DISCREPANCY = 5
+#: speeds it needs (``discrepancy.holdout``: some are held out)
+MIN_SPEEDS_DISCREPANCY = 8
 
 
 @dataclass(frozen=True)
@@ -144,6 +148,20 @@ def _check_agreement(c: EndToEndConfig, o: Any, spindle: Any) -> None:
                          "peak over the range (use 'peak_unbalance' or 'peak')")
 
 
+def _check_discrepancy_data(loop: LoopTable, o: Any) -> None:
+    """The campaign holds what the discrepancy workflow needs (unless it never runs)."""
+    if loop.discrepancy == "never":
+        return
+    why = (f"with loop.discrepancy = {loop.discrepancy!r}: the discrepancy workflow needs >= "
+           "{} {} (or set loop.discrepancy = 'never')")
+    if o.repeats < MIN_REPEATS_DISCREPANCY:
+        raise ValueError(f"rig.campaign.repeats = {o.repeats} is not allowed "
+                         + why.format(MIN_REPEATS_DISCREPANCY, "repeats (the noise)"))
+    if len(o.speeds_rpm) < MIN_SPEEDS_DISCREPANCY:
+        raise ValueError(f"rig.campaign.speeds_rpm has {len(o.speeds_rpm)} speeds: not allowed "
+                         + why.format(MIN_SPEEDS_DISCREPANCY, "speeds (some are held out)"))
+
+
 def build(c: EndToEndConfig, base_dir: Path) -> Plan:
     study = study_kind.build(c, base_dir)
     spindle = study.problem.spindle
@@ -157,13 +175,22 @@ def build(c: EndToEndConfig, base_dir: Path) -> Plan:
                                                                      "trial") == "trial":
         raise ValueError("rig.campaign.trial_unbalance is not allowed to be unset: the "
                          "identification uses trial-weight differences (e.g. [0.0, 5e-5, 0.0])")
+    _check_discrepancy_data(c.loop, cfg.options)
     ident = _identification_options(c.identification)
+    n_coef = 4 if ident.fit_on == "stiffness" else 8      # per bearing pair: k (and c) yy, zz
+    if cfg.options.repeats < n_coef + 2:
+        raise ValueError(f"rig.campaign.repeats = {cfg.options.repeats} is not allowed: the "
+                         f"identification's scatter fit over runs needs >= {n_coef + 2} repeats"
+                         f" for identification.fit_on = {ident.fit_on!r} ({n_coef} "
+                         "coefficients + 2)")
     o = validation_options(c.rig, c.validation)
     _check_agreement(c, o, spindle)
     try:
         disc = options_from_dict(c.discrepancy)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"discrepancy: {exc}") from None
+        msg = str(exc)
+        raise ValueError(msg if "discrepancy" in msg.split(" ", 1)[0] else
+                         f"discrepancy.{msg}") from None
     return Plan(c, rig, study, ident, o, disc, rig.disk_need)
 
 
