@@ -56,7 +56,7 @@ def _pick(res: Any) -> Any:
 
 
 def _headline_lines(theta: Any, bearings: Sequence[str], ver: Any, res: Any, disc: Any,
-                    limit_um: float) -> list[str]:
+                    limit_um: float, res2: Any = None, reoptimise: Any = None) -> list[str]:
     mvn = theta.stiffness
     sd = np.sqrt(np.diag(np.asarray(mvn.cov, float)))
     th = ", ".join(f"{b} {m:.3f} ± {s:.1%}" for b, m, s in zip(bearings, mvn.mean, sd,
@@ -87,7 +87,10 @@ def _headline_lines(theta: Any, bearings: Sequence[str], ver: Any, res: Any, dis
         out.append(f"* **Discrepancy** (§5): verdict *{disc.result.verdict}*"
                    + (f", named {', '.join(named)}; updated spindle in "
                       "`discrepancy/spindle_updated.toml`" if named else "")
-                   + ". Not re-optimised by this run.")
+                   + (". Optimised again and validated again (§6): "
+                      f"{len(res2.disagreements)} of {len(res2.verdicts)} comparisons "
+                      "disagree with the updated model." if res2 is not None else
+                      f". **Not re-optimised**: {reoptimise.reason}."))
     else:
         out.append(f"* **Discrepancy** (§5): not run ({disc.reason}).")
     return out + [""]
@@ -138,7 +141,7 @@ def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) 
             *_figures(root / "identification", root), ""]
 
 
-def _study_section(ver: Any, limit_um: float, root: Path) -> list[str]:
+def _study_section(ver: Any, limit_um: float, root: Path, folder: str = "study") -> list[str]:
     rows = []
     for i, n in enumerate(ver.names):
         fe = ver.fe
@@ -147,16 +150,16 @@ def _study_section(ver: Any, limit_um: float, root: Path) -> list[str]:
                      _fmt(fe.std[i] * 1e6), f"{fe.pf[i]:.3g} [{lo:.3g}, {hi:.3g}]"))
     return ["## 3. RBRDO on the identified θ (stages `surrogate` … `verify`)", "",
             f"The chosen designs, checked with the FE model on {ver.n_theta} fresh θ samples "
-            f"(`study/verification.csv`, columns `*_fe`); y = peak tool-tip amplitude over the "
+            f"(`{folder}/verification.csv`, columns `*_fe`); y = peak tool-tip amplitude over the "
             f"range, failure y > {limit_um:g} µm.", "",
             *_table(["design", "x = [F N, L mm, D mm]", "μ_y µm", "σ_y µm",
                      "P_f [95 % CI]"], rows), "",
-            "Fronts, strategy comparison and compromises: `study/pareto_fronts.csv`, "
-            "`study/strategy_comparison.csv`, `study/compromises.csv`.", "",
-            *_figures(root / "study", root), ""]
+            f"Fronts, strategy comparison and compromises: `{folder}/pareto_fronts.csv`, "
+            f"`{folder}/strategy_comparison.csv`, `{folder}/compromises.csv`.", "",
+            *_figures(root / folder, root), ""]
 
 
-def _validation_section(res: Any, root: Path) -> list[str]:
+def _validation_section(res: Any, root: Path, folder: str = "validation") -> list[str]:
     n = res.options.n_replications
     rows = []
     for c in res.comparisons:
@@ -175,39 +178,57 @@ def _validation_section(res: Any, root: Path) -> list[str]:
     out = ["## 4. Validation on the rig (stages `measure`, `model`)", "",
            f"Each design built on the rig's truth and measured over {n} paired replications "
            f"(fresh assembly and run each; baseline `{res.baseline}`). Table 7's analogue for "
-           "y, the peak over the range (`validation/table7.csv`; amplitudes in µm, P_f as a "
+           f"y, the peak over the range (`{folder}/table7.csv`; amplitudes in µm, P_f as a "
            "fraction, relative change as a fraction with its interval):", "",
            *_table(["design", "metric", "baseline", "design value", "relative change [CI]",
                     "test", "p", "effect size"], rows), ""]
     if verdicts:
         out += ["Model (the study's FE verification) against measurement, Holm-corrected "
-                "(`validation/model_vs_measured.csv`; µm, P_f as a fraction):", "",
+                f"(`{folder}/model_vs_measured.csv`; µm, P_f as a fraction):", "",
                 *_table(["design", "quantity", "metric", "measured", "model", "p (Holm)",
                          "verdict"], verdicts), ""]
-    out += ["The full section: [validation/validation.md](validation/validation.md).", "",
-            *_figures(root / "validation", root), ""]
+    out += [f"The full section: [{folder}/validation.md]({folder}/validation.md).", "",
+            *_figures(root / folder, root), ""]
     return out
 
 
-def _discrepancy_section(stage: Any, root: Path) -> list[str]:
+def _discrepancy_section(stage: Any, root: Path, reoptimised: Any) -> list[str]:
     out = ["## 5. Discrepancy (stage `discrepancy`)", ""]
     if not stage.ran:
-        return out + [f"Not run: {stage.reason}. The model is unchanged; no re-optimisation.",
-                      ""]
+        return out + [f"Not run: {stage.reason}. The model is unchanged; nothing is "
+                      "re-optimised.", ""]
     r = stage.result
     named = [getattr(e, "name", str(e)) for e in r.named_effects]
     out += [f"Run because {stage.reason}. On the campaign's phasors "
             f"(`campaign/phasors.csv`) the workflow's verdict is **{r.verdict}**"
             + (f": {', '.join(named)}" if named else "") + " (`discrepancy/findings.json`, "
             "`discrepancy/candidates.csv`)."]
-    if named:
+    if named and reoptimised.done:
         out += ["", "The updated spindle (the model's effects plus the named ones, fitted) is "
-                "written to `discrepancy/spindle_updated.toml`. **Re-optimisation with it is "
-                "not done by this run**: pass it as `[spindle]` of a new study."]
+                "written to `discrepancy/spindle_updated.toml`; §6 optimises it again "
+                "(stage `reoptimise`: " + reoptimised.reason + ") and validates its designs "
+                "on the rig."]
+    elif named:
+        out += ["", "The updated spindle (the model's effects plus the named ones, fitted) is "
+                "written to `discrepancy/spindle_updated.toml`. **It is not re-optimised** "
+                f"(stage `reoptimise`): {reoptimised.reason}."]
     else:
         out += ["", "No effect is named, so the model is not updated and nothing is "
                 "re-optimised."]
     return out + [""] + _figures(root / "discrepancy", root) + [""]
+
+
+def _updated_section(ver: Any, res: Any, before: Any, limit_um: float, root: Path
+                     ) -> list[str]:
+    """§6: the study on the updated spindle and its designs on the rig."""
+    out = ["## 6. The updated model: optimised again, validated again (stages `*_updated`)", ""]
+    out += _study_section(ver, limit_um, root, "study_updated")[2:]
+    out += _validation_section(res, root, "validation_updated")[2:]
+    n0, n1 = len(before.disagreements), len(res.disagreements)
+    out += [f"Model against rig: {n0} of {len(before.verdicts)} comparisons disagreed with the "
+            f"identified model (§4), {n1} of {len(res.verdicts)} with the updated one "
+            "(`validation_updated/model_vs_measured.csv`).", ""]
+    return out
 
 
 def _timings_section(timings: Mapping[str, float]) -> list[str]:
@@ -222,7 +243,8 @@ def write_loop_report(out_dir: str | Path, *, truth: Any, campaign: Any, campaig
                       model: Any, identification: Any, identification_figures: bool,
                       convergence_speed_rpm: float, theta: Any, theta_bearings: Sequence[str],
                       verification: Any, limit_um: float, validation: Any, discrepancy: Any,
-                      timings: Mapping[str, float], rig_figures: bool = True
+                      timings: Mapping[str, float], rig_figures: bool = True,
+                      updated: tuple[Any, Any] = (None, None), reoptimise: Any = None
                       ) -> dict[str, Any]:
     """Write the parts' files and ``report.md`` into ``out_dir``; return the headline
     numbers (the runner's summary)."""
@@ -239,16 +261,21 @@ def write_loop_report(out_dir: str | Path, *, truth: Any, campaign: Any, campaig
     write_validation_report(validation, root / "validation")
     if discrepancy.ran:
         plot_all(discrepancy.result, root / "discrepancy")
+    ver2, res2 = updated
+    if res2 is not None:
+        write_validation_report(res2, root / "validation_updated")
     lines = ["# Results: the data-driven loop on the virtual rig", "",
              "One run of `rbrdo run` (experiment kind `end_to_end`): every number below is "
              "this run's, and names the file of the run folder it comes from.", ""]
     lines += _headline_lines(theta, theta_bearings, verification, validation, discrepancy,
-                             limit_um)
+                             limit_um, res2, reoptimise)
     lines += _rig_section(campaign, campaign_options, rig_summary, truth.variability, root)
     lines += _theta_section(identification, theta, theta_bearings, root)
     lines += _study_section(verification, limit_um, root)
     lines += _validation_section(validation, root)
-    lines += _discrepancy_section(discrepancy, root)
+    lines += _discrepancy_section(discrepancy, root, reoptimise)
+    if res2 is not None:
+        lines += _updated_section(ver2, res2, validation, limit_um, root)
     lines += _timings_section(timings)
     atomic_write_text(root / "report.md", "\n".join(lines) + "\n")
     return _headline(verification, validation, discrepancy, theta)

@@ -104,6 +104,32 @@ a = [2000.0, 500.0, 65.0]
 b = [3000.0, 350.0, 75.0]
 """
 
+LOOP = """[experiment]
+name = "l"
+kind = "end_to_end"
+[spindle]
+geometry = "credible"
+[response]
+kind = "peak_unbalance"
+[limit]
+delta_lim_um = 1.0
+[surrogate]
+structure = "fe"
+[optimization]
+p_targets = [0.10]
+strategies = []
+n_theta = 20
+pop_size = 8
+n_gen = 2
+n_jobs = 1
+[rig.campaign]
+speeds_rpm = { start = 8000.0, stop = 24000.0, num = 8 }
+repeats = 6
+trial_unbalance = [0.0, 5e-5, 0.0]
+[validation]
+delta_lim_um = 1.0
+"""
+
 
 def _set(base: str, table: str, line: str) -> str:
     """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
@@ -140,6 +166,10 @@ def G(table: str, line: str) -> str:          # noqa: N802
 
 def W(table: str, line: str) -> str:          # noqa: N802
     return _set(RIG_VAL, table, line)
+
+
+def E(table: str, line: str) -> str:          # noqa: N802 - the end-to-end loop
+    return _set(LOOP, table, line)
 
 
 ARR = r"must be an array of"
@@ -774,6 +804,49 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("rv_from_with_spindle", "[designs]\nfrom = '.'\n" + RIG_VAL.split("[designs]")[0]
      + "[spindle]\n", {}, [],
      r"\[spindle\] and \[uncertainty\] are not allowed with designs.from"),
+    # ------------------------------------------------------------------ end_to_end
+    ("e2e_loop_when", E("loop", "discrepancy = 'sometimes'"), {}, [],
+     r"loop.discrepancy = 'sometimes' is not allowed: must be one of"),
+    ("e2e_loop_designs_dup", E("loop", "designs = ['rbrdo 10%', 'rbrdo 10%']"), {}, [],
+     r"loop.designs = \['rbrdo 10%', 'rbrdo 10%'\] is not allowed: a name appears twice"),
+    ("e2e_loop_designs_str", E("loop", "designs = 'baseline'"), {}, [],
+     r"loop.designs = 'baseline' is not allowed: " + ARR),
+    ("e2e_loop_key", E("loop", "design = []"), {}, [],
+     r"unknown key loop.design; allowed: \['designs', 'discrepancy'\]"),
+    ("e2e_rig_design", E("rig", "design = [2000.0, 500.0, 65.0]"), {}, [],
+     r"rig.design = \[2000.0, 500.0, 65.0\] is not allowed: the campaign's rotor is"),
+    ("e2e_no_trial", _sub(LOOP, "trial_unbalance = [0.0, 5e-5, 0.0]\n", ""), {}, [],
+     r"rig.campaign.trial_unbalance = None is not allowed: the identification uses"),
+    ("e2e_repeats", _sub(LOOP, "repeats = 6", "repeats = 5"), {}, [],
+     r"rig.campaign.repeats = 5 is not allowed: the identification's scatter fit"),
+    ("e2e_repeats_disc", _sub(E("identification", "fit_on = 'stiffness'"), "repeats = 6",
+                              "repeats = 4"), {}, [],
+     r"rig.campaign.repeats = 4 is not allowed with loop.discrepancy = 'on_disagreement'"),
+    ("e2e_speeds_disc", _sub(LOOP, "num = 8", "num = 6"), {}, [],
+     r"rig.campaign.speeds_rpm has 6 speeds: not allowed with loop.discrepancy"),
+    ("e2e_ident_source", E("identification", "source = 'results/rig'"), {}, [],
+     r"identification.source = 'results/rig' is not allowed: the source is this run's"),
+    ("e2e_ident_n_boot", E("identification", "n_boot = 0"), {}, [],
+     r"identification.n_boot = 0 is not allowed"),
+    ("e2e_ident_fit_on", E("identification", "fit_on = 'mass'"), {}, [],
+     r"identification.fit_on = 'mass' is not allowed"),
+    ("e2e_delta", _sub(LOOP, "[validation]\ndelta_lim_um = 1.0", "[validation]"), {}, [],
+     r"validation.delta_lim_um = 19.5 is not allowed: the study has limit.delta_lim_um = 1.0"),
+    ("e2e_range", E("validation", "speed_range_rpm = [2000.0, 24000.0]"), {}, [],
+     r"validation.speed_range_rpm = \[2000.0, 24000.0\] is not allowed: the study's y"),
+    ("e2e_at_speed", _sub(LOOP, "kind = \"peak_unbalance\"",
+                          "kind = \"at_speed\"\nspeed_rpm = 24000.0"), {}, [],
+     r"response.kind = 'at_speed' is not allowed: the loop validates the peak"),
+    ("e2e_val_sensors", E("validation", "sensors = { noise = false }"), {}, [],
+     r"validation.sensors is not allowed: the sensors are \[rig.sensors\]"),
+    ("e2e_disc_n_draws", E("discrepancy", "n_draws = 20"), {}, [],
+     r"discrepancy.n_draws = 20 is not allowed"),
+    ("e2e_disc_key", E("discrepancy", "alpa = 0.01"), {}, [],
+     r"discrepancy.*alpa"),
+    ("e2e_model_n", E("model", "n_samples = 5"), {}, [],
+     r"model.n_samples = 5 is not allowed: must be an integer >= 10"),
+    ("e2e_table", E("designs", "a = [570.0, 500.0, 65.0]"), {}, [],
+     r"unknown table designs; allowed: \["),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

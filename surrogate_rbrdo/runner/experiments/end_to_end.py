@@ -26,13 +26,17 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.discrepancy.report import updated_spindle
 from surrogate_rbrdo.identification.experiment import IdentificationOptions, run_identification
 from surrogate_rbrdo.identification.study import study_uncertainty
 from surrogate_rbrdo.reporting.end_to_end import write_loop_report
@@ -49,6 +53,7 @@ from surrogate_rbrdo.runner.experiments.validation import (
 )
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.runfolder import RunFolder
+from surrogate_rbrdo.runner.tables import SpindleTable
 from surrogate_rbrdo.study.problem import peak_unbalance_inputs
 from surrogate_rbrdo.validation import ModelSpec, Moments, ValidationOptions
 from surrogate_rbrdo.validation.campaign import file_label
@@ -60,6 +65,8 @@ DISCREPANCY_WHEN = ("on_disagreement", "always", "never")
 MIN_REPEATS_DISCREPANCY = 5
 #: speeds it needs (``discrepancy.holdout``: some are held out)
 MIN_SPEEDS_DISCREPANCY = 8
+#: suffix of the second round's stages (the model the discrepancy workflow updated)
+UPDATED = "_updated"
 
 
 @dataclass(frozen=True)
@@ -67,10 +74,12 @@ class LoopTable:
     """``[loop]``: which of the study's chosen designs are validated (default: the baseline
     and every RBRDO compromise) and when the discrepancy workflow runs
     (``"on_disagreement"``: when the validation finds model and rig disagreeing beyond
-    uncertainty; ``"always"``; ``"never"``)."""
+    uncertainty; ``"always"``; ``"never"``) and whether a model it updates (named effects) is
+    optimised again and its designs validated on the rig (``reoptimise``)."""
 
     designs: tuple[str, ...] = ()
     discrepancy: str = "on_disagreement"
+    reoptimise: bool = True
 
     def __post_init__(self) -> None:
         check_choice("discrepancy", self.discrepancy, DISCREPANCY_WHEN)
@@ -103,6 +112,7 @@ class Plan:
     validation: Any
     discrepancy: Any
     disk_need: tuple[str, Any, float, str]
+    base_dir: Path
 
 
 @dataclass(frozen=True, eq=False)
@@ -173,8 +183,9 @@ def build(c: EndToEndConfig, base_dir: Path) -> Plan:
     rig = rig_kind.rig_plan(replace(cfg, truth=truth), c.rig.effects)
     if cfg.options.trial_unbalance is None and c.identification.get("excitation",
                                                                      "trial") == "trial":
-        raise ValueError("rig.campaign.trial_unbalance is not allowed to be unset: the "
-                         "identification uses trial-weight differences (e.g. [0.0, 5e-5, 0.0])")
+        raise ValueError("rig.campaign.trial_unbalance = None is not allowed: the "
+                         "identification uses trial-weight differences; give the trial mass "
+                         "[position mm, kg m, phase deg], e.g. [0.0, 5e-5, 0.0]")
     _check_discrepancy_data(c.loop, cfg.options)
     ident = _identification_options(c.identification)
     n_coef = 4 if ident.fit_on == "stiffness" else 8      # per bearing pair: k (and c) yy, zz
@@ -191,7 +202,7 @@ def build(c: EndToEndConfig, base_dir: Path) -> Plan:
         msg = str(exc)
         raise ValueError(msg if "discrepancy" in msg.split(" ", 1)[0] else
                          f"discrepancy.{msg}") from None
-    return Plan(c, rig, study, ident, o, disc, rig.disk_need)
+    return Plan(c, rig, study, ident, o, disc, rig.disk_need, Path(base_dir))
 
 
 # ---------------------------------------------------------------- rig and identification
@@ -244,17 +255,80 @@ def _uncertainty(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Identif
 
 
 # ---------------------------------------------------------------- the study on identified θ
-def study_plan(p: Plan, done: Mapping[str, Any]) -> StudyPlan:
-    """The study's plan with the identified θ of stage ``uncertainty``."""
+def _round(done: Mapping[str, Any], updated: bool) -> Mapping[str, Any]:
+    """The results of one round under the names the study and validation stage functions
+    read (``surrogate``, …, ``model``): the second round's are stored as ``<name>_updated``."""
+    if not updated:
+        return done
+    out = dict(done)
+    out.update({k[:-len(UPDATED)]: v for k, v in done.items() if k.endswith(UPDATED)})
+    return out
+
+
+def spindle_section(p: Plan) -> dict[str, Any]:
+    """``[spindle]`` as given, with the baseline (what the discrepancy workflow updates)."""
+    section = {k: v for k, v in dataclasses.asdict(p.config.spindle).items() if v is not None}
+    section["baseline"] = [float(v) for v in p.study.problem.baseline]
+    return section
+
+
+def _updated_study(p: Plan, done: Mapping[str, Any]) -> StudyPlan:
+    """The study's plan on the spindle the discrepancy workflow updated."""
+    table = parse(SpindleTable, updated_spindle(spindle_section(p), p.study.problem.spindle
+                                                .effects, done["discrepancy"].result), "spindle")
+    return study_kind.build(replace(p.config, spindle=table), p.base_dir)
+
+
+def study_plan(p: Plan, done: Mapping[str, Any], updated: bool = False) -> StudyPlan | None:
+    """The study's plan with the identified θ of stage ``uncertainty``; with ``updated`` on
+    the spindle the discrepancy workflow updated (``None`` unless stage ``reoptimise`` found
+    it can be optimised)."""
+    base = p.study
+    if updated:
+        r = done.get("reoptimise")
+        if r is None or not r.done:
+            return None
+        base = _updated_study(p, done)
     th = done["uncertainty"]
-    return replace(p.study, problem=replace(p.study.problem, inputs=th.inputs,
-                                            response=th.response))
+    return replace(base, problem=replace(base.problem, inputs=th.inputs, response=th.response))
 
 
-def _study_stage(func: Any) -> Any:
+@dataclass(frozen=True)
+class Reoptimisation:
+    """Whether the updated model is optimised again (``done``) and why (``reason``)."""
+
+    done: bool
+    reason: str
+
+
+def _reoptimise(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Reoptimisation:
+    d = done["discrepancy"]
+    if not p.config.loop.reoptimise:
+        return Reoptimisation(False, "loop.reoptimise = false")
+    if not d.ran:
+        return Reoptimisation(False, f"the discrepancy workflow did not run ({d.reason})")
+    named = [e.name for e in d.result.named_effects]
+    if not named:
+        return Reoptimisation(False, f"the discrepancy workflow named no effect (verdict "
+                                     f"{d.result.verdict!r}): the model is unchanged")
+    pr = _updated_study(p, done).problem
+    for k in pr.constraints:        # every design constraint must exist for the new spindle
+        try:
+            k.func(pr.baseline[None, :])
+        except (ValueError, ModelError) as exc:
+            return Reoptimisation(False, f"the study's design constraint {k.name!r} cannot be "
+                                         f"evaluated on the updated spindle (with {named}): "
+                                         f"{exc}")
+    return Reoptimisation(True, f"the updated spindle adds {named}")
+
+
+def _study_stage(func: Any, updated: bool = False) -> Any:
     def stage(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
-        return func(study_plan(p, done), done, part_context(ctx, "study"))
-    stage.__name__ = func.__name__
+        plan = study_plan(p, done, updated)
+        if plan is None:
+            return None
+        return func(plan, _round(done, updated), part_context(ctx, "study"))
+    stage.__name__ = func.__name__ + (UPDATED if updated else "")
     return stage
 
 
@@ -273,35 +347,48 @@ def validated_designs(p: Plan, done: Mapping[str, Any]) -> dict[str, int]:
     return {n: names.index(n) for n in want}
 
 
-def _validation_plan(p: Plan, done: Mapping[str, Any]) -> Any:
-    ver, o, c = done["verify"], p.validation, p.config
-    rows = validated_designs(p, done)
+def _validation_plan(p: Plan, done: Mapping[str, Any], updated: bool = False) -> Any:
+    """The validation of one round's designs on the rig (``None``: no such round). The
+    truth is always the rig's (the model's spindle with the hidden effects); the model is
+    the round's: its spindle, its FE verification."""
+    d = _round(done, updated)
+    if updated and done.get("verify" + UPDATED) is None:
+        return None
+    ver, o, c = d["verify"], p.validation, p.config
+    rows = validated_designs(p, d)
     labels = {n: file_label(n) for n in rows}
     designs = {labels[n]: tuple(float(v) for v in ver.X[i]) for n, i in rows.items()}
-    spindle = p.study.problem.spindle
     model = None
     if c.model.compare:
         known = {labels[n]: {"peak": Moments.from_estimate(ver.fe, i, ver.n_theta,
                                                            o.confidence)}
                  for n, i in rows.items()}
-        sur, _ = study_kind._final(done)
+        sur, _ = study_kind._final(d)
         model = ModelSpec({"peak": sur.model.response}, done["uncertainty"].inputs,
-                          c.model.n_samples, spindle_model=spindle.model, known=known)
+                          c.model.n_samples, spindle_model=study_plan(p, done, updated)
+                          .problem.spindle.model, known=known,
+                          name="updated model" if updated else "model")
+    spindle = p.study.problem.spindle
     template = spindle_truth(spindle, c.rig.hidden(), c.rig.variability)
-    source = {"designs": "stage verify (study/verification.csv)", "study_labels": labels,
-              "known_from_study": "peak: the study's FE verification (n_theta fresh θ)"}
+    where = "study_updated" if updated else "study"
+    source = {"designs": f"stage verify{UPDATED if updated else ''} ({where}/verification.csv)",
+              "study_labels": labels,
+              "known_from_study": f"peak: the FE verification of {where} (n_theta fresh θ)"}
     o = replace(o, baseline=labels["baseline"])
     return validation_plan(template, spindle, designs, o, model, source)
 
 
-def _measure(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
-    return validation_kind._measure(_validation_plan(p, done), done,
-                                    part_context(ctx, "validation"))
+def _measure(p: Plan, done: Mapping[str, Any], ctx: StageContext, updated: bool = False
+             ) -> Any:
+    plan = _validation_plan(p, done, updated)
+    return None if plan is None else validation_kind._measure(
+        plan, _round(done, updated), part_context(ctx, "validation"))
 
 
-def _model(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
-    return validation_kind._model(_validation_plan(p, done), done,
-                                  part_context(ctx, "validation"))
+def _model(p: Plan, done: Mapping[str, Any], ctx: StageContext, updated: bool = False) -> Any:
+    plan = _validation_plan(p, done, updated)
+    return None if plan is None else validation_kind._model(
+        plan, _round(done, updated), part_context(ctx, "validation"))
 
 
 # ---------------------------------------------------------------- discrepancy
@@ -316,34 +403,44 @@ def _discrepancy(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Discrep
            f"{len(bad)} model-vs-rig disagreement(s): "
            + "; ".join(f"{v.design} {v.quantity} {v.metric}" for v in bad))
     pr = p.study.problem
-    section = {k: v for k, v in dataclasses.asdict(p.config.spindle).items() if v is not None}
-    section["baseline"] = [float(v) for v in pr.baseline]
     with ctx.bar("discrepancy", "part") as progress:
         progress(0, 1, "naming what the model misses")
         res, paths = analyse(data_from_folder(ctx.run_dir / "campaign"),
                              pr.spindle.geometry_for(pr.baseline), tuple(pr.spindle.effects),
-                             spindle_section=section, options=p.discrepancy,
+                             spindle_section=spindle_section(p), options=p.discrepancy,
                              rng=part_context(ctx, "discrepancy").stream(0),
                              out_dir=ctx.run_dir / "discrepancy")
     return DiscrepancyStage(True, why, res, {k: str(v) for k, v in paths.items()})
 
 
 # ---------------------------------------------------------------- report
-def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
-    sub = RunFolder(path=run.path / "study", experiment=run.experiment, run_id=run.run_id)
+def _study_report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext,
+                  updated: bool) -> None:
+    """The study kind's tables and figures of one round into ``study[_updated]/``."""
+    plan = study_plan(p, done, updated)
+    if plan is None or done.get("verify" + (UPDATED if updated else "")) is None:
+        return
+    sub = RunFolder(path=run.path / ("study" + (UPDATED if updated else "")),
+                    experiment=run.experiment, run_id=run.run_id)
     sub.path.mkdir(exist_ok=True)
-    study_kind._report(study_plan(p, done), done, sub, part_context(ctx, "study"))
+    study_kind._report(plan, _round(done, updated), sub, part_context(ctx, "study"))
+
+
+def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
+    for updated in (False, True):
+        _study_report(p, done, run, ctx, updated)
     pr, c = p.study.problem, p.config
     timings = {k: float(v.get("time_s", 0.0)) for k, v in run.meta.get("stages", {}).items()}
-    out = write_loop_report(
+    return write_loop_report(
         run.path, truth=p.rig.rig.truth, campaign=done["campaign"],
         campaign_options=p.rig.rig.options, model=_model_at_baseline(p),
         identification=done["identification"], identification_figures=p.identification.figures,
         convergence_speed_rpm=p.identification.convergence_speed_rpm,
         theta=done["uncertainty"], theta_bearings=pr.spindle.theta_bearings,
         verification=done["verify"], limit_um=c.limit.delta_lim_um, validation=done["model"],
-        discrepancy=done["discrepancy"], timings=timings, rig_figures=p.rig.rig.figures)
-    return out
+        discrepancy=done["discrepancy"], timings=timings, rig_figures=p.rig.rig.figures,
+        updated=(done.get("verify" + UPDATED), done.get("model" + UPDATED)),
+        reoptimise=done["reoptimise"])
 
 
 register_kind(Kind(
@@ -360,7 +457,12 @@ register_kind(Kind(
             Stage("refine", _study_stage(study_kind._refine)),
             Stage("verify", _study_stage(study_kind._verify)),
             Stage("measure", _measure), Stage("model", _model),
-            Stage("discrepancy", _discrepancy)),
+            Stage("discrepancy", _discrepancy), Stage("reoptimise", _reoptimise),
+            *(Stage(f.__name__.lstrip("_") + UPDATED, _study_stage(f, updated=True))
+              for f in (study_kind._surrogate, study_kind._design_model, study_kind._optimise,
+                        study_kind._refine, study_kind._verify)),
+            Stage("measure" + UPDATED, partial(_measure, updated=True)),
+            Stage("model" + UPDATED, partial(_model, updated=True))),
     report=_report,
     build=build,
 ))
