@@ -812,7 +812,7 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("e2e_loop_designs_str", E("loop", "designs = 'baseline'"), {}, [],
      r"loop.designs = 'baseline' is not allowed: " + ARR),
     ("e2e_loop_key", E("loop", "design = []"), {}, [],
-     r"unknown key loop.design; allowed: \['designs', 'discrepancy'\]"),
+     r"unknown key loop.design; allowed: \['designs', 'discrepancy', 'reoptimise'\]"),
     ("e2e_rig_design", E("rig", "design = [2000.0, 500.0, 65.0]"), {}, [],
      r"rig.design = \[2000.0, 500.0, 65.0\] is not allowed: the campaign's rotor is"),
     ("e2e_no_trial", _sub(LOOP, "trial_unbalance = [0.0, 5e-5, 0.0]\n", ""), {}, [],

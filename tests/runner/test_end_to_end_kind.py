@@ -78,8 +78,10 @@ discrepancy = "always"
 n_draws = 100
 """
 
-STAGES = ["campaign", "identification", "uncertainty", "surrogate", "design_model", "optimise",
-          "refine", "verify", "measure", "model", "discrepancy"]
+STUDY = ["surrogate", "design_model", "optimise", "refine", "verify"]
+STAGES = ["campaign", "identification", "uncertainty", *STUDY, "measure", "model",
+          "discrepancy", "reoptimise", *(f"{s}_updated" for s in STUDY), "measure_updated",
+          "model_updated"]
 
 
 def _write(tmp_path: Path, text: str = TINY) -> Path:
