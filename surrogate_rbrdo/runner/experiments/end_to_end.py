@@ -10,10 +10,13 @@ on that campaign) → ``uncertainty`` (the study's θ: the identified stiffness 
 ``refine`` → ``verify`` (the ``study`` kind's, on the identified θ) → ``measure`` → ``model``
 (the ``validation`` kind's: the chosen designs against the baseline on the rig; the model's
 moments are the study's FE verification) → ``discrepancy`` (``discrepancy.experiment.analyse``
-on the campaign's phasors when the validation names a disagreement, ``[loop] discrepancy``).
-The report writes each part's files into its subfolder (``rig/``, ``identification/``,
-``study/``, ``validation/``, ``discrepancy/``) and ``report.md``
-(:mod:`surrogate_rbrdo.reporting.end_to_end`).
+on the campaign's phasors when the validation names a disagreement, ``[loop] discrepancy``)
+→ ``reoptimise`` (whether the updated spindle can be optimised: effects named, the study's
+design constraints defined for it) → ``surrogate_updated`` … ``model_updated`` (the study and
+the validation again on the updated spindle, same θ, seeds and rig; ``None`` when not
+re-optimised). The report writes each part's files into its subfolder (``rig/``,
+``identification/``, ``study[_updated]/``, ``validation[_updated]/``, ``discrepancy/``) and
+``report.md`` (:mod:`surrogate_rbrdo.reporting.end_to_end`).
 
 Tables: the ``study`` kind's (``[spindle]`` … ``[refine]``), ``[rig]`` (``RigTable`` without
 ``design``: the campaign's rotor is ``[spindle]``'s baseline), ``[identification]``
