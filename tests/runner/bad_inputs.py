@@ -875,6 +875,32 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"spindle.geometry file '.*none.toml' does not exist"),
     ("id_missing_table", "[experiment]\nname = 'i'\nkind = 'identification'\n", {}, [],
      r"identification is missing: it is required"),
+    # ------------------------------------------------------------------ [uncertainty] from
+    ("from_with_mean", S("uncertainty", "from = 'ident/r1'\nmean = [1.0, 1.0]"), {}, [],
+     r"uncertainty.mean = \[1.0, 1.0\] is not allowed with from = 'ident/r1': the identified "
+     r"model gives θ's mean and covariance"),
+    ("from_with_corr", S("uncertainty", "from = 'ident/r1'\ncorr = [[1.0, 0.1], [0.1, 1.0]]"),
+     {}, [], r"uncertainty.corr = \[\[1.0, 0.1\], \[0.1, 1.0\]\] is not allowed with from"),
+    ("from_empty", S("uncertainty", "from = ''"), {}, [],
+     r"uncertainty.from = '' is not allowed: give an identification run folder"),
+    ("from_int", S("uncertainty", "from = 3"), {}, [], r"uncertainty.from = 3 is not allowed: "
+     + STR),
+    ("from_missing", S("uncertainty", "from = 'results/identification/none'"), {}, [],
+     r"uncertainty.from = 'results/identification/none' is not allowed: no such file or "
+     r"folder"),
+    ("from_not_json", S("uncertainty", "from = 'u.json'"), {"u.json": "not json"}, [],
+     r"uncertainty.from = '.*u.json' is not allowed: not JSON"),
+    ("from_wrong_format", S("uncertainty", "from = 'u.json'"), {"u.json": '{"names": []}'}, [],
+     r"uncertainty.from = 'u.json': .*u.json: format = None, version = None: expected "
+     r"'surrogate_rbrdo.identified_uncertainty'"),
+    ("from_not_identification", S("uncertainty", "from = '.'"),
+     {"meta.json": '{"kind": "study", "status": "complete"}', "uncertainty.json": "{}"}, [],
+     r"uncertainty.from = '.' is not allowed: not a complete identification run \(its "
+     r"meta.json: kind 'study'"),
+    ("from_unfinished", S("uncertainty", "from = '.'"),
+     {"meta.json": '{"kind": "identification", "status": "failed"}',
+      "uncertainty.json": "{}"}, [], r"uncertainty.from = '.' is not allowed: not a complete "
+     r"identification run \(its meta.json: kind 'identification', status 'failed'\)"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

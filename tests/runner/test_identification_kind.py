@@ -4,14 +4,20 @@ runs), the files it writes, that it composes the library, and its resume."""
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.identification import IdentificationOptions, identify_records
+from surrogate_rbrdo.identification import (
+    IdentificationOptions,
+    identify_records,
+    stiffness_block_from,
+)
 from surrogate_rbrdo.runner.cli import run_experiment
+from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.experiments import identification as kind
 from surrogate_rbrdo.runner.runfolder import read_meta
 from surrogate_rbrdo.spindle import reference_spindle
@@ -123,3 +129,106 @@ def test_resume_does_not_redo_the_identification(tmp_path, rig_results, monkeypa
                          resume=True)
     assert read_meta(run.path)["status"] == "complete"
     assert (run.path / "identified.csv").is_file() and (run.path / "uncertainty.json").is_file()
+
+
+STUDY = """[experiment]
+name = "study_from"
+kind = "study"
+seed = 1
+[uncertainty]
+from = "{source}"
+[response]
+{response}
+[surrogate]
+n_doe = 12
+n_jobs = 1
+n_start = 1
+[deterministic]
+resonance = "none"
+stress = false
+[optimization]
+p_targets = [0.10]
+n_theta = 20
+pop_size = 6
+n_gen = 2
+n_jobs = 1
+strategies = ["rdo"]
+[verification]
+n_theta = 4
+n_jobs = 1
+[report]
+n_speeds = 10
+campbell_speeds = 3
+n_modes = 2
+"""
+AT_24K = 'kind = "at_speed"\nspeed_rpm = 24000.0'
+
+
+@pytest.fixture(scope="module")
+def ident_run(rig_results, tmp_path_factory):
+    root = tmp_path_factory.mktemp("ident_run")
+    cfg = _config(root, rig_results / "rig_trial" / "r1", figures=False)
+    return run_experiment(cfg, results_dir=root / "res", run_id="i1", progress=False).path
+
+
+def _study(tmp_path: Path, source, response: str = AT_24K) -> Path:
+    p = tmp_path / "study.toml"
+    p.write_text(STUDY.format(source=source, response=response))
+    return p
+
+
+@pytest.mark.known_answer
+def test_study_theta_is_the_identified_model(tmp_path, ident_run):
+    """``[uncertainty] from``: at the identification's summary speed (24 000 rpm) the study's θ
+    has the mean and covariance written in uncertainty.json; the study runs and its meta.json
+    names the file (sha256) and the identification run."""
+    u_file = ident_run / "uncertainty.json"
+    u = json.loads(u_file.read_text())
+    assert u["speed_rpm"] == 24000.0
+    cfg = _study(tmp_path, ident_run)
+    plan = prepare(cfg).plan
+    theta = plan.problem.inputs
+    np.testing.assert_allclose(theta.mean, u["mean"], rtol=1e-12)
+    np.testing.assert_allclose(theta.cov, u["cov"], rtol=1e-9, atol=1e-15)
+    run = run_experiment(cfg, results_dir=tmp_path / "res", run_id="s1", progress=False)
+    meta = read_meta(run.path)
+    src = meta["uncertainty_from"]
+    assert meta["status"] == "complete"
+    assert src["sha256"] == hashlib.sha256(u_file.read_bytes()).hexdigest()
+    assert src["run"]["run_id"] == "i1" and src["run"]["kind"] == "identification"
+    assert src["speeds_rpm"] == [24000.0]
+    # the file is an input: the resume check knows it
+    assert meta["inputs"] == {str(u_file.resolve()): src["sha256"]}
+
+
+def test_study_from_refuses_what_the_identification_does_not_give(tmp_path, ident_run,
+                                                                   monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    # a peak over 1 000-24 000 rpm: the campaign was measured from 4 000 rpm up
+    with pytest.raises(ValueError, match=r"uncertainty.from = '.*': speed_rpm = 1000.0 is not "
+                                         r"allowed: the model was identified in \[[48]000, "
+                                         r"24000\] rpm \(no extrapolation\)"):
+        prepare(_study(tmp_path, ident_run, 'kind = "peak"'))
+    # θ bearings that were not identified
+    u = json.loads((ident_run / "uncertainty.json").read_text())
+    u["names"] = ["spindle_nose", "rear"]
+    (tmp_path / "u.json").write_text(json.dumps(u))
+    with pytest.raises(ValueError, match=r"uncertainty.from = 'u.json': theta_bearings = "
+                                         r"\['front', 'rear'\] is not allowed: \['front'\] not "
+                                         r"identified \(identified: \['spindle_nose', 'rear'\]\)"):
+        prepare(_study(tmp_path, "u.json"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["study.toml", "u.json"]
+
+
+def test_stiffness_block_from_python(ident_run):
+    """The library call the runner composes: the MVN of uncertainty.json at its speed."""
+    u = json.loads((ident_run / "uncertainty.json").read_text())
+    block, prov = stiffness_block_from(ident_run, ("rear", "front"), [24000.0])
+    np.testing.assert_allclose(block.mean, u["mean"][::-1], rtol=1e-12)
+    np.testing.assert_allclose(block.cov, np.asarray(u["cov"])[::-1, ::-1], rtol=1e-9,
+                               atol=1e-15)
+    assert prov["run"]["experiment"] == "ident" and prov["distribution"] == "normal"
+    logn, _ = stiffness_block_from(ident_run / "uncertainty.json", ("front", "rear"),
+                                   [24000.0], distribution="lognormal")
+    x = logn.sample(20000, rng=np.random.default_rng(0))
+    np.testing.assert_allclose(x.mean(axis=0), u["mean"], rtol=3e-3)
