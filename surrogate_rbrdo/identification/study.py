@@ -179,7 +179,25 @@ def _run_meta(source) -> dict:
     return {"path": str(folder.resolve()), **{k: meta[k] for k in RUN_META_KEYS if k in meta}}
 
 
-def stiffness_block_from(source, theta_bearings: Sequence[str], speeds_rpm: Sequence[float], *,
+def _grid_in(u: IdentifiedUncertainty, speed_range_rpm, n_speeds: int) -> tuple[np.ndarray, dict]:
+    """``n_speeds`` evenly spaced speeds over the part of ``speed_range_rpm`` the model was
+    identified in, and what of the range that leaves out."""
+    lo, hi = (float(v) for v in speed_range_rpm)
+    ilo, ihi = u.speed_range_rpm
+    a, b = max(lo, ilo), min(hi, ihi)
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi) or a > b:
+        raise ValueError(f"speed_range_rpm = [{lo:g}, {hi:g}] is not allowed: the model was "
+                         f"identified in [{ilo:g}, {ihi:g}] rpm, which it does not overlap "
+                         "(no extrapolation)")
+    left_out = [r for r in ([lo, a], [b, hi]) if r[1] > r[0]]
+    return np.linspace(a, b, n_speeds if b > a else 1), {
+        "speed_range_rpm": [lo, hi], "identified_range_rpm": [ilo, ihi],
+        "range_left_out_rpm": left_out}
+
+
+def stiffness_block_from(source, theta_bearings: Sequence[str],
+                         speeds_rpm: Sequence[float] | None = None, *,
+                         speed_range_rpm: Sequence[float] | None = None, n_speeds: int = 25,
                          distribution: str = "normal",
                          reference: SpindleModel | np.ndarray | None = None
                          ) -> tuple[object, dict]:
@@ -188,7 +206,10 @@ def stiffness_block_from(source, theta_bearings: Sequence[str], speeds_rpm: Sequ
 
     The moments are :func:`study_uncertainty`'s ``random_vector`` at ``speeds_rpm`` (one
     speed: the identified trend there relative to the stored reference, with the physical
-    scatter and the trend's uncertainty; several: their moment-matched mixture); the block is
+    scatter and the trend's uncertainty; several: their moment-matched mixture) or, for a
+    response that is a peak over ``speed_range_rpm``, at ``n_speeds`` evenly spaced speeds over
+    the part of that range the model was identified in (the identified trend is not
+    extrapolated; what of the range is left out is in the provenance). The block is
     :func:`~surrogate_rbrdo.uncertainty.factors.stiffness_factors` with those moments
     (``distribution = "normal"``: that MVN; ``"lognormal"``: lognormal margins with the same
     means, standard deviations and correlations).
@@ -198,20 +219,27 @@ def stiffness_block_from(source, theta_bearings: Sequence[str], speeds_rpm: Sequ
     block : random vector of ``len(theta_bearings)`` positive factors
     provenance : dict
         ``source`` (the file), its ``sha256``, the identification's own provenance, the
-        speeds and choices (:attr:`StudyUncertainty.provenance`), ``distribution``, and
+        speeds and choices (:attr:`StudyUncertainty.provenance`), ``distribution``, for a
+        range ``speed_range_rpm``, ``identified_range_rpm`` and ``range_left_out_rpm``, and
         ``run``: the identification run's ``meta.json`` (experiment, run id, finishing time,
         code) when the file sits in a run folder.
 
     Raises ``ValueError`` for a source that is not an identification's ``uncertainty.json`` (or
-    a run that did not complete), θ bearings that were not identified, or a speed outside the
-    identified range.
+    a run that did not complete), θ bearings that were not identified, a speed outside the
+    identified range or a range that does not overlap it.
     """
+    if (speeds_rpm is None) == (speed_range_rpm is None):
+        raise ValueError("speeds_rpm and speed_range_rpm: give exactly one")
     run = _run_meta(source)
-    su = study_uncertainty(source, speeds_rpm, theta_bearings=theta_bearings,
-                           reference=reference)
+    u, file_prov = _source(source)
+    extra: dict = {}
+    if speed_range_rpm is not None:
+        speeds_rpm, extra = _grid_in(u, speed_range_rpm, n_speeds)
+    su = study_uncertainty(u, speeds_rpm, theta_bearings=theta_bearings, reference=reference)
     rv = su.random_vector
     block = stiffness_factors(rv.mean, rv.std, rv.corr, distribution=distribution)
-    return block, {**su.provenance, "distribution": distribution, "run": run}
+    return block, {**su.provenance, **file_prov, **extra, "distribution": distribution,
+                   "run": run}
 
 
 __all__ = ["StudyUncertainty", "stiffness_block_from", "study_uncertainty"]

@@ -11,6 +11,7 @@ dotted path of the field.
 from __future__ import annotations
 
 import shutil
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Annotated, Any
@@ -138,7 +139,8 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
 
 
 #: speeds at which an identified θ is evaluated for a peak over the speed range (evenly
-#: spaced; θ is their moment-matched mixture, identification.study.StudyUncertainty)
+#: spaced over its identified part; θ is their moment-matched mixture,
+#: identification.stiffness_block_from)
 PEAK_THETA_SPEEDS = 25
 
 
@@ -180,17 +182,18 @@ class UncertaintyTable:
 
 
 def identified_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...],
-                      speeds_rpm: Any) -> tuple[Any, dict[str, Any]]:
-    """The stiffness block of ``[uncertainty] from`` at ``speeds_rpm`` and its provenance."""
+                      at: Mapping[str, Any] | None) -> tuple[Any, dict[str, Any]]:
+    """The stiffness block of ``[uncertainty] from`` where θ applies (``at``:
+    :func:`response_speeds`) and its provenance."""
     where = f"uncertainty.from = {t.from_!r}"
-    if speeds_rpm is None:
+    if at is None:
         raise ValueError(f"{where} is not allowed here: this kind has no response speed to "
                          "evaluate the identified trend at (use it in a study)")
     if not Path(t.from_).exists():
         raise ValueError(f"{where} is not allowed: no such file or folder; give an "
                          "identification run folder or its uncertainty.json")
     try:
-        return stiffness_block_from(t.from_, theta_bearings, speeds_rpm,
+        return stiffness_block_from(t.from_, theta_bearings, **at,
                                     distribution=t.distribution)
     except ValueError as exc:
         msg = str(exc)
@@ -198,22 +201,25 @@ def identified_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...],
                          else f"{where}: {msg}") from None
 
 
-def response_speeds(response: ResponseSpec, spindle: ReferenceSpindle) -> np.ndarray:
-    """The speed(s) θ applies at: the rated speed of ``at_speed``, else
-    :data:`PEAK_THETA_SPEEDS` speeds spanning the spindle's range (a peak over it)."""
+def response_speeds(response: ResponseSpec, spindle: ReferenceSpindle) -> dict[str, Any]:
+    """Where θ applies, as ``stiffness_block_from`` keywords: the rated speed of
+    ``at_speed``, else the spindle's speed range (a peak over it), :data:`PEAK_THETA_SPEEDS`
+    speeds."""
     if response.kind == "at_speed":
-        return np.array([float(response.speed_rpm)])
+        return {"speeds_rpm": [float(response.speed_rpm)]}
     g = spindle.geometry
-    return np.linspace(g.speed_min_rpm, g.speed_max_rpm, PEAK_THETA_SPEEDS)
+    return {"speed_range_rpm": (g.speed_min_rpm, g.speed_max_rpm),
+            "n_speeds": PEAK_THETA_SPEEDS}
 
 
 def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...], *,
-                 default_std: tuple[float, ...] = TABLE4_STD, speeds_rpm: Any = None) -> Any:
+                 default_std: tuple[float, ...] = TABLE4_STD,
+                 at: Mapping[str, Any] | None = None) -> Any:
     """The stiffness block of a ``[uncertainty]`` table: one positive factor per θ bearing
-    (``uncertainty.stiffness_factors``; with ``from``, the identified model at ``speeds_rpm``,
-    :func:`identified_inputs`)."""
+    (``uncertainty.stiffness_factors``; with ``from``, the identified model where θ applies,
+    ``at``: :func:`response_speeds`, :func:`identified_inputs`)."""
     if t.from_ is not None:
-        return identified_inputs(t, theta_bearings, speeds_rpm)[0]
+        return identified_inputs(t, theta_bearings, at)[0]
     m = len(theta_bearings)
     mean = [1.0] * m if t.mean is None else list(t.mean)
     std = list(default_std[:m]) if t.std is None else list(t.std)

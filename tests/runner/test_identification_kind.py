@@ -204,11 +204,11 @@ def test_study_theta_is_the_identified_model(tmp_path, ident_run):
 def test_study_from_refuses_what_the_identification_does_not_give(tmp_path, ident_run,
                                                                    monkeypatch):
     monkeypatch.chdir(tmp_path)
-    # a peak over 1 000-24 000 rpm: the campaign was measured from 4 000 rpm up
-    with pytest.raises(ValueError, match=r"uncertainty.from = '.*': speed_rpm = 1000.0 is not "
+    # a speed below the identified range (the campaign was measured from 4 000 rpm up)
+    with pytest.raises(ValueError, match=r"uncertainty.from = '.*': speed_rpm = 2000.0 is not "
                                          r"allowed: the model was identified in \[[48]000, "
                                          r"24000\] rpm \(no extrapolation\)"):
-        prepare(_study(tmp_path, ident_run, 'kind = "peak"'))
+        prepare(_study(tmp_path, ident_run, 'kind = "at_speed"\nspeed_rpm = 2000.0'))
     # θ bearings that were not identified
     u = json.loads((ident_run / "uncertainty.json").read_text())
     u["names"] = ["spindle_nose", "rear"]
@@ -218,6 +218,27 @@ def test_study_from_refuses_what_the_identification_does_not_give(tmp_path, iden
                                          r"identified \(identified: \['spindle_nose', 'rear'\]\)"):
         prepare(_study(tmp_path, "u.json"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["study.toml", "u.json"]
+
+
+def test_peak_unbalance_theta_over_the_identified_part_of_the_range(tmp_path, ident_run):
+    """A peak over 1 000-24 000 rpm: θ's stiffness block is the mixture over 25 speeds
+    spanning the identified part of the range (from the lowest speed of a used record in
+    identified.csv); the thermal and unbalance columns are those without ``from``."""
+    with open(ident_run / "identified.csv", newline="") as fh:
+        used = [float(r["speed_rpm"]) for r in csv.DictReader(fh) if r["used"] == "1"]
+    plan = prepare(_study(tmp_path, ident_run, 'kind = "peak_unbalance"')).plan
+    own, _ = stiffness_block_from(ident_run, ("front", "rear"),
+                                  np.linspace(min(used), max(used), 25))
+    theta = plan.problem.inputs
+    np.testing.assert_allclose(theta.blocks[0].mean, own.mean, rtol=1e-12)
+    np.testing.assert_allclose(theta.blocks[0].cov, own.cov, rtol=1e-9, atol=1e-15)
+    src = plan.theta_source
+    assert src["range_left_out_rpm"] == [[1000.0, min(used)]]
+    plain = _study(tmp_path, ident_run, 'kind = "peak_unbalance"').read_text().replace(
+        f'from = "{ident_run}"', "")
+    (tmp_path / "plain.toml").write_text(plain)
+    ref = prepare(tmp_path / "plain.toml").plan.problem.inputs
+    assert theta.dim == ref.dim and repr(theta.blocks[1:]) == repr(ref.blocks[1:])
 
 
 def test_stiffness_block_from_python(ident_run):

@@ -146,7 +146,7 @@ def _study(c: ValidationConfig, o: ValidationOptions) -> tuple[Any, ...]:
     source = {"designs": str(folder), "study_labels": labels,
               "known_from_study": q or "none: the study's response is not measured"}
     inputs = build_inputs(sc.uncertainty, spindle.theta_bearings,
-                          speeds_rpm=response_speeds(sc.response, spindle))
+                          at=response_speeds(sc.response, spindle))
     return designs, spindle, inputs, known, source
 
 
