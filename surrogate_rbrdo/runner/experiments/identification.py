@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.files import read_input
 from surrogate_rbrdo.identification.experiment import (
     IdentificationOptions,
     check_source,
@@ -41,6 +42,7 @@ from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kin
 from surrogate_rbrdo.runner.runfolder import read_meta
 from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 from surrogate_rbrdo.spindle.assembly import SpindleModel
+from surrogate_rbrdo.spindle.reference import reference_spindle
 
 
 @dataclass(frozen=True)
@@ -85,7 +87,8 @@ def _latest(path: Path) -> Path:
     if not runs:
         raise ValueError(f"identification.source = {str(path)!r} is not allowed: "
                          f"{str(path.parent)!r} holds no complete run to take as the latest; "
-                         "run the rig campaign first (rbrdo run experiments/rig_campaign.toml)")
+                         "run that experiment first (for experiments/identification.toml: rbrdo "
+                         "run experiments/rig_campaign_trial.toml)")
     return max(runs)[1]
 
 
@@ -110,10 +113,13 @@ def _source(given: str) -> tuple[Path, dict[str, Any]]:
 
 
 def _check_design(model_design: np.ndarray, rig: Mapping[str, Any], where: str) -> None:
-    """A rig campaign's truth is built at ``[rig] design``: the model must be that design."""
+    """A rig campaign's truth is built at ``[rig] design`` (default the reference spindle's
+    baseline): the model must be that design."""
+    if rig.get("kind") != "rig":
+        return
     design = (rig.get("config") or {}).get("rig", {}).get("design")
-    if rig.get("kind") == "rig" and design is not None and not np.allclose(
-            design, model_design, rtol=1e-9):
+    design = reference_spindle().baseline.tolist() if design is None else design
+    if not np.allclose(design, model_design, rtol=1e-9):
         raise ValueError(f"spindle.baseline = {np.round(model_design, 6).tolist()} is not "
                          f"allowed: the rig campaign {where!r} was built at design {design} "
                          "(set [spindle] baseline to it)")
@@ -134,6 +140,8 @@ def build(c: IdentificationConfig, base_dir: Path) -> Plan:
         dataset = check_source(folder, o)
     except ValueError as exc:
         raise ValueError(f"identification.{exc}") from None
+    for name in ("dataset.json", "index.jsonl"):   # tracked: --resume sees a changed dataset
+        read_input(dataset / name, "identification.source")
     return Plan(model, folder, dataset, o, {k: v for k, v in rig.items() if k != "config"})
 
 
