@@ -37,6 +37,7 @@ from surrogate_rbrdo.runner.tables import (
     build_inputs,
     build_spindle,
     require_memory,
+    response_speeds,
 )
 from surrogate_rbrdo.validation import (
     Moments,
@@ -144,7 +145,9 @@ def _study(c: ValidationConfig, o: ValidationOptions) -> tuple[Any, ...]:
              for n in names} if q else {}
     source = {"designs": str(folder), "study_labels": labels,
               "known_from_study": q or "none: the study's response is not measured"}
-    return designs, spindle, build_inputs(sc.uncertainty, spindle.theta_bearings), known, source
+    inputs = build_inputs(sc.uncertainty, spindle.theta_bearings,
+                          at=response_speeds(sc.response, spindle))
+    return designs, spindle, inputs, known, source
 
 
 def build(c: ValidationConfig, base_dir: Path) -> Plan:
