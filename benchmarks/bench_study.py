@@ -7,7 +7,7 @@ BLAS pinned to one thread. Two problems (``--problem``):
   at 24 000 rpm, δ_lim = 1.5 µm, the substructure surrogate on 60 FE designs (Kriging of the
   condensed rotor, bearings and θ coupled exactly; the θ sample goes through the θ-polynomial
   coupling, ``spindle.coupling.coupled_tool_amplitude_theta``).
-* ``peak`` (``experiments/paper_peak.toml``): y = peak amplitude over 1000–24 000 rpm,
+* ``peak`` (``experiments/synthetic_peak_in_phase.toml``): y = peak amplitude over 1000–24 000 rpm,
   δ_lim = 19.5 µm, the pipeline's global ``PeakSurrogate`` (Kriging on a 200-point DOE over
   (x, θ), separable predictor with the θ block cached for the CRN sample).
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import keyword
 import re
 import tomllib
 import types
@@ -159,7 +160,13 @@ def type_at(cls: Any, loc: tuple[Any, ...]) -> Any:
 def fields_at(cls: type, loc: tuple[Any, ...]) -> list[str] | None:
     """Field names of the dataclass reached from ``cls`` along ``loc`` (``None``: not one)."""
     tp = type_at(cls, loc)
-    return [f.name for f in dataclasses.fields(tp)] if dataclasses.is_dataclass(tp) else None
+    return [_key(f.name) for f in dataclasses.fields(tp)] if dataclasses.is_dataclass(tp) \
+        else None
+
+
+def _key(name: str) -> str:
+    """A field's config key: ``from_`` (a Python keyword with ``_``) is written ``from``."""
+    return name[:-1] if name.endswith("_") and keyword.iskeyword(name[:-1]) else name
 
 
 def _length(cls: type, loc: tuple[Any, ...]) -> int | None:

@@ -64,7 +64,11 @@ from surrogate_rbrdo.identification.scatter import (
     output_variance_share,
     variance_split,
 )
-from surrogate_rbrdo.identification.study import StudyUncertainty, study_uncertainty
+from surrogate_rbrdo.identification.study import (
+    StudyUncertainty,
+    stiffness_block_from,
+    study_uncertainty,
+)
 from surrogate_rbrdo.identification.systematic import (
     SystematicUncertainty,
     systematic_sensitivities,
@@ -115,6 +119,7 @@ __all__ = [
     "physical_scatter",
     "run_identification",
     "save_uncertainty",
+    "stiffness_block_from",
     "study_uncertainty",
     "study_weights",
     "systematic_sensitivities",

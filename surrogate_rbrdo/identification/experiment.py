@@ -42,10 +42,17 @@ from surrogate_rbrdo.identification.campaign import (
     identify_campaign,
 )
 from surrogate_rbrdo.identification.condensation import node_at
-from surrogate_rbrdo.identification.measured import SensorCorrections, measured_phasors
-from surrogate_rbrdo.identification.model import save_uncertainty
+from surrogate_rbrdo.identification.measured import (
+    SensorCorrections,
+    dataset_root,
+    measured_phasors,
+    probe_channels,
+)
+from surrogate_rbrdo.identification.model import SCATTERS, STUDY_FORMS, save_uncertainty
 from surrogate_rbrdo.identification.responses import Responses, known_unbalance, trial_pairs
 from surrogate_rbrdo.identification.systematic import SystematicUncertainty
+from surrogate_rbrdo.identification.trend import TREND_LAWS
+from surrogate_rbrdo.rig.store import open_dataset
 from surrogate_rbrdo.spindle.assembly import SpindleModel
 
 EXCITATIONS = ("trial", "known")
@@ -84,7 +91,7 @@ class IdentificationOptions:
     unbalance: tuple[tuple[float, float, float], ...] | None = None
     targets: tuple[str, ...] = ("front", "rear")
     probe_bandwidth_hz: float | None = 10_000.0
-    gains: dict = field(default_factory=dict)
+    gains: dict[str, float] = field(default_factory=dict)
     keyphasor_angle_deg: float = 0.0
     fit_on: str = "stiffness"
     max_rel_se: float = DEFAULT_MAX_REL_SE
@@ -102,6 +109,11 @@ class IdentificationOptions:
     def __post_init__(self) -> None:
         check_choice("excitation", self.excitation, EXCITATIONS)
         check_choice("fit_on", self.fit_on, FIT_ON)
+        check_choice("law", self.law, ("auto",) + TREND_LAWS)
+        check_choice("study", self.study, STUDY_FORMS)
+        check_choice("scatter", self.scatter, ("auto",) + SCATTERS)
+        if self.summary_speed_rpm is not None:
+            check_positive("summary_speed_rpm", self.summary_speed_rpm)
         check_positive("max_rel_se", self.max_rel_se)
         check_int("n_boot", self.n_boot, minimum=20)
         check_int("n_jobs", self.n_jobs, minimum=1)
@@ -171,7 +183,54 @@ class IdentificationRun:
         return self.campaign.uncertainty
 
 
-def _responses(model: SpindleModel, source, o: IdentificationOptions) -> Responses:
+def check_source(source, options: IdentificationOptions = IdentificationOptions()) -> Path:
+    """The dataset folder of ``source`` (a dataset folder, a rig campaign folder with
+    ``dataset/``), checked against ``options`` before any work: it has steady records, the
+    probes of ``options.targets``, trial-weight runs for ``excitation = "trial"``, the
+    ``group_label``, and ``summary_speed_rpm`` inside its speeds. Reads the index and one
+    record; raises ``ValueError`` naming the field, its value and what is allowed.
+    """
+    src = Path(source)
+    if not src.is_dir():
+        raise ValueError(f"source = {str(source)!r} is not allowed: no such folder; give a rig "
+                         "campaign run folder or a measured-data folder (with dataset.json)")
+    root = dataset_root(src)
+    if not (root / "dataset.json").is_file():
+        raise ValueError(f"source = {str(source)!r} is not allowed: not a campaign (no "
+                         "dataset.json in it or in its dataset/); give a rig campaign run "
+                         "folder or a measured-data folder")
+    ds = open_dataset(root)
+    rows = [r for r in ds.index if r.get("kind") == "steady"]
+    if not rows:
+        raise ValueError(f"source = {str(source)!r} is not allowed: the dataset has no steady "
+                         "records to identify from")
+    labels = [r.get("labels", {}) for r in rows]
+    if options.excitation == "trial" and not any(lab.get("trial", 0) for lab in labels):
+        raise ValueError(f"excitation = 'trial' is not allowed with source = {str(source)!r}: "
+                         "it has no trial-weight runs (no record labelled trial = 1); measure "
+                         "with [rig.campaign] trial_unbalance = [position_mm, magnitude_kgm, "
+                         "phase_deg], or use excitation = 'known' with unbalance")
+    if options.group_label is not None and any(options.group_label not in lab
+                                               for lab in labels):
+        raise ValueError(f"group_label = {options.group_label!r} is not allowed: not a label "
+                         f"of every record (labels: {sorted(labels[0])})")
+    speeds = [float(r["speed_rpm"]) for r in rows]
+    s = options.summary_speed_rpm
+    if s is not None and not min(speeds) <= s <= max(speeds):
+        raise ValueError(f"summary_speed_rpm = {s!r} is not allowed: must lie in the "
+                         f"campaign's speeds [{min(speeds):g}, {max(speeds):g}] rpm")
+    try:
+        probe_channels(ds.load(rows[0]), options.targets)
+    except ValueError as exc:
+        raise ValueError(f"targets = {list(options.targets)} is not allowed: {exc}") from None
+    return root
+
+
+def read_responses(source, options: IdentificationOptions = IdentificationOptions()
+                   ) -> Responses:
+    """Demodulate and correct the steady records of ``source`` and form the responses to a
+    known unbalance (trial-weight differences or the stated ``unbalance``)."""
+    o = options
     m = measured_phasors(source, targets=o.targets, corrections=o.corrections(),
                          n_jobs=o.n_jobs)
     if o.excitation == "trial":
@@ -180,10 +239,38 @@ def _responses(model: SpindleModel, source, o: IdentificationOptions) -> Respons
     return known_unbalance(m, o.unbalance, group_label=o.group_label)
 
 
+def identify_responses(model: SpindleModel, resp: Responses, options: IdentificationOptions = (
+        IdentificationOptions()), *, rng: np.random.Generator, source="",
+        truth: np.ndarray | None = None, demodulation_s: float = 0.0) -> IdentificationRun:
+    """Identify every response vector and fit the uncertainty model (the second half of
+    :func:`identify_records`; ``source`` and ``demodulation_s`` are recorded)."""
+    require_rng(rng)
+    t1 = time.perf_counter()
+    probe_nodes = [node_at(model, float(p)) for p in resp.positions_mm[::2]]
+    unb = [(node_at(model, pos), U * np.exp(1j * np.radians(ph)))
+           for pos, U, ph in resp.unbalance]
+    prov = {"source": str(source), "excitation": resp.excitation,
+            "unbalance": [list(u) for u in resp.unbalance], "channels": list(resp.channels),
+            "options": options.to_dict()}
+    camp = identify_campaign(
+        model, resp.speed_rpm, resp.repeat, resp.phasors, phasor_sd=resp.phasor_sd,
+        groups=resp.groups, perturbations=resp.perturbations,
+        probe_nodes=probe_nodes, unbalance=unb, fit_on=options.fit_on,
+        max_rel_se=options.max_rel_se, law=options.law, study=options.study,
+        scatter=options.scatter, truth=truth, rng=rng, n_boot=options.n_boot,
+        systematic=options.systematic, probe_bandwidth_hz=options.probe_bandwidth_hz,
+        summary_speed_rpm=options.summary_speed_rpm, provenance=prov)
+    dt = time.perf_counter() - t1
+    return IdentificationRun(resp, camp, {"demodulation_s": demodulation_s,
+                                          "identification_s": dt,
+                                          "total_s": demodulation_s + dt}, prov)
+
+
 def identify_records(model: SpindleModel, source, options: IdentificationOptions = (
         IdentificationOptions()), *, rng: np.random.Generator,
         truth: np.ndarray | None = None) -> IdentificationRun:
-    """Identify the steady records of a measured-data folder (module docstring).
+    """Identify the steady records of a measured-data folder (module docstring):
+    :func:`read_responses` then :func:`identify_responses`.
 
     Parameters
     ----------
@@ -200,25 +287,9 @@ def identify_records(model: SpindleModel, source, options: IdentificationOptions
     """
     require_rng(rng)
     t0 = time.perf_counter()
-    resp = _responses(model, source, options)
-    t1 = time.perf_counter()
-    probe_nodes = [node_at(model, float(p)) for p in resp.positions_mm[::2]]
-    unb = [(node_at(model, pos), U * np.exp(1j * np.radians(ph)))
-           for pos, U, ph in resp.unbalance]
-    prov = {"source": str(source), "excitation": resp.excitation,
-            "unbalance": [list(u) for u in resp.unbalance], "channels": list(resp.channels),
-            "options": options.to_dict()}
-    camp = identify_campaign(
-        model, resp.speed_rpm, resp.repeat, resp.phasors, phasor_sd=resp.phasor_sd,
-        groups=resp.groups, perturbations=resp.perturbations,
-        probe_nodes=probe_nodes, unbalance=unb, fit_on=options.fit_on,
-        max_rel_se=options.max_rel_se, law=options.law, study=options.study,
-        scatter=options.scatter, truth=truth, rng=rng, n_boot=options.n_boot,
-        systematic=options.systematic, probe_bandwidth_hz=options.probe_bandwidth_hz,
-        summary_speed_rpm=options.summary_speed_rpm, provenance=prov)
-    t2 = time.perf_counter()
-    return IdentificationRun(resp, camp, {"demodulation_s": t1 - t0, "identification_s": t2 - t1,
-                                          "total_s": t2 - t0}, prov)
+    resp = read_responses(source, options)
+    return identify_responses(model, resp, options, rng=rng, source=source, truth=truth,
+                              demodulation_s=time.perf_counter() - t0)
 
 
 def run_identification(model: SpindleModel, source, out_dir, options: IdentificationOptions = (
@@ -239,13 +310,23 @@ def run_identification(model: SpindleModel, source, out_dir, options: Identifica
     return IdentificationRun(run.responses, run.campaign, run.timings, run.provenance, files)
 
 
-def _write_table(path: Path, table: dict) -> Path:
+def table_rows(table: Mapping[str, Any]) -> tuple[list[str], list[list[Any]]]:
+    """``identified.csv``'s header and rows from a campaign table (columns of equal length):
+    booleans as 0/1, non-finite numbers as empty cells.
+
+    >>> table_rows({"speed_rpm": [1000.0], "front_k_yy": [float("nan")], "used": [True]})
+    (['speed_rpm', 'front_k_yy', 'used'], [[1000.0, '', 1]])
+    """
     cols = list(table)
+    return cols, [[_cell(table[c][i]) for c in cols] for i in range(len(table[cols[0]]))]
+
+
+def _write_table(path: Path, table: dict) -> Path:
+    cols, rows = table_rows(table)
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(cols)
-        for i in range(len(table[cols[0]])):
-            w.writerow([_cell(table[c][i]) for c in cols])
+        w.writerows(rows)
     return path
 
 
@@ -253,9 +334,10 @@ def _cell(v):
     if isinstance(v, (bool, np.bool_)):
         return int(v)
     if isinstance(v, (float, np.floating)):
-        return "" if not np.isfinite(v) else repr(float(v))
+        return "" if not np.isfinite(v) else float(v)
     return v
 
 
-__all__ = ["EXCITATIONS", "IdentificationOptions", "IdentificationRun", "identification_config",
-           "identify_records", "run_identification"]
+__all__ = ["EXCITATIONS", "IdentificationOptions", "IdentificationRun", "check_source",
+           "identification_config", "identify_records", "identify_responses", "read_responses",
+           "run_identification", "table_rows"]

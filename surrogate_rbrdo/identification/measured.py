@@ -131,7 +131,7 @@ class MeasuredPhasors:
             self.phase_shift[idx], self.source)
 
 
-def _probe_channels(rec: Record, targets: Sequence[str] | None) -> tuple[str, ...]:
+def probe_channels(rec: Record, targets: Sequence[str] | None) -> tuple[str, ...]:
     chans = [c for c in rec.channels if c.quantity == "displacement"
              and c.location.direction in ("x", "y")
              and (targets is None or c.location.target in targets)]
@@ -216,12 +216,12 @@ def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | N
         A record that is unreadable, lacks a probe or its keyphasor, or has too few
         revolutions (names the file and the field).
     """
-    ds = source if isinstance(source, Dataset) else open_dataset(_dataset_root(source))
+    ds = source if isinstance(source, Dataset) else open_dataset(dataset_root(source))
     rows = [r for r in ds.index if r["kind"] == "steady"]
     if not rows:
         raise RecordError(str(ds.root), "index", "no steady records to identify from")
     first = ds.load(rows[0])
-    channels = _probe_channels(first, targets)
+    channels = probe_channels(first, targets)
     positions = np.array([first.channel(c).location.position_mm for c in channels])
     if np.any(~np.isfinite(positions)):
         raise RecordError(f"record {first.id!r}", "channels[].location.position_mm",
@@ -242,7 +242,7 @@ def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | N
         tuple(o.setup for o in out), corrections, phase_sd, shift, f"{ds.root} ({note})")
 
 
-def _dataset_root(source: str | Path) -> Path:
+def dataset_root(source: str | Path) -> Path:
     p = Path(source)
     return p / "dataset" if (p / "dataset" / "dataset.json").is_file() else p
 

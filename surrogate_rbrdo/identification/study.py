@@ -34,21 +34,27 @@ the choices) goes with it, for ``meta.json``.
 from __future__ import annotations
 
 import hashlib
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from surrogate_rbrdo.core.files import read_input
 from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.identification.model import (
     SCATTERS,
     IdentifiedUncertainty,
-    load_uncertainty,
     model_reference,
 )
 from surrogate_rbrdo.spindle.assembly import SpindleModel
+from surrogate_rbrdo.uncertainty.factors import stiffness_factors
 from surrogate_rbrdo.uncertainty.mvn import MultivariateNormal
+
+#: what of an identification run's ``meta.json`` goes into the study's provenance
+RUN_META_KEYS = ("experiment", "run_id", "kind", "status", "finished_utc", "git_sha",
+                 "source_sha256", "seeds")
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,8 +97,15 @@ def _source(source) -> tuple[IdentifiedUncertainty, dict]:
         return source, {"source": "in memory"}
     path = Path(source)
     file = path / "uncertainty.json" if path.is_dir() else path
-    u = load_uncertainty(file)
-    return u, {"source": str(file), "sha256": hashlib.sha256(file.read_bytes()).hexdigest()}
+    data = read_input(file, "uncertainty")          # recorded: a resumed run sees changes
+    try:
+        d = json.loads(data)
+    except ValueError as exc:
+        raise ValueError(f"source = {str(file)!r} is not allowed: not JSON ({exc})") from None
+    if not isinstance(d, dict):
+        raise ValueError(f"source = {str(file)!r} is not allowed: not an uncertainty.json")
+    u = IdentifiedUncertainty.from_dict(d, source=str(file))
+    return u, {"source": str(file), "sha256": hashlib.sha256(data).hexdigest()}
 
 
 def study_uncertainty(source, speeds_rpm: Sequence[float], *,
@@ -150,4 +163,83 @@ def study_uncertainty(source, speeds_rpm: Sequence[float], *,
     return StudyUncertainty(names, sp, mean, cov, prov)
 
 
-__all__ = ["StudyUncertainty", "study_uncertainty"]
+def _run_meta(source) -> dict:
+    """The identification run's ``meta.json`` (beside ``uncertainty.json``), if there is one;
+    a run that is not a complete ``identification`` run is refused."""
+    path = Path(source)
+    folder = path if path.is_dir() else path.parent
+    try:
+        meta = json.loads((folder / "meta.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    if meta.get("kind") not in (None, "identification") or meta.get("status") != "complete":
+        raise ValueError(f"source = {str(source)!r} is not allowed: not a complete "
+                         f"identification run (its meta.json: kind {meta.get('kind')!r}, status "
+                         f"{meta.get('status')!r})")
+    return {"path": str(folder.resolve()), **{k: meta[k] for k in RUN_META_KEYS if k in meta}}
+
+
+def _grid_in(u: IdentifiedUncertainty, speed_range_rpm, n_speeds: int) -> tuple[np.ndarray, dict]:
+    """``n_speeds`` evenly spaced speeds over the part of ``speed_range_rpm`` the model was
+    identified in, and what of the range that leaves out."""
+    lo, hi = (float(v) for v in speed_range_rpm)
+    ilo, ihi = u.speed_range_rpm
+    a, b = max(lo, ilo), min(hi, ihi)
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi) or a > b:
+        raise ValueError(f"speed_range_rpm = [{lo:g}, {hi:g}] is not allowed: the model was "
+                         f"identified in [{ilo:g}, {ihi:g}] rpm, which it does not overlap "
+                         "(no extrapolation)")
+    left_out = [r for r in ([lo, a], [b, hi]) if r[1] > r[0]]
+    return np.linspace(a, b, n_speeds if b > a else 1), {
+        "speed_range_rpm": [lo, hi], "identified_range_rpm": [ilo, ihi],
+        "range_left_out_rpm": left_out}
+
+
+def stiffness_block_from(source, theta_bearings: Sequence[str],
+                         speeds_rpm: Sequence[float] | None = None, *,
+                         speed_range_rpm: Sequence[float] | None = None, n_speeds: int = 25,
+                         distribution: str = "normal",
+                         reference: SpindleModel | np.ndarray | None = None
+                         ) -> tuple[object, dict]:
+    """The study's stiffness block of θ from an identification run: what ``[uncertainty]
+    from = "<run folder or uncertainty.json>"`` gives.
+
+    The moments are :func:`study_uncertainty`'s ``random_vector`` at ``speeds_rpm`` (one
+    speed: the identified trend there relative to the stored reference, with the physical
+    scatter and the trend's uncertainty; several: their moment-matched mixture) or, for a
+    response that is a peak over ``speed_range_rpm``, at ``n_speeds`` evenly spaced speeds over
+    the part of that range the model was identified in (the identified trend is not
+    extrapolated; what of the range is left out is in the provenance). The block is
+    :func:`~surrogate_rbrdo.uncertainty.factors.stiffness_factors` with those moments
+    (``distribution = "normal"``: that MVN; ``"lognormal"``: lognormal margins with the same
+    means, standard deviations and correlations).
+
+    Returns
+    -------
+    block : random vector of ``len(theta_bearings)`` positive factors
+    provenance : dict
+        ``source`` (the file), its ``sha256``, the identification's own provenance, the
+        speeds and choices (:attr:`StudyUncertainty.provenance`), ``distribution``, for a
+        range ``speed_range_rpm``, ``identified_range_rpm`` and ``range_left_out_rpm``, and
+        ``run``: the identification run's ``meta.json`` (experiment, run id, finishing time,
+        code) when the file sits in a run folder.
+
+    Raises ``ValueError`` for a source that is not an identification's ``uncertainty.json`` (or
+    a run that did not complete), θ bearings that were not identified, a speed outside the
+    identified range or a range that does not overlap it.
+    """
+    if (speeds_rpm is None) == (speed_range_rpm is None):
+        raise ValueError("speeds_rpm and speed_range_rpm: give exactly one")
+    run = _run_meta(source)
+    u, file_prov = _source(source)
+    extra: dict = {}
+    if speed_range_rpm is not None:
+        speeds_rpm, extra = _grid_in(u, speed_range_rpm, n_speeds)
+    su = study_uncertainty(u, speeds_rpm, theta_bearings=theta_bearings, reference=reference)
+    rv = su.random_vector
+    block = stiffness_factors(rv.mean, rv.std, rv.corr, distribution=distribution)
+    return block, {**su.provenance, **file_prov, **extra, "distribution": distribution,
+                   "run": run}
+
+
+__all__ = ["StudyUncertainty", "stiffness_block_from", "study_uncertainty"]

@@ -122,7 +122,7 @@ def _rig_section(campaign: Any, options: Any, rig_summary: Mapping[str, Any], va
 def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) -> list[str]:
     mvn = theta.stiffness
     mean, sd = np.asarray(mvn.mean, float), np.sqrt(np.diag(np.asarray(mvn.cov, float)))
-    used = np.asarray(ident.campaign.table.get("used", []), bool)
+    used = np.asarray(ident.campaign.used, bool)
     prov = theta.provenance
     rows = [(b, _fmt(m, 4), f"{s:.2%}") for b, m, s in zip(bearings, mean, sd, strict=True)]
     speeds = np.asarray(prov.get("speeds_rpm", []), float)
@@ -130,8 +130,8 @@ def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) 
             "",
             f"{int(used.sum())} of {used.size} identified coefficient vectors used "
             "(`identification/identified.csv`, column `used`; flags in "
-            "`identification/summary.json`); trend, physical scatter and systematic "
-            "uncertainty in `identification/uncertainty.json`.",
+            "`identification/identification_summary.json`); trend, physical scatter and "
+            "systematic uncertainty in `identification/uncertainty.json`.",
             "",
             "θ of the study — stiffness factors relative to the model's nominal bearing "
             "stiffness, the moment-matched mixture over the identified speeds "

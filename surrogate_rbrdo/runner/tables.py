@@ -11,16 +11,19 @@ dotted path of the field.
 from __future__ import annotations
 
 import shutil
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
+from pydantic import AliasChoices, Field
 
 from surrogate_rbrdo.core.memory import available_memory
 from surrogate_rbrdo.core.protocols import LimitState
 from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.formulations import DeterministicOptions
+from surrogate_rbrdo.identification.study import stiffness_block_from
 from surrogate_rbrdo.runner.runfolder import check_name
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.effects import effects_from_data
@@ -135,30 +138,88 @@ def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpind
         raise ValueError(f"spindle.{exc}") from None
 
 
+#: speeds at which an identified θ is evaluated for a peak over the speed range (evenly
+#: spaced over its identified part; θ is their moment-matched mixture,
+#: identification.stiffness_block_from)
+PEAK_THETA_SPEEDS = 25
+
+
 @dataclass(frozen=True)
 class UncertaintyTable:
     """``[uncertainty]``: θ. The stiffness block, one factor per θ bearing: ``distribution``
     (``"normal"`` or ``"lognormal"``: positive support, ``uncertainty.stiffness_factors``),
     ``mean`` (default 1), ``std`` (default: the scatter around the speed trend, 1.5 % / 3.3 %,
     with ``response.kind = "peak_unbalance"``; the paper's pooled Table 4 CoVs otherwise, the
-    synthetic benchmarks), ``corr``. With ``kind = "peak_unbalance"`` θ continues with the
-    thermal preload state (``thermal_max > 0``: τ ~ U(0, thermal_max), the preload bearing at
-    F(1 + τ)) and the unbalance columns of ``[uncertainty.unbalance]`` (``UnbalanceOptions``).
-    (Identification phase 2 replaces the stiffness block by an identified model; the
-    unbalance block stays ISO's.)"""
+    synthetic benchmarks), ``corr`` — or ``from = "<identification run folder or its
+    uncertainty.json>"``: the identified model (trend at the response's speed(s), physical
+    scatter and the trend's uncertainty; ``identification.stiffness_block_from``), instead of
+    ``mean``/``std``/``corr``; a relative path is taken from the working directory (where
+    ``results/`` is). With ``kind = "peak_unbalance"`` θ continues with the thermal preload
+    state (``thermal_max > 0``: τ ~ U(0, thermal_max), the preload bearing at F(1 + τ)) and
+    the unbalance columns of ``[uncertainty.unbalance]`` (``UnbalanceOptions``), with or
+    without ``from``."""
 
     distribution: str = "normal"
+    from_: Annotated[str | None, Field(validation_alias=AliasChoices("from", "from_"))] = None
     mean: tuple[float, ...] | None = None
     std: tuple[float, ...] | None = None
     corr: tuple[tuple[float, ...], ...] | None = None
     thermal_max: float = 0.0
     unbalance: UnbalanceOptions | None = None
 
+    def __post_init__(self) -> None:
+        if self.from_ is None:
+            return
+        if not self.from_.strip():
+            raise ValueError(f"from = {self.from_!r} is not allowed: give an identification run "
+                             "folder or its uncertainty.json")
+        given = [k for k in ("mean", "std", "corr") if getattr(self, k) is not None]
+        if given:
+            v = np.asarray(getattr(self, given[0])).tolist()
+            raise ValueError(f"{given[0]} = {v} is not allowed with from = {self.from_!r}: the "
+                             f"identified model gives θ's mean and covariance (remove "
+                             f"{', '.join(given)}, or from)")
+
+
+def identified_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...],
+                      at: Mapping[str, Any] | None) -> tuple[Any, dict[str, Any]]:
+    """The stiffness block of ``[uncertainty] from`` where θ applies (``at``:
+    :func:`response_speeds`) and its provenance."""
+    where = f"uncertainty.from = {t.from_!r}"
+    if at is None:
+        raise ValueError(f"{where} is not allowed here: this kind has no response speed to "
+                         "evaluate the identified trend at (use it in a study)")
+    if not Path(t.from_).exists():
+        raise ValueError(f"{where} is not allowed: no such file or folder; give an "
+                         "identification run folder or its uncertainty.json")
+    try:
+        return stiffness_block_from(t.from_, theta_bearings, **at,
+                                    distribution=t.distribution)
+    except ValueError as exc:
+        msg = str(exc)
+        raise ValueError(f"uncertainty.from{msg[len('source'):]}" if msg.startswith("source =")
+                         else f"{where}: {msg}") from None
+
+
+def response_speeds(response: ResponseSpec, spindle: ReferenceSpindle) -> dict[str, Any]:
+    """Where θ applies, as ``stiffness_block_from`` keywords: the rated speed of
+    ``at_speed``, else the spindle's speed range (a peak over it), :data:`PEAK_THETA_SPEEDS`
+    speeds."""
+    if response.kind == "at_speed":
+        return {"speeds_rpm": [float(response.speed_rpm)]}
+    g = spindle.geometry
+    return {"speed_range_rpm": (g.speed_min_rpm, g.speed_max_rpm),
+            "n_speeds": PEAK_THETA_SPEEDS}
+
 
 def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...], *,
-                 default_std: tuple[float, ...] = TABLE4_STD) -> Any:
+                 default_std: tuple[float, ...] = TABLE4_STD,
+                 at: Mapping[str, Any] | None = None) -> Any:
     """The stiffness block of a ``[uncertainty]`` table: one positive factor per θ bearing
-    (``uncertainty.stiffness_factors``)."""
+    (``uncertainty.stiffness_factors``; with ``from``, the identified model where θ applies,
+    ``at``: :func:`response_speeds`, :func:`identified_inputs`)."""
+    if t.from_ is not None:
+        return identified_inputs(t, theta_bearings, at)[0]
     m = len(theta_bearings)
     mean = [1.0] * m if t.mean is None else list(t.mean)
     std = list(default_std[:m]) if t.std is None else list(t.std)
@@ -174,9 +235,15 @@ def build_inputs(t: UncertaintyTable, theta_bearings: tuple[str, ...], *,
 
 
 def build_theta(t: UncertaintyTable, spindle: ReferenceSpindle, response: ResponseSpec
-                ) -> tuple[Any, ResponseSpec]:
-    """θ of a ``[uncertainty]`` table for ``response``, and the response (for
-    ``kind = "peak_unbalance"`` the ``PeakUnbalanceSpec`` carrying θ's columns)."""
+                ) -> tuple[Any, ResponseSpec, dict[str, Any] | None]:
+    """θ of a ``[uncertainty]`` table for ``response``, the response (for
+    ``kind = "peak_unbalance"`` the ``PeakUnbalanceSpec`` carrying θ's columns) and, with
+    ``from``, the identified model's provenance (for ``meta.json``; else ``None``)."""
+    if t.from_ is not None:
+        block, source = identified_inputs(t, spindle.theta_bearings,
+                                          response_speeds(response, spindle))
+    else:
+        block, source = None, None
     if response.kind != "peak_unbalance":
         for key, given in (("unbalance", t.unbalance is not None),
                            ("thermal_max", t.thermal_max != 0.0)):
@@ -184,11 +251,14 @@ def build_theta(t: UncertaintyTable, spindle: ReferenceSpindle, response: Respon
                 raise ValueError(f"uncertainty.{key} is not allowed with response.kind = "
                                  f"{response.kind!r}: θ is the stiffness factors (the geometry's "
                                  "unbalance is fixed); use kind = 'peak_unbalance'")
-        return build_inputs(t, spindle.theta_bearings), response
-    block = build_inputs(t, spindle.theta_bearings, default_std=RESIDUAL_STD)
+        if block is None:
+            block = build_inputs(t, spindle.theta_bearings)
+        return block, response, source
+    if block is None:
+        block = build_inputs(t, spindle.theta_bearings, default_std=RESIDUAL_STD)
     try:
-        return peak_unbalance_inputs(spindle, block, thermal_max=t.thermal_max,
-                                     unbalance=t.unbalance)
+        return (*peak_unbalance_inputs(spindle, block, thermal_max=t.thermal_max,
+                                       unbalance=t.unbalance), source)
     except ValueError as exc:
         key = str(exc).split(" ", 1)[0]
         where = {"thermal_max": "uncertainty.", "magnitude": "uncertainty.unbalance.",
@@ -279,5 +349,6 @@ def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str |
 
 
 __all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",
-           "SpindleTable", "UncertaintyTable", "available_memory", "build_inputs",
-           "build_spindle", "build_theta", "require_disk", "require_memory"]
+           "PEAK_THETA_SPEEDS", "SpindleTable", "UncertaintyTable", "available_memory",
+           "build_inputs", "build_spindle", "build_theta", "identified_inputs", "require_disk",
+           "require_memory", "response_speeds"]

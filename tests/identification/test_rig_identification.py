@@ -245,8 +245,8 @@ def test_bad_campaigns_are_refused(tmp_path, noisy_run):
         trial_pairs(m, group_label="shift")
 
 
-def test_pending_config_parses_into_the_options():
-    path = Path(__file__).resolve().parents[2] / "experiments" / "pending" / "identification.toml"
+def test_shipped_config_parses_into_the_options():
+    path = Path(__file__).resolve().parents[2] / "experiments" / "identification.toml"
     cfg = tomllib.loads(path.read_text())
     assert cfg["experiment"]["kind"] == "identification"
     src, opts = identification_config(cfg["identification"])

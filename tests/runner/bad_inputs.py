@@ -170,6 +170,25 @@ def W(table: str, line: str) -> str:          # noqa: N802
 
 def E(table: str, line: str) -> str:          # noqa: N802 - the end-to-end loop
     return _set(LOOP, table, line)
+IDENT = """[experiment]
+name = "i"
+kind = "identification"
+[identification]
+source = "."
+n_boot = 20
+"""
+
+#: a steady-record dataset without trial-weight runs (the record file is not read)
+DS_NO_TRIAL = {
+    "dataset.json": "{}",
+    "index.jsonl": '{"id": "a", "kind": "steady", "file": "a.npz", "speed_rpm": 6000.0, '
+                   '"labels": {"run": 0, "repeat": 0}}\n',
+    "a.npz": "not read",
+}
+
+
+def ID(line: str) -> str:                     # noqa: N802
+    return _set(IDENT, "identification", line)
 
 
 ARR = r"must be an array of"
@@ -825,7 +844,11 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("e2e_speeds_disc", _sub(LOOP, "num = 8", "num = 6"), {}, [],
      r"rig.campaign.speeds_rpm has 6 speeds: not allowed with loop.discrepancy"),
     ("e2e_ident_source", E("identification", "source = 'results/rig'"), {}, [],
-     r"identification.source = 'results/rig' is not allowed: the source is this run's"),
+     r"unknown key identification.source; allowed: \["),
+    ("e2e_unc_from", E("uncertainty", "from = 'results/identification/x'"), {}, [],
+     r"uncertainty.from = 'results/identification/x' is not allowed: the loop's stiffness"),
+    ("e2e_unc_std", E("uncertainty", "std = [0.01, 0.02]"), {}, [],
+     r"uncertainty.std = \[0.01, 0.02\] is not allowed: the loop's stiffness block"),
     ("e2e_ident_n_boot", E("identification", "n_boot = 0"), {}, [],
      r"identification.n_boot = 0 is not allowed"),
     ("e2e_ident_fit_on", E("identification", "fit_on = 'mass'"), {}, [],
@@ -847,6 +870,112 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"model.n_samples = 5 is not allowed: must be an integer >= 10"),
     ("e2e_table", E("designs", "a = [570.0, 500.0, 65.0]"), {}, [],
      r"unknown table designs; allowed: \["),
+    # ------------------------------------------------------------------ identification
+    ("id_no_source", IDENT.replace('source = "."\n', ""), {}, [],
+     r"identification.source = '' is not allowed: give the rig campaign run folder"),
+    ("id_source_int", IDENT.replace('source = "."', "source = 3"), {}, [],
+     r"identification.source = 3 is not allowed: " + STR),
+    ("id_source_missing", IDENT.replace('source = "."', 'source = "results/rig/r9"'), {}, [],
+     r"identification.source = 'results/rig/r9' is not allowed: no such folder"),
+    ("id_source_not_campaign", IDENT, {}, [],
+     r"identification.source = '.*' is not allowed: not a campaign \(no dataset.json"),
+    ("id_source_latest_none", IDENT.replace('source = "."', 'source = "results/rig/latest"'),
+     {}, [], r"identification.source = 'results/rig/latest' is not allowed: 'results/rig' "
+     r"holds no complete run"),
+    ("id_source_failed_run", IDENT, {"meta.json": '{"status": "failed"}'}, [],
+     r"identification.source = '.' is not allowed: the run '.' is 'failed', not complete"),
+    ("id_rig_design", IDENT, {"meta.json": '{"status": "complete", "kind": "rig"}',
+                              "config.json": '{"rig": {"design": [2500.0, 500.0, 65.0]}}'},
+     [], r"spindle.baseline = \[2000.0, 500.0, 65.0\] is not allowed: the rig campaign '.' "
+     r"was built at design \[2500.0, 500.0, 65.0\]"),
+    ("id_no_trial_runs", IDENT, DS_NO_TRIAL, [],
+     r"identification.excitation = 'trial' is not allowed with source = '.*': it has no "
+     r"trial-weight runs"),
+    ("id_no_steady", IDENT, {**DS_NO_TRIAL, "index.jsonl": DS_NO_TRIAL["index.jsonl"].replace(
+        "steady", "impact")}, [], r"identification.source = '.*' is not allowed: the dataset "
+     r"has no steady records"),
+    ("id_group_label", ID("excitation = 'known'\nunbalance = [[0.0, 1e-5, 0.0]]\n"
+                          "group_label = 'tool'"), DS_NO_TRIAL, [],
+     r"identification.group_label = 'tool' is not allowed: not a label of every record"),
+    ("id_summary_speed", ID("excitation = 'known'\nunbalance = [[0.0, 1e-5, 0.0]]\n"
+                            "summary_speed_rpm = 30000.0"), DS_NO_TRIAL, [],
+     r"identification.summary_speed_rpm = 30000.0 is not allowed: must lie in the campaign's "
+     r"speeds \[6000, 6000\] rpm"),
+    ("id_excitation", ID("excitation = 'impulse'"), {}, [],
+     r"identification.excitation = 'impulse' is not allowed: must be one of \['trial', "
+     r"'known'\]"),
+    ("id_known_no_unbalance", ID("excitation = 'known'"), {}, [],
+     r"identification.unbalance = None is not allowed with excitation = 'known'"),
+    ("id_unbalance_shape", ID("unbalance = [[0.0, 1e-5]]"), {}, [],
+     r"identification.unbalance\[0\] = \[0.0, 1e-05\] is not allowed: must be an array of 3"),
+    ("id_law", ID("law = 'linear'"), {}, [],
+     r"identification.law = 'linear' is not allowed: must be one of \['auto', 'constant', "
+     r"'quadratic', 'power', 'cubic'\]"),
+    ("id_scatter", ID("scatter = 'pooled'"), {}, [],
+     r"identification.scatter = 'pooled' is not allowed: must be one of \['auto', 'physical', "
+     r"'total'\]"),
+    ("id_study", ID("study = 'anisotropic'"), {}, [],
+     r"identification.study = 'anisotropic' is not allowed: must be one of \['isotropic', "
+     r"'stiffness'\]"),
+    ("id_fit_on", ID("fit_on = 'damping'"), {}, [],
+     r"identification.fit_on = 'damping' is not allowed: must be one of"),
+    ("id_n_boot_neg", IDENT.replace("n_boot = 20", "n_boot = -5"), {}, [],
+     r"identification.n_boot = -5 is not allowed: must be an integer >= 20"),
+    ("id_n_boot_float", IDENT.replace("n_boot = 20", "n_boot = 50.5"), {}, [],
+     r"identification.n_boot = 50.5 is not allowed: " + INT),
+    ("id_n_jobs", ID("n_jobs = 0"), {}, [],
+     r"identification.n_jobs = 0 is not allowed: must be an integer >= 1"),
+    ("id_max_rel_se", ID("max_rel_se = 0.0"), {}, [],
+     r"identification.max_rel_se = 0.0 is not allowed: must be a finite number > 0"),
+    ("id_bandwidth", ID("probe_bandwidth_hz = -1.0"), {}, [],
+     r"identification.probe_bandwidth_hz = -1.0 is not allowed"),
+    ("id_gain", ID("gains = { front_x = 'high' }"), {}, [],
+     r"identification.gains.front_x = 'high' is not allowed: must be a number"),
+    ("id_targets_str", ID("targets = 'front'"), {}, [],
+     r"identification.targets = 'front' is not allowed: " + ARR),
+    ("id_convergence_speed", ID("convergence_speed_rpm = 0.0"), {}, [],
+     r"identification.convergence_speed_rpm = 0.0 is not allowed: must be a finite number > 0"),
+    ("id_systematic_neg", IDENT + "[identification.systematic]\ngain_sd = -0.02\n", {}, [],
+     r"identification.systematic.gain_sd = -0.02 is not allowed: must be a finite number >= 0"),
+    ("id_systematic_key", IDENT + "[identification.systematic]\ngain = 0.02\n", {}, [],
+     r"unknown key identification.systematic.gain; allowed:"),
+    ("id_tool_disk", IDENT + "[identification.systematic]\ntool_disk = 'arbor'\n", {}, [],
+     r"identification.systematic.tool_disk = 'arbor' is not allowed: not a disk of the "
+     r"\[spindle\] model"),
+    ("id_unknown_key", ID("speeds = [1000.0]"), {}, [],
+     r"unknown key identification.speeds; allowed: \["),
+    ("id_unknown_table", IDENT + "[rig]\nfigures = false\n", {}, [],
+     r"unknown table rig; allowed: \['identification', 'spindle'\]"),
+    ("id_spindle_geometry", IDENT + "[spindle]\ngeometry = 'none.toml'\n", {}, [],
+     r"spindle.geometry file '.*none.toml' does not exist"),
+    ("id_missing_table", "[experiment]\nname = 'i'\nkind = 'identification'\n", {}, [],
+     r"identification is missing: it is required"),
+    # ------------------------------------------------------------------ [uncertainty] from
+    ("from_with_mean", S("uncertainty", "from = 'ident/r1'\nmean = [1.0, 1.0]"), {}, [],
+     r"uncertainty.mean = \[1.0, 1.0\] is not allowed with from = 'ident/r1': the identified "
+     r"model gives θ's mean and covariance"),
+    ("from_with_corr", S("uncertainty", "from = 'ident/r1'\ncorr = [[1.0, 0.1], [0.1, 1.0]]"),
+     {}, [], r"uncertainty.corr = \[\[1.0, 0.1\], \[0.1, 1.0\]\] is not allowed with from"),
+    ("from_empty", S("uncertainty", "from = ''"), {}, [],
+     r"uncertainty.from = '' is not allowed: give an identification run folder"),
+    ("from_int", S("uncertainty", "from = 3"), {}, [], r"uncertainty.from = 3 is not allowed: "
+     + STR),
+    ("from_missing", S("uncertainty", "from = 'results/identification/none'"), {}, [],
+     r"uncertainty.from = 'results/identification/none' is not allowed: no such file or "
+     r"folder"),
+    ("from_not_json", S("uncertainty", "from = 'u.json'"), {"u.json": "not json"}, [],
+     r"uncertainty.from = '.*u.json' is not allowed: not JSON"),
+    ("from_wrong_format", S("uncertainty", "from = 'u.json'"), {"u.json": '{"names": []}'}, [],
+     r"uncertainty.from = 'u.json': .*u.json: format = None, version = None: expected "
+     r"'surrogate_rbrdo.identified_uncertainty'"),
+    ("from_not_identification", S("uncertainty", "from = '.'"),
+     {"meta.json": '{"kind": "study", "status": "complete"}', "uncertainty.json": "{}"}, [],
+     r"uncertainty.from = '.' is not allowed: not a complete identification run \(its "
+     r"meta.json: kind 'study'"),
+    ("from_unfinished", S("uncertainty", "from = '.'"),
+     {"meta.json": '{"kind": "identification", "status": "failed"}',
+      "uncertainty.json": "{}"}, [], r"uncertainty.from = '.' is not allowed: not a complete "
+     r"identification run \(its meta.json: kind 'identification', status 'failed'\)"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

@@ -13,6 +13,7 @@ import pytest
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.experiments import end_to_end as kind
+from surrogate_rbrdo.runner.experiments import identification as ident_kind
 from surrogate_rbrdo.runner.experiments import rig as rig_kind
 from surrogate_rbrdo.runner.experiments import study as study_kind
 from surrogate_rbrdo.runner.kinds import StageContext
@@ -79,7 +80,7 @@ n_draws = 100
 """
 
 STUDY = ["surrogate", "design_model", "optimise", "refine", "verify"]
-STAGES = ["campaign", "identification", "uncertainty", *STUDY, "measure", "model",
+STAGES = ["campaign", "demodulate", "identify", "uncertainty", *STUDY, "measure", "model",
           "discrepancy", "reoptimise", *(f"{s}_updated" for s in STUDY), "measure_updated",
           "model_updated"]
 
@@ -123,25 +124,26 @@ def _stop(*args, **kwargs):
 
 def test_resume_continues_at_the_first_unfinished_stage(tmp_path, monkeypatch):
     cfg = _write(tmp_path)
-    monkeypatch.setattr(kind, "study_uncertainty", _stop)
+    monkeypatch.setattr(kind, "build_theta", _stop)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False)
     path = tmp_path / "res" / "e2e_tiny" / "r"
     assert read_meta(path)["status"] == "interrupted"
     assert sorted(f.name for f in (path / "stages").iterdir()) == [
-        "00-campaign.pkl", "01-identification.pkl"]
+        "00-campaign.pkl", "01-demodulate.pkl", "02-identify.pkl"]
     written = (path / "identification" / "uncertainty.json").stat().st_mtime_ns
     monkeypatch.undo()
     # finished stages must not run again; stop the second session in the study's optimiser
     monkeypatch.setattr(rig_kind, "run_campaign", _stop)
-    monkeypatch.setattr(kind, "run_identification", _stop)
+    monkeypatch.setattr(ident_kind, "read_responses", _stop)
+    monkeypatch.setattr(ident_kind, "identify_responses", _stop)
     monkeypatch.setattr(study_kind, "optimise", _stop)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False,
                        resume=True)
     meta = read_meta(path)
     assert meta["status"] == "interrupted" and len(meta["sessions"]) == 2
-    assert sorted(meta["stages"]) == sorted(STAGES[:5])
+    assert sorted(meta["stages"]) == sorted(STAGES[:6])
     assert (path / "identification" / "uncertainty.json").stat().st_mtime_ns == written
 
 

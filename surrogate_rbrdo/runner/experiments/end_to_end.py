@@ -40,11 +40,11 @@ from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
 from surrogate_rbrdo.discrepancy.report import updated_spindle
-from surrogate_rbrdo.identification.experiment import IdentificationOptions, run_identification
-from surrogate_rbrdo.identification.study import study_uncertainty
+from surrogate_rbrdo.identification.experiment import IdentificationOptions, check_source
 from surrogate_rbrdo.reporting.end_to_end import write_loop_report
 from surrogate_rbrdo.rig.config import RigTable
 from surrogate_rbrdo.rig.truth import spindle_truth
+from surrogate_rbrdo.runner.experiments import identification as ident_kind
 from surrogate_rbrdo.runner.experiments import rig as rig_kind
 from surrogate_rbrdo.runner.experiments import study as study_kind
 from surrogate_rbrdo.runner.experiments import validation as validation_kind
@@ -56,8 +56,12 @@ from surrogate_rbrdo.runner.experiments.validation import (
 )
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.runfolder import RunFolder
-from surrogate_rbrdo.runner.tables import SpindleTable
-from surrogate_rbrdo.study.problem import peak_unbalance_inputs
+from surrogate_rbrdo.runner.tables import (
+    SpindleTable,
+    build_theta,
+    identified_inputs,
+    response_speeds,
+)
 from surrogate_rbrdo.validation import ModelSpec, Moments, ValidationOptions
 from surrogate_rbrdo.validation.campaign import file_label
 
@@ -96,7 +100,7 @@ class EndToEndConfig(StudyConfig):
     """The study's tables plus the rig, identification, validation and the loop's."""
 
     rig: RigTable = field(default_factory=RigTable)
-    identification: dict[str, Any] = field(default_factory=dict)
+    identification: IdentificationOptions = field(default_factory=IdentificationOptions)
     validation: ValidationOptions = field(default_factory=ValidationOptions)
     model: ModelTable = field(default_factory=ModelTable)
     discrepancy: dict[str, Any] = field(default_factory=dict)
@@ -136,16 +140,6 @@ def part_context(ctx: StageContext, part: str) -> StageContext:
     return replace(ctx, seed=int(seed.generate_state(1, np.uint64)[0]))
 
 
-def _identification_options(table: Mapping[str, Any]) -> IdentificationOptions:
-    if "source" in table:
-        raise ValueError(f"identification.source = {table['source']!r} is not allowed: the "
-                         "source is this run's campaign")
-    try:
-        return IdentificationOptions.from_dict(dict(table))
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"identification.{exc}") from None
-
-
 def _check_agreement(c: EndToEndConfig, o: Any, spindle: Any) -> None:
     """The validation measures what the study optimised: its δ_lim and speed range."""
     g = spindle.geometry
@@ -176,6 +170,13 @@ def _check_discrepancy_data(loop: LoopTable, o: Any) -> None:
 
 
 def build(c: EndToEndConfig, base_dir: Path) -> Plan:
+    given = [k for k in ("from_", "mean", "std", "corr") if getattr(c.uncertainty, k) is not None]
+    if given:
+        v = getattr(c.uncertainty, given[0])
+        v = [list(r) if isinstance(r, tuple) else r for r in v] if isinstance(v, tuple) else v
+        raise ValueError(f"uncertainty.{given[0].rstrip('_')} = {v!r} is not allowed: the loop's "
+                         "stiffness block is this run's identification (uncertainty.from is "
+                         "set by stage 'uncertainty'); keep distribution, thermal_max, unbalance")
     study = study_kind.build(c, base_dir)
     spindle = study.problem.spindle
     if c.rig.design is not None:
@@ -184,13 +185,12 @@ def build(c: EndToEndConfig, base_dir: Path) -> Plan:
     cfg = c.rig.config()
     truth = spindle_truth(spindle, c.rig.hidden(), c.rig.variability, study.problem.baseline)
     rig = rig_kind.rig_plan(replace(cfg, truth=truth), c.rig.effects)
-    if cfg.options.trial_unbalance is None and c.identification.get("excitation",
-                                                                     "trial") == "trial":
+    if cfg.options.trial_unbalance is None and c.identification.excitation == "trial":
         raise ValueError("rig.campaign.trial_unbalance = None is not allowed: the "
                          "identification uses trial-weight differences; give the trial mass "
                          "[position mm, kg m, phase deg], e.g. [0.0, 5e-5, 0.0]")
     _check_discrepancy_data(c.loop, cfg.options)
-    ident = _identification_options(c.identification)
+    ident = c.identification
     n_coef = 4 if ident.fit_on == "stiffness" else 8      # per bearing pair: k (and c) yy, zz
     if cfg.options.repeats < n_coef + 2:
         raise ValueError(f"rig.campaign.repeats = {cfg.options.repeats} is not allowed: the "
@@ -218,13 +218,31 @@ def _model_at_baseline(p: Plan) -> Any:
     return p.study.problem.spindle.model(p.study.problem.baseline)
 
 
-def _identification(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
-    c = part_context(ctx, "identification")
-    with ctx.bar("identification", "part") as progress:
-        progress(0, 1, "demodulation, trial pairs, coefficients, uncertainty")
-        return run_identification(_model_at_baseline(p), ctx.run_dir / "campaign",
-                                  ctx.run_dir / "identification", p.identification,
-                                  rng=c.stream(0))
+def identification_plan(p: Plan, ctx: StageContext) -> Any:
+    """The ``identification`` kind's plan on this run's campaign (its checks included)."""
+    campaign = ctx.run_dir / "campaign"
+    try:
+        dataset = check_source(campaign, p.identification)
+    except ValueError as exc:
+        raise ValueError(f"identification.{exc}") from None
+    return ident_kind.Plan(_model_at_baseline(p), campaign, dataset, p.identification,
+                           {"path": str(campaign), "kind": "end_to_end campaign stage"})
+
+
+def _demodulate(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    return ident_kind._demodulate(identification_plan(p, ctx), done,
+                                  part_context(ctx, "identification"))
+
+
+def _identify(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Any:
+    """The identification kind's stage, then its files into ``identification/`` (the
+    ``uncertainty.json`` the study's ``[uncertainty] from`` reads)."""
+    plan, sub = identification_plan(p, ctx), part_context(ctx, "identification")
+    res = ident_kind._identify(plan, done, sub)
+    folder = subfolder(ctx.run_dir, "identification")
+    ident_kind._report(replace(plan, options=replace(plan.options, figures=False)),
+                       {**done, "identify": res}, folder, sub)
+    return res
 
 
 @dataclass(frozen=True, eq=False)
@@ -240,21 +258,14 @@ class IdentifiedTheta:
 
 
 def _uncertainty(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> IdentifiedTheta:
-    pr, u = p.study.problem, p.config.uncertainty
-    g = pr.spindle.geometry
-    lo, hi = done["identification"].uncertainty.speed_range_rpm
-    sp = np.asarray(p.rig.rig.options.speeds_rpm, float)     # the campaign's, where identified
-    sp = sp[(sp >= max(lo, g.speed_min_rpm)) & (sp <= min(hi, g.speed_max_rpm))]
-    su = study_uncertainty(ctx.run_dir / "identification", sp.tolist(),
-                           theta_bearings=pr.spindle.theta_bearings,
-                           reference=_model_at_baseline(p))
-    block = su.random_vector
-    if pr.response.kind == "peak_unbalance":
-        inputs, response = peak_unbalance_inputs(pr.spindle, block, thermal_max=u.thermal_max,
-                                                 unbalance=u.unbalance)
-    else:
-        inputs, response = block, pr.response
-    return IdentifiedTheta(block, inputs, response, dict(su.provenance))
+    """``[uncertainty] from = <this run>/identification``: the study's θ as the ``study``
+    kind makes it (``runner.tables.build_theta``)."""
+    pr = p.study.problem
+    t = replace(p.config.uncertainty, from_=str(ctx.run_dir / "identification"))
+    inputs, response, prov = build_theta(t, pr.spindle, pr.response)
+    block, _ = identified_inputs(t, pr.spindle.theta_bearings,
+                                 response_speeds(pr.response, pr.spindle))
+    return IdentifiedTheta(block, inputs, response, dict(prov))
 
 
 # ---------------------------------------------------------------- the study on identified θ
@@ -417,15 +428,19 @@ def _discrepancy(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Discrep
 
 
 # ---------------------------------------------------------------- report
+def subfolder(run_dir: Path, name: str) -> RunFolder:
+    """A part's folder of the run as a :class:`RunFolder` (its kind's report writes there)."""
+    (run_dir / name).mkdir(exist_ok=True)
+    return RunFolder(path=run_dir / name, experiment=run_dir.parent.name, run_id=run_dir.name)
+
+
 def _study_report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext,
                   updated: bool) -> None:
     """The study kind's tables and figures of one round into ``study[_updated]/``."""
     plan = study_plan(p, done, updated)
     if plan is None or done.get("verify" + (UPDATED if updated else "")) is None:
         return
-    sub = RunFolder(path=run.path / ("study" + (UPDATED if updated else "")),
-                    experiment=run.experiment, run_id=run.run_id)
-    sub.path.mkdir(exist_ok=True)
+    sub = subfolder(run.path, "study" + (UPDATED if updated else ""))
     study_kind._report(plan, _round(done, updated), sub, part_context(ctx, "study"))
 
 
@@ -437,7 +452,7 @@ def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> di
     return write_loop_report(
         run.path, truth=p.rig.rig.truth, campaign=done["campaign"],
         campaign_options=p.rig.rig.options, model=_model_at_baseline(p),
-        identification=done["identification"], identification_figures=p.identification.figures,
+        identification=done["identify"], identification_figures=p.identification.figures,
         convergence_speed_rpm=p.identification.convergence_speed_rpm,
         theta=done["uncertainty"], theta_bearings=pr.spindle.theta_bearings,
         verification=done["verify"], limit_um=c.limit.delta_lim_um, validation=done["model"],
@@ -452,7 +467,8 @@ register_kind(Kind(
             "identification → the study's θ → RBRDO at every P_target → validation of the "
             "chosen designs on the rig → discrepancy when model and rig disagree → report.md",
     schema=EndToEndConfig,
-    stages=(Stage("campaign", _campaign), Stage("identification", _identification),
+    stages=(Stage("campaign", _campaign), Stage("demodulate", _demodulate),
+            Stage("identify", _identify),
             Stage("uncertainty", _uncertainty),
             Stage("surrogate", _study_stage(study_kind._surrogate)),
             Stage("design_model", _study_stage(study_kind._design_model)),

@@ -99,6 +99,7 @@ class StudyPlan:
     verification: VerificationOptions
     report: StudyReportTable
     refine: RefineOptions
+    theta_source: dict[str, Any] | None = None
 
 
 def surrogate_options(table: Mapping[str, Any], response: ResponseSpec, where: str) -> Any:
@@ -138,7 +139,7 @@ def _memory(c: StudyConfig, sur: Any) -> None:
 
 def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
     spindle = build_spindle(c.spindle, base_dir)
-    inputs, r = build_theta(c.uncertainty, spindle, c.response)
+    inputs, r, theta_source = build_theta(c.uncertainty, spindle, c.response)
     g = spindle.geometry
     if r.kind == "at_speed" and not g.speed_min_rpm <= r.speed_rpm <= g.speed_max_rpm:
         raise ValueError(f"response.speed_rpm = {r.speed_rpm} is not allowed: must lie in the "
@@ -168,7 +169,7 @@ def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
         raise ValueError(f"report.baseline: {exc}") from None
     _memory(c, sur)
     return StudyPlan(problem, sur, c.design_model, c.optimization, c.verification, c.report,
-                     c.refine)
+                     c.refine, theta_source)
 
 
 def _surrogate(p: StudyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
@@ -242,6 +243,8 @@ def _report(p: StudyPlan, done: Mapping[str, Any], run: Any, ctx: StageContext
                            n_modes=rep.n_modes, limit_um=p.problem.limit.threshold * 1e6)
     meta = tables.study_meta(p.problem, p.optimization, done["surrogate"], done["design_model"],
                              done["optimise"], done["refine"], done["verify"])
+    if p.theta_source is not None:       # [uncertainty] from: the identified model's origin
+        meta["uncertainty_from"] = p.theta_source
     run.write_json("study_meta.json", meta)
     keep = ("design", "preload_N", "span_mm", "diameter_mm", "mean_um_fe", "std_um_fe",
             "pf_pct_fe", "mean_um_surrogate", "std_um_surrogate", "pf_pct_surrogate")

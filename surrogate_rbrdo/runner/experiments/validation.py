@@ -38,6 +38,7 @@ from surrogate_rbrdo.runner.tables import (
     build_inputs,
     build_spindle,
     require_memory,
+    response_speeds,
 )
 from surrogate_rbrdo.validation import (
     ModelSpec,
@@ -146,7 +147,9 @@ def _study(c: ValidationConfig, o: ValidationOptions) -> tuple[Any, ...]:
              for n in names} if q else {}
     source = {"designs": str(folder), "study_labels": labels,
               "known_from_study": q or "none: the study's response is not measured"}
-    return designs, spindle, build_inputs(sc.uncertainty, spindle.theta_bearings), known, source
+    inputs = build_inputs(sc.uncertainty, spindle.theta_bearings,
+                          at=response_speeds(sc.response, spindle))
+    return designs, spindle, inputs, known, source
 
 
 def validation_options(rig: RigTruthTable, options: ValidationOptions) -> ValidationOptions:
