@@ -126,7 +126,8 @@ def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) 
     prov = theta.provenance
     rows = [(b, _fmt(m, 4), f"{s:.2%}") for b, m, s in zip(bearings, mean, sd, strict=True)]
     speeds = np.asarray(prov.get("speeds_rpm", []), float)
-    return ["## 2. Identification and the study's θ (stages `identification`, `uncertainty`)",
+    return ["## 2. Identification and the study's θ (stages `demodulate`, `identify`, "
+            "`uncertainty`)",
             "",
             f"{int(used.sum())} of {used.size} identified coefficient vectors used "
             "(`identification/identified.csv`, column `used`; flags in "
