@@ -8,7 +8,7 @@ The inputs are the stages' frozen results; the parts' own files (``rig/``, ``ide
 so every number in ``report.md`` can be found again in a table of the run folder.
 
 >>> _fmt(0.000123456), _fmt(12345.678), _fmt(float("nan"))
-('0.000123', '1.235e+04', '—')
+('0.000123', '1.23e+04', '—')
 """
 
 from __future__ import annotations

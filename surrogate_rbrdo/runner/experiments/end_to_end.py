@@ -135,7 +135,13 @@ class DiscrepancyStage:
 def part_context(ctx: StageContext, part: str) -> StageContext:
     """The context a part's stages get: the same run folder and cache, and its own child of
     the experiment's seed (so the rig's assemblies, the study's samples and the validation's
-    replications never share random numbers)."""
+    replications never share random numbers).
+
+    >>> ctx = StageContext(seed=1, progress=False, label="x", cache_dir=Path("."),
+    ...                    run_dir=Path("."))
+    >>> part_context(ctx, "rig").seed != part_context(ctx, "study").seed
+    True
+    """
     seed = np.random.SeedSequence(ctx.seed, spawn_key=(1000 + PARTS.index(part),))
     return replace(ctx, seed=int(seed.generate_state(1, np.uint64)[0]))
 
