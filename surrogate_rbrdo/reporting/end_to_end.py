@@ -25,6 +25,7 @@ from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
 from surrogate_rbrdo.reporting.plots_identification import write_identification_figures
 from surrogate_rbrdo.reporting.plots_rig import write_rig_report
 from surrogate_rbrdo.reporting.plots_validation import write_validation_report
+from surrogate_rbrdo.rig.store import open_dataset
 from surrogate_rbrdo.validation.campaign import file_label
 from surrogate_rbrdo.validation.table7 import table7_rows
 
@@ -119,12 +120,25 @@ def _rig_section(campaign: Any, options: Any, rig_summary: Mapping[str, Any], va
     return lines + [""] + _figures(root / "rig", root) + [""]
 
 
-def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) -> list[str]:
+def truth_theta(dataset: Path) -> np.ndarray:
+    """θ the rig's truth had in each steady record without the trial mass (virtual rig only:
+    each record's provenance), ``(n, m)``; empty when the records do not carry it."""
+    ds = open_dataset(dataset)
+    rows = [r for r in ds.select(kind="steady") if not r["labels"].get("trial", 0)]
+    th = [ds.load(r).provenance.get("theta") for r in rows]
+    return np.array([t for t in th if t is not None], float)
+
+
+def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path,
+                   truth: np.ndarray) -> list[str]:
     mvn = theta.stiffness
     mean, sd = np.asarray(mvn.mean, float), np.sqrt(np.diag(np.asarray(mvn.cov, float)))
     used = np.asarray(ident.campaign.used, bool)
     prov = theta.provenance
-    rows = [(b, _fmt(m, 4), f"{s:.2%}") for b, m, s in zip(bearings, mean, sd, strict=True)]
+    tm, ts = ((truth.mean(axis=0), truth.std(axis=0, ddof=1)) if truth.size else
+              (np.full(len(bearings), np.nan), np.full(len(bearings), np.nan)))
+    rows = [(b, _fmt(m, 4), f"{s:.2%}", _fmt(a, 4), f"{c:.2%}") for b, m, s, a, c in
+            zip(bearings, mean, sd, tm, ts, strict=True)]
     speeds = np.asarray(prov.get("speeds_rpm", []), float)
     return ["## 2. Identification and the study's θ (stages `demodulate`, `identify`, "
             "`uncertainty`)",
@@ -138,7 +152,14 @@ def _theta_section(ident: Any, theta: Any, bearings: Sequence[str], root: Path) 
             "stiffness, the moment-matched mixture over the identified speeds "
             + (f"{_fmt(speeds.min(), 5)}–{_fmt(speeds.max(), 5)} rpm ({speeds.size} speeds)"
                if speeds.size else "") + " (stage `uncertainty`; `theta.json`):", "",
-            *_table(["bearing", "mean factor", "SD"], rows), "",
+            *_table(["bearing", "identified mean factor", "SD", "truth's mean", "truth's SD"],
+                    rows), "",
+            f"The truth's columns are the θ the rig's hidden truth had in the {truth.shape[0]} "
+            "steady records without the trial mass (each record's provenance in "
+            "`campaign/dataset/`; a real rig has no such column): one build measured over its "
+            "runs, so its mean is *this* spindle's deviation from the catalogue and its SD the "
+            "run-to-run (thermal) scatter — not the assembly-to-assembly scatter that the "
+            "validation's replications draw (`[rig.variability] bearing_k_cov`).", "",
             *_figures(root / "identification", root), ""]
 
 
@@ -271,7 +292,8 @@ def write_loop_report(out_dir: str | Path, *, truth: Any, campaign: Any, campaig
     lines += _headline_lines(theta, theta_bearings, verification, validation, discrepancy,
                              limit_um, res2, reoptimise)
     lines += _rig_section(campaign, campaign_options, rig_summary, truth.variability, root)
-    lines += _theta_section(identification, theta, theta_bearings, root)
+    lines += _theta_section(identification, theta, theta_bearings, root,
+                            truth_theta(campaign.dataset))
     lines += _study_section(verification, limit_um, root)
     lines += _validation_section(validation, root)
     lines += _discrepancy_section(discrepancy, root, reoptimise)
