@@ -126,7 +126,11 @@ class OptimizationOptions:
             raise ValueError(f"p_targets = {list(self.p_targets)} is not allowed: contains "
                              "duplicates")
         check_range("strategy_p_target", self.strategy_p_target, 0.0, 1.0, inclusive=False)
-        for i, s in enumerate(self.strategies):
+        for i, s in enumerate(self.strategies):   # the RBRDO runs are the p_targets
+            if s == "rbrdo":
+                raise ValueError(f"strategies[{i}] = 'rbrdo' is not allowed: the RBRDO runs are "
+                                 "set by p_targets (one per level); strategies are the other "
+                                 f"formulations {sorted(set(FORMULATIONS) - {'rbrdo'})}")
             check_choice(f"strategies[{i}]", s, sorted(FORMULATIONS))
         if len(set(self.strategies)) != len(self.strategies):
             raise ValueError(f"strategies = {list(self.strategies)} is not allowed: contains "

@@ -242,6 +242,7 @@ c("ver_front_n_theta_huge", S("verification", "front_designs = 3\nfront_n_theta 
 c("ver_campbell_huge", S("verification", "campbell_speeds = 1000000000000"))
 c("val_n_doe_huge", _sub(VALIDATION, "n_doe = 14", "n_doe = 10000000"))
 
+c("opt_strategies_rbrdo2", S("optimization", "strategies = ['rbrdo']"))  # item 5: failed in the report
 
 c("cli_seed_float", SPINDLE, args=["--seed", "1.5"])
 c("cli_resume_overwrite", SPINDLE, args=["--resume", "--overwrite", "--run-id", "x"])
@@ -427,4 +428,6 @@ PATTERNS = {
     'ver_front_n_theta_huge': r"verification\.front_n_theta = 100000000000 is not allowed: .* GB",
     'ver_campbell_huge': r"verification\.campbell_speeds = 1000000000000 is not allowed: .* GB",
     'val_n_doe_huge': r"surrogate\.n_doe = 10000000 is not allowed: .* GB",
+    'opt_strategies_rbrdo2': r"optimization\.strategies\[0\] = 'rbrdo' is not allowed: the RBRDO "
+                             r"runs are set by p_targets",
 }
