@@ -11,6 +11,7 @@ are stopped). Progress bars are drawn only on a terminal.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -33,14 +34,43 @@ from surrogate_rbrdo.runner.signals import handled_signals  # noqa: E402
 MAX_ROWS = 12
 
 
+#: the tables that say which problem is solved (their defaults are printed by ``rbrdo kinds``)
+PROBLEM_TABLES = ("spindle", "uncertainty", "response", "limit", "deterministic")
+
+
+def table_defaults(schema: type) -> str:
+    """``[table] field=value, ...`` of the problem tables of ``schema`` as they are when the
+    table is left out (``None`` fields, whose default depends on other fields, are not
+    shown), read from the schema itself."""
+    out = []
+    for f in dataclasses.fields(schema):
+        if f.name not in PROBLEM_TABLES or f.default_factory is dataclasses.MISSING:
+            continue
+        value = f.default_factory()
+        if not dataclasses.is_dataclass(value):
+            continue
+        shown = ", ".join(f"{g.name}={getattr(value, g.name)!r}"
+                          for g in dataclasses.fields(value)
+                          if getattr(value, g.name) is not None)
+        out.append(f"[{f.name}] {shown}")
+    return "; ".join(out)
+
+
 def describe_kinds() -> str:
-    """One paragraph per kind: name, what it does, its tables and stages."""
+    """One paragraph per kind: name, what it does, its tables and stages, and the problem a
+    left-out problem table means."""
     out = []
     for name, kind in sorted(discover().items()):
         tables = ", ".join(f"[{t}]" for t in kind.schema.__dataclass_fields__)
         stages = " → ".join(s.name for s in kind.stages) or "(report only)"
-        out.append(f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
-                   f"  stages: {stages} → report")
+        text = (f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
+                f"  stages: {stages} → report")
+        defaults = table_defaults(kind.schema)
+        if defaults:
+            text += f"\n  a left-out table means: {defaults}"
+        if kind.defaults:
+            text += f"\n  {kind.defaults}"
+        out.append(text)
     return "\n\n".join(out)
 
 

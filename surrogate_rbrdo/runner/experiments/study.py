@@ -245,4 +245,9 @@ register_kind(Kind(
             Stage("optimise", _optimise), Stage("refine", _refine), Stage("verify", _verify)),
     report=_report,
     build=build,
+    defaults="with every problem table left out a study is the paper's published problem "
+             "(reference spindle, in-phase G 2.5 unbalance, θ = the Table 4 stiffness CoVs, "
+             "y = peak over the speed range, δ_lim = 19.5 µm, the f_n1 guard): NOT the "
+             "credible reference problem (credible_problem(), experiments/quick.toml, which "
+             "states every table)",
 ))
