@@ -109,4 +109,20 @@ def check_memory(needs: Mapping[str, tuple[Any, float]], *, have: float | None =
                          f"{have / 1e9:.3g} GB available")
 
 
-__all__ = ["available_memory", "check_memory", "memory_needs", "table_needs"]
+def require_memory(field: str, value: Any, nbytes: float, detail: str) -> None:
+    """Refuse ``field = value`` if the arrays it sizes (``nbytes``, described by ``detail``)
+    exceed the memory available now (one field; :func:`check_memory` for several).
+
+    >>> require_memory("n", 10, 80.0, "the grid")
+    >>> require_memory("n", 10 ** 12, 8e24, "the grid")   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: n = 1000000000000 is not allowed: the grid need ~8e+15 GB of memory, more than...
+    """
+    have = available_memory()
+    if nbytes > have:
+        raise ValueError(f"{field} = {value!r} is not allowed: {detail} need ~{nbytes / 1e9:.3g} "
+                         f"GB of memory, more than the {have / 1e9:.3g} GB available")
+
+
+__all__ = ["available_memory", "check_memory", "memory_needs", "require_memory", "table_needs"]
