@@ -11,7 +11,6 @@ are stopped). Progress bars are drawn only on a terminal.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import os
@@ -26,6 +25,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 from surrogate_rbrdo import __version__  # noqa: E402 - after the BLAS pinning
+from surrogate_rbrdo.core.schema import table_defaults  # noqa: E402
 from surrogate_rbrdo.runner.execute import RunFailed, Terminated, run_experiment  # noqa: E402
 from surrogate_rbrdo.runner.kinds import discover  # noqa: E402
 from surrogate_rbrdo.runner.runfolder import AlreadyComplete  # noqa: E402
@@ -38,24 +38,6 @@ MAX_ROWS = 12
 PROBLEM_TABLES = ("spindle", "uncertainty", "response", "limit", "deterministic")
 
 
-def table_defaults(schema: type) -> str:
-    """``[table] field=value, ...`` of the problem tables of ``schema`` as they are when the
-    table is left out (``None`` fields, whose default depends on other fields, are not
-    shown), read from the schema itself."""
-    out = []
-    for f in dataclasses.fields(schema):
-        if f.name not in PROBLEM_TABLES or f.default_factory is dataclasses.MISSING:
-            continue
-        value = f.default_factory()
-        if not dataclasses.is_dataclass(value):
-            continue
-        shown = ", ".join(f"{g.name}={getattr(value, g.name)!r}"
-                          for g in dataclasses.fields(value)
-                          if getattr(value, g.name) is not None)
-        out.append(f"[{f.name}] {shown}")
-    return "; ".join(out)
-
-
 def describe_kinds() -> str:
     """One paragraph per kind: name, what it does, its tables and stages, and the problem a
     left-out problem table means."""
@@ -65,7 +47,7 @@ def describe_kinds() -> str:
         stages = " → ".join(s.name for s in kind.stages) or "(report only)"
         text = (f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
                 f"  stages: {stages} → report")
-        defaults = table_defaults(kind.schema)
+        defaults = table_defaults(kind.schema, PROBLEM_TABLES)
         if defaults:
             text += f"\n  a left-out table means: {defaults}"
         if kind.defaults:
