@@ -28,6 +28,7 @@ import io
 import json
 import os
 import secrets
+import shutil
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from functools import cache
@@ -208,6 +209,22 @@ def source_digest() -> str:
     return h.hexdigest()[:16]
 
 
+def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str | Path) -> None:
+    """Refuse ``field = value`` if what it writes (``nbytes``, described by ``detail``)
+    exceeds the free space of the file system holding ``root`` (or its nearest existing
+    parent).
+
+    >>> require_disk("n", 1, 1.0, "a byte", ".")
+    """
+    p = Path(root).absolute()
+    while not p.exists():
+        p = p.parent
+    free = shutil.disk_usage(p).free
+    if nbytes > free:
+        raise ValueError(f"{field} = {value!r} is not allowed: {detail} need ~{nbytes / 1e9:.3g} "
+                         f"GB of disk, more than the {free / 1e9:.3g} GB free under {str(p)!r}")
+
+
 __all__ = ["FILE_MODE", "atomic_write_bytes", "atomic_write_text", "csv_text", "input_changes",
-           "json_default", "json_text", "make_dirs", "read_input", "rows_text", "sha256",
-           "share_tree", "source_digest", "tracked_inputs"]
+           "json_default", "json_text", "make_dirs", "read_input", "require_disk", "rows_text",
+           "sha256", "share_tree", "source_digest", "tracked_inputs"]

@@ -300,4 +300,33 @@ def parse(cls: type, data: Any, where: str = "") -> Any:
         raise ValueError(_message(cls, (fits or errors)[0], where, union=not fits)) from None
 
 
-__all__ = ["dotted", "fields_at", "load_data", "load_toml", "parse", "type_at"]
+def table_defaults(schema: type, tables: tuple[str, ...]) -> str:
+    """``[table] field=value, ...`` of the ``tables`` of ``schema`` as they are when the table
+    is left out (``None`` fields, whose default depends on other fields, are not shown), read
+    from the schema itself.
+
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Limit:
+    ...     delta_lim_um: float = 19.5
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Config:
+    ...     limit: Limit = dataclasses.field(default_factory=Limit)
+    >>> table_defaults(Config, ("limit",))
+    '[limit] delta_lim_um=19.5'
+    """
+    out = []
+    for f in dataclasses.fields(schema):
+        if f.name not in tables or f.default_factory is dataclasses.MISSING:
+            continue
+        value = f.default_factory()
+        if not dataclasses.is_dataclass(value):
+            continue
+        shown = ", ".join(f"{g.name}={getattr(value, g.name)!r}"
+                          for g in dataclasses.fields(value)
+                          if getattr(value, g.name) is not None)
+        out.append(f"[{f.name}] {shown}")
+    return "; ".join(out)
+
+
+__all__ = ["dotted", "fields_at", "load_data", "load_toml", "parse", "table_defaults",
+           "type_at"]

@@ -249,14 +249,19 @@ def spotlight(opt: Optimisation, ver: Verification) -> dict[str, np.ndarray]:
 def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt: Optimisation,
                ref: Refinement, ver: Verification) -> dict[str, Any]:
     """For ``meta.json``: the model calls per stage and model (all counted where the model
-    was called), the optimiser's seeds and run times, the refinement rounds."""
+    was called), the FE values each stage loaded from the FE cache (``fe_cache_hits``), the
+    optimiser's seeds and run times, the refinement rounds."""
     final_sur, final_opt = ref.surrogate or trained, ref.optimisation or opt
     stages = {"optimization": merge_calls(opt.calls, {k: v for k, v in ref.calls.items()
-                                                      if k != "fe"}),
+                                                      if k not in ("fe", "fe_cached")}),
               "refine": {"fe": ref.calls.get("fe", 0)}, "verification": ver.calls}
     fe = {"doe": trained.fe_calls,
           "design_model": 0 if design_model is None else design_model.validation["n_fe_calls"],
           **{k: int(c.get("fe", 0)) for k, c in stages.items()}}
+    # FE values loaded from the FE cache instead of computed, per stage (counted by the
+    # samplers; the design model's FE designs are not cached)
+    hits = {"doe": trained.fe_cache_hits, "refine": int(ref.calls.get("fe_cached", 0)),
+            "verification": int(ver.calls.get("fe_cached", 0))}
     sc = {k: int(c.get("surrogate", 0)) for k, c in stages.items() if k != "refine"}
     dm = {k: int(c.get("design_model", 0)) for k, c in stages.items() if k != "refine"}
     runs = final_opt.by_label()
@@ -265,7 +270,7 @@ def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt:
             "theta_names": list(problem.theta_names),
             "design_constraints": [c.name for c in problem.constraints],
             "fe_calls": {**fe, "total": sum(fe.values())},
-            "fe_cache_hits": {"doe": trained.fe_cache_hits},
+            "fe_cache_hits": {**hits, "total": sum(hits.values())},
             "surrogate_calls": {**sc, "total": sum(sc.values())},
             "design_model_calls": {**dm, "total": sum(dm.values())},
             "optimizer": options.optimizer,

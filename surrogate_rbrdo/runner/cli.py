@@ -25,6 +25,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 from surrogate_rbrdo import __version__  # noqa: E402 - after the BLAS pinning
+from surrogate_rbrdo.core.schema import table_defaults  # noqa: E402
 from surrogate_rbrdo.runner.execute import RunFailed, Terminated, run_experiment  # noqa: E402
 from surrogate_rbrdo.runner.kinds import discover  # noqa: E402
 from surrogate_rbrdo.runner.runfolder import AlreadyComplete  # noqa: E402
@@ -33,14 +34,25 @@ from surrogate_rbrdo.runner.signals import handled_signals  # noqa: E402
 MAX_ROWS = 12
 
 
+#: the tables that say which problem is solved (their defaults are printed by ``rbrdo kinds``)
+PROBLEM_TABLES = ("spindle", "uncertainty", "response", "limit", "deterministic")
+
+
 def describe_kinds() -> str:
-    """One paragraph per kind: name, what it does, its tables and stages."""
+    """One paragraph per kind: name, what it does, its tables and stages, and the problem a
+    left-out problem table means."""
     out = []
     for name, kind in sorted(discover().items()):
         tables = ", ".join(f"[{t}]" for t in kind.schema.__dataclass_fields__)
         stages = " → ".join(s.name for s in kind.stages) or "(report only)"
-        out.append(f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
-                   f"  stages: {stages} → report")
+        text = (f"{name}\n  {kind.summary}\n  tables: [experiment], {tables}\n"
+                f"  stages: {stages} → report")
+        defaults = table_defaults(kind.schema, PROBLEM_TABLES)
+        if defaults:
+            text += f"\n  a left-out table means: {defaults}"
+        if kind.defaults:
+            text += f"\n  {kind.defaults}"
+        out.append(text)
     return "\n\n".join(out)
 
 

@@ -108,6 +108,8 @@ class Kind:
     stages: tuple[Stage, ...]
     report: Callable[[Any, Mapping[str, Any], Any, StageContext], Mapping[str, Any]]
     build: Callable[[Any, Path], Any] = _identity
+    #: what the kind is when its problem tables are left out (``rbrdo kinds``)
+    defaults: str = ""
 
     def __post_init__(self) -> None:
         names = [s.name for s in self.stages]

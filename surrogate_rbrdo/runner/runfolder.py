@@ -253,11 +253,13 @@ class RunFolder:
 
     def stop(self, status: str, **info: Any) -> None:
         """Mark the run ``complete``, ``failed`` or ``interrupted``; a complete run deletes
-        the run it replaced."""
+        the run(s) it replaced (a failed ``--overwrite`` keeps them aside)."""
         files = sorted(p.name for p in self.path.iterdir() if p.is_file()
                        and not p.name.startswith("."))
         if status == "complete" and self.replaced is not None:
-            shutil.rmtree(self.replaced, ignore_errors=True)
+            # this run's predecessor, and any run an earlier failed --overwrite set aside
+            for aside in self.path.parent.glob(f".{self.run_id}.replaced-*"):
+                shutil.rmtree(aside, ignore_errors=True)
             self.meta.pop("replaced_run", None)
             self.replaced = None
         self.write_meta(status=status, finished_utc=datetime.now(UTC).isoformat(),

@@ -2,15 +2,14 @@
 
 ``[experiment]`` (:class:`ExperimentTable`), ``[spindle]`` (:class:`SpindleTable` →
 :func:`build_spindle`), ``[uncertainty]`` (→ :func:`build_inputs`), ``[limit]``,
-``[response]`` and ``[deterministic]``; :func:`require_memory` refuses sizes whose arrays would
-not fit before any work starts. Each table is a frozen dataclass checked by
-:func:`~surrogate_rbrdo.core.schema.parse`; the builders raise ``ValueError`` naming the
-dotted path of the field.
+``[response]`` and ``[deterministic]`` (``require_memory``/``require_disk``, re-exported from
+``core``, refuse sizes whose arrays or files would not fit before any work starts). Each
+table is a frozen dataclass checked by :func:`~surrogate_rbrdo.core.schema.parse`; the
+builders raise ``ValueError`` naming the dotted path of the field.
 """
 
 from __future__ import annotations
 
-import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -19,7 +18,8 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import AliasChoices, Field
 
-from surrogate_rbrdo.core.memory import available_memory
+from surrogate_rbrdo.core.files import require_disk
+from surrogate_rbrdo.core.memory import available_memory, require_memory
 from surrogate_rbrdo.core.protocols import LimitState
 from surrogate_rbrdo.core.validate import check_int, check_positive
 from surrogate_rbrdo.formulations import DeterministicOptions
@@ -325,27 +325,6 @@ class DeterministicTable:
         except ValueError as exc:
             raise ValueError(f"deterministic.{str(exc).replace('practice:', 'practice_spec:')}"
                              ) from None
-
-
-def require_memory(field: str, value: Any, nbytes: float, detail: str) -> None:
-    """Refuse ``field = value`` if the arrays it sizes (``nbytes``) exceed the memory
-    available now."""
-    have = available_memory()
-    if nbytes > have:
-        raise ValueError(f"{field} = {value!r} is not allowed: {detail} need ~{nbytes / 1e9:.3g} "
-                         f"GB of memory, more than the {have / 1e9:.3g} GB available")
-
-
-def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str | Path) -> None:
-    """Refuse ``field = value`` if what it writes (``nbytes``) exceeds the free space of the
-    file system holding ``root`` (or its nearest existing parent)."""
-    p = Path(root).absolute()
-    while not p.exists():
-        p = p.parent
-    free = shutil.disk_usage(p).free
-    if nbytes > free:
-        raise ValueError(f"{field} = {value!r} is not allowed: {detail} need ~{nbytes / 1e9:.3g} "
-                         f"GB of disk, more than the {free / 1e9:.3g} GB free under {str(p)!r}")
 
 
 __all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",

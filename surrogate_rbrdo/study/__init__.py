@@ -7,6 +7,7 @@
 """
 
 from surrogate_rbrdo.study.constraints import expression_constraints, spindle_constraints
+from surrogate_rbrdo.study.memory import check_study_memory
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
 from surrogate_rbrdo.study.problem import (
     DESIGN_NAMES,
@@ -31,7 +32,8 @@ from surrogate_rbrdo.study.stages import (
 
 __all__ = [
     "DESIGN_NAMES", "RESIDUAL_STD", "TABLE4_STD", "OptimizationOptions", "Optimisation",
-    "Problem", "Refinement", "Verification", "VerificationOptions", "chosen_designs",
+    "Problem", "Refinement", "Verification", "VerificationOptions", "check_study_memory",
+    "chosen_designs",
     "credible_problem", "expression_constraints", "formulation", "merge_calls", "optimise",
     "reference_problem", "refine", "run_label", "spindle_constraints", "verify",
 ]

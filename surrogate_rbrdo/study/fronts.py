@@ -101,7 +101,7 @@ def verify_fronts(problem: Any, optimisation: Any, n_designs: int, theta: np.nda
         if rows.size:
             nd[rows] = nondominated(np.column_stack([mean[rows], std[rows]]))
     return FrontCheck(tuple(runs), X, sizes, crn, mean, std, pf, nd, int(theta.shape[0]),
-                      {"fe": counter.calls})
+                      {"fe": counter.calls, "fe_cached": counter.cached})
 
 
 __all__ = ["FrontCheck", "spread_indices", "verify_fronts"]

@@ -126,7 +126,11 @@ class OptimizationOptions:
             raise ValueError(f"p_targets = {list(self.p_targets)} is not allowed: contains "
                              "duplicates")
         check_range("strategy_p_target", self.strategy_p_target, 0.0, 1.0, inclusive=False)
-        for i, s in enumerate(self.strategies):
+        for i, s in enumerate(self.strategies):   # the RBRDO runs are the p_targets
+            if s == "rbrdo":
+                raise ValueError(f"strategies[{i}] = 'rbrdo' is not allowed: the RBRDO runs are "
+                                 "set by p_targets (one per level); strategies are the other "
+                                 f"formulations {sorted(set(FORMULATIONS) - {'rbrdo'})}")
             check_choice(f"strategies[{i}]", s, sorted(FORMULATIONS))
         if len(set(self.strategies)) != len(self.strategies):
             raise ValueError(f"strategies = {list(self.strategies)} is not allowed: contains "
@@ -155,6 +159,19 @@ class OptimizationOptions:
         self._check_reliability()
         for name, _ in self.runs:   # every field of the optimisers' options, checked now
             self._check_run(name)
+
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): each run evaluates ``pop_size × n_theta`` responses
+        (~8 arrays of 8 B; ``min(n_jobs, runs)`` runs at once) and keeps an archive of
+        ``pop_size × n_gen`` individuals (~16 values each, kept twice) per run.
+
+        >>> m = OptimizationOptions(pop_size=10 ** 8, n_gen=10 ** 8, n_theta=40).memory_bytes()
+        >>> max(m, key=m.get)
+        'pop_size*n_gen'
+        """
+        k = len(self.runs)
+        return {"pop_size*n_theta": 64.0 * self.pop_size * self.n_theta * min(self.n_jobs, k),
+                "pop_size*n_gen": 256.0 * self.pop_size * self.n_gen * k}
 
     def _check_reliability(self) -> None:
         check_choice("reliability_measure", self.reliability_measure, RELIABILITY_MEASURES)
@@ -284,6 +301,30 @@ class VerificationOptions:
             raise ValueError("campbell_speeds = 1 is not allowed: 0 (no check) or >= 2")
         check_int("front_designs", self.front_designs, minimum=0)
         check_int("front_n_theta", self.front_n_theta, minimum=2)
+
+    def memory_bytes(self, n_designs: int = 1, n_dof: int = 8, n_inputs: int = 1,
+                     n_fronts: int = 1) -> dict[str, float]:
+        """Peak bytes (``core.memory``) of checking ``n_designs`` designs of a model with
+        ``n_dof`` degrees of freedom and ``n_inputs`` θ components (the defaults are lower
+        bounds; the study passes its own, ``study.memory``): the θ samples and ~4 values per
+        design and θ row (FE, surrogate, their difference); the IS estimator's samples of all
+        designs at once; the front check of up to ``front_designs`` designs of each of
+        ``n_fronts`` fronts; one Campbell eigen-analysis (2·n_dof complex eigenvalues and
+        vectors' norms per speed).
+
+        >>> VerificationOptions(pf_method="is", is_samples=10 ** 12).memory_bytes()[
+        ...     "is_samples"] > 1e13
+        True
+        """
+        out = {"n_theta": 8.0 * self.n_theta * (n_inputs + 4 * n_designs)}
+        if self.pf_method == "is":
+            out["is_samples"] = 8.0 * self.is_samples * (n_inputs + 4 * n_designs)
+        if self.front_designs:
+            out["front_n_theta"] = 8.0 * self.front_n_theta * (
+                n_inputs + 4 * self.front_designs * n_fronts)
+        if self.campbell_speeds:
+            out["campbell_speeds"] = 16.0 * 4 * n_dof * self.campbell_speeds
+        return out
 
 
 __all__ = ["OptimizationOptions", "VerificationOptions", "optimizer_options_class"]

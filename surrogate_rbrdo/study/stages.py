@@ -218,7 +218,7 @@ def refine(problem: Problem, trained: TrainedSurrogate, design_model: Any,
                        progress=progress, label=label)
         calls = merge_calls(calls, opt.calls)
     return Refinement(tuple(rounds), sur if refitted else None, opt if refitted else None,
-                      merge_calls(calls, {"fe": counter.calls}))
+                      merge_calls(calls, {"fe": counter.calls, "fe_cached": counter.cached}))
 
 
 @dataclass(frozen=True, eq=False)
@@ -325,6 +325,7 @@ def verify(problem: Problem, trained: TrainedSurrogate, design_model: Any,
                                n_jobs=ver.n_jobs, chunk=ver.chunk, cache=cache,
                                progress=progress, label=label)
     calls = merge_calls({"fe": fe_counter.calls + is_counter.calls,
+                         "fe_cached": fe_counter.cached + is_counter.cached,
                          "design_model": dm.counter.calls},
                         {trained.in_loop: model.counter.calls},
                         fronts.calls if fronts is not None else {})

@@ -74,6 +74,22 @@ def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, 
                    {"test": c_test.cached, "mc": c_mc.cached})
 
 
+def truth_memory_bytes(*, n_test: int, n_theta: int, n_inputs: int, n_designs: int,
+                       n_variants: int) -> dict[str, float]:
+    """Peak bytes of :func:`fe_truth` and the assessments of ``n_variants`` structures, per
+    size field (``core.memory``): the joint test points (3 design + ``n_inputs`` θ columns)
+    with ~4 values per variant, and the θ sample with ~4 values per design for the FE and
+    every variant.
+
+    >>> truth_memory_bytes(n_test=10, n_theta=10 ** 11, n_inputs=2, n_designs=1,
+    ...                    n_variants=1)["n_theta"] > 1e13
+    True
+    """
+    m = 3 + n_inputs
+    return {"n_theta": 8.0 * n_theta * (m + 4 * n_designs * (1 + n_variants)),
+            "n_test": 8.0 * n_test * (m + 4 * n_variants)}
+
+
 @dataclass(frozen=True, eq=False)
 class Assessment:
     """One trained structure against :class:`FETruth`: ``y_pred`` at the test points, its
@@ -128,4 +144,5 @@ def train_and_assess(name: str, spindle: Any, inputs: Any, limit: LimitState, op
     return assess(name, trained, truth, limit, rel_tol=rel_tol, counter=counter)
 
 
-__all__ = ["Assessment", "FETruth", "assess", "fe_truth", "train_and_assess"]
+__all__ = ["Assessment", "FETruth", "assess", "fe_truth", "train_and_assess",
+           "truth_memory_bytes"]

@@ -552,7 +552,7 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("pop_float", _sub(STUDY, "pop_size = 8", "pop_size = 8.5"), {}, [],
      r"optimization.pop_size = 8.5 is not allowed: " + INT),
     ("n_theta_huge", _sub(STUDY, "n_theta = 40", "n_theta = 100000000000"), {}, [],
-     r"optimization.n_theta = 100000000000 is not allowed: .* GB of memory"),
+     r"optimization.pop_size × n_theta = 8 × 100000000000 is not allowed: .* GB of memory"),
     ("eliminate_str", S("optimization", "eliminate_duplicates = 'true'"), {}, [],
      r"optimization.eliminate_duplicates = 'true' is not allowed: " + BOOL),
     ("opt_key", S("optimization", "generations = 3"), {}, [],

@@ -229,6 +229,20 @@ c("opt_optimizer_options_list", S("optimization", "optimizer_options = [1, 2]"))
 c("opt_n_theta_one", _sub(STUDY, "n_theta = 40", "n_theta = 1"))
 c("ver_pf_is_fe_loop", _sub(STUDY, "n_doe = 20\nn_jobs = 1\nn_start = 1", "structure = 'fe'") + "\n[verification.extra]\na=1\n")
 
+# sizes of every kind's size fields, refused before any work (review items 2 and 10)
+c("ver_is_samples_huge", S("verification", "pf_method = 'is'\nis_samples = 1000000000000"))
+c("study_campbell_huge", _sub(STUDY, "campbell_speeds = 4", "campbell_speeds = 1000000000000"))
+c("study_n_modes_huge", _sub(STUDY, "n_modes = 2", "n_modes = 1000000000"))
+c("sub_n_speeds_huge", S("surrogate", "structure = 'substructure'\nsub_n_speeds = 100000000"))
+c("al_n_initial_huge", S("surrogate", "active_learning = true\nal_n_initial = 10000000000"))
+c("al_pool_huge2", S("surrogate", "active_learning = true\nal_pool_designs = 1000000000\nal_pool_theta = 1000000000"))
+c("res_band_pool_huge", S("surrogate", "structure = 'resonance'\nres_band_pool = 1000000000000"))
+c("pop_gen_huge", _sub(_sub(STUDY, "pop_size = 8", "pop_size = 100000000"), "n_gen = 3", "n_gen = 100000000"))
+c("ver_front_n_theta_huge", S("verification", "front_designs = 3\nfront_n_theta = 100000000000"))
+c("ver_campbell_huge", S("verification", "campbell_speeds = 1000000000000"))
+c("val_n_doe_huge", _sub(VALIDATION, "n_doe = 14", "n_doe = 10000000"))
+
+c("opt_strategies_rbrdo2", S("optimization", "strategies = ['rbrdo']"))  # item 5: failed in the report
 
 c("cli_seed_float", SPINDLE, args=["--seed", "1.5"])
 c("cli_resume_overwrite", SPINDLE, args=["--resume", "--overwrite", "--run-id", "x"])
@@ -401,4 +415,19 @@ PATTERNS = {
     'cli_resume_overwrite': r"argument --overwrite: not allowed with argument --resume",
     'cli_seeds_resume': r"--resume: there is no run folder '.*x-seed1' to continue",
     'cli_accept_without_resume': r"--accept-changes is not allowed: it needs --resume",
+    'ver_is_samples_huge': r"verification\.is_samples = 1000000000000 is not allowed: .* GB",
+    'study_campbell_huge': r"report\.campbell_speeds = 1000000000000 is not allowed: .* GB",
+    'study_n_modes_huge': r"report\.n_modes = 1000000000 is not allowed: the model has \d+ modes",
+    'sub_n_speeds_huge': r"surrogate\.sub_n_speeds = 100000000 is not allowed: .* GB",
+    'al_n_initial_huge': r"surrogate\.al_n_initial = 10000000000 is not allowed: .* GB",
+    'al_pool_huge2': r"surrogate\.al_pool_designs × al_pool_theta = 1000000000 × 1000000000 is "
+                     r"not allowed: .* GB",
+    'res_band_pool_huge': r"surrogate\.res_band_pool = 1000000000000 is not allowed: .* GB",
+    'pop_gen_huge': r"optimization\.pop_size × n_gen = 100000000 × 100000000 is not allowed: "
+                    r"the arrays they size need .* GB",
+    'ver_front_n_theta_huge': r"verification\.front_n_theta = 100000000000 is not allowed: .* GB",
+    'ver_campbell_huge': r"verification\.campbell_speeds = 1000000000000 is not allowed: .* GB",
+    'val_n_doe_huge': r"surrogate\.n_doe = 10000000 is not allowed: .* GB",
+    'opt_strategies_rbrdo2': r"optimization\.strategies\[0\] = 'rbrdo' is not allowed: the RBRDO "
+                             r"runs are set by p_targets",
 }

@@ -24,6 +24,7 @@ from typing import Any
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.reporting import study as tables
+from surrogate_rbrdo.reporting.spindle import check_overview
 from surrogate_rbrdo.runner.kinds import Kind, Stage, StageContext, register_kind
 from surrogate_rbrdo.runner.tables import (
     DeterministicTable,
@@ -32,11 +33,11 @@ from surrogate_rbrdo.runner.tables import (
     UncertaintyTable,
     build_spindle,
     build_theta,
-    require_memory,
 )
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.study.constraints import expression_constraints
+from surrogate_rbrdo.study.memory import check_study_memory
 from surrogate_rbrdo.study.options import OptimizationOptions, VerificationOptions
 from surrogate_rbrdo.study.problem import DESIGN_NAMES, Problem
 from surrogate_rbrdo.study.stages import optimise, refine, verify
@@ -118,25 +119,6 @@ def surrogate_options(table: Mapping[str, Any], response: ResponseSpec, where: s
     return options
 
 
-def _memory(c: StudyConfig, sur: Any) -> None:
-    """Refuse sizes whose arrays would not fit (before any work)."""
-    o, v = c.optimization, c.verification
-    k = 1 + len(o.runs)
-    require_memory("verification.n_theta", v.n_theta, 4 * 8.0 * k * v.n_theta,
-                   f"{k} designs × n_theta × 4 arrays of 8 B")
-    require_memory("optimization.n_theta", o.n_theta, 8 * 8.0 * o.pop_size * o.n_theta *
-                   o.n_jobs, "pop_size × n_theta × 8 arrays of 8 B per worker")
-    require_memory("optimization.n_gen", o.n_gen, 2 * 16 * 8.0 * o.pop_size * o.n_gen *
-                   len(o.runs), "the archives (pop_size × n_gen × 16 values per run)")
-    require_memory("report.n_speeds", c.report.n_speeds, 2 * 65536.0 * c.report.n_speeds,
-                   "the unbalance responses (~64 kB per speed and design)")
-    n = getattr(sur, "n_doe", 0)
-    require_memory("surrogate.n_doe", n, 10 * 8.0 * n * n, "the Kriging matrices (10 n_doe²)")
-    pool = getattr(sur, "al_pool_designs", 0) * getattr(sur, "al_pool_theta", 0)
-    require_memory("surrogate.al_pool_theta", getattr(sur, "al_pool_theta", 0),
-                   8 * 8.0 * pool * max(n, 1), "the pool predictions (pool × n_doe)")
-
-
 def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
     spindle = build_spindle(c.spindle, base_dir)
     inputs, r, theta_source = build_theta(c.uncertainty, spindle, c.response)
@@ -167,7 +149,11 @@ def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
         problem = Problem(spindle, inputs, c.limit.limit(), r, det, base, cons)
     except ValueError as exc:
         raise ValueError(f"report.baseline: {exc}") from None
-    _memory(c, sur)
+    check_study_memory(problem, sur, c.optimization, c.verification,
+                       ("design_model", c.design_model), ("refine", c.refine))
+    rep = c.report    # the baseline and one compromise (tables.spotlight)
+    check_overview(spindle, {"baseline": base, "compromise": base}, n_speeds=rep.n_speeds,
+                   campbell_speeds=rep.campbell_speeds, n_modes=rep.n_modes, where="report")
     return StudyPlan(problem, sur, c.design_model, c.optimization, c.verification, c.report,
                      c.refine, theta_source)
 
@@ -262,4 +248,9 @@ register_kind(Kind(
             Stage("optimise", _optimise), Stage("refine", _refine), Stage("verify", _verify)),
     report=_report,
     build=build,
+    defaults="with every problem table left out a study is the paper's published problem "
+             "(reference spindle, in-phase G 2.5 unbalance, θ = the Table 4 stiffness CoVs, "
+             "y = peak over the speed range, δ_lim = 19.5 µm, the f_n1 guard): NOT the "
+             "credible reference problem (credible_problem(), experiments/quick.toml, which "
+             "states every table)",
 ))

@@ -45,6 +45,7 @@ from surrogate_rbrdo.surrogates.assessment import (
     FETruth,
     fe_truth,
     train_and_assess,
+    truth_memory_bytes,
 )
 from surrogate_rbrdo.surrogates.structured import STRUCTURES, JointDOEOptions
 
@@ -138,10 +139,9 @@ def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
     box = main if isinstance(main, JointDOEOptions) else JointDOEOptions(
         n_jobs=main.n_jobs, backend=main.backend)
     v = c.validation
-    m = 3 + inputs.dim
-    check_memory({"validation.n_theta": (v.n_theta, 8.0 * v.n_theta * (m + 4 * len(designs) * (
-        1 + len(variants)))), "validation.n_test": (v.n_test, 8.0 * v.n_test * (m + 4 * len(
-            variants)))})
+    check_memory({f"validation.{k}": (getattr(v, k), b) for k, b in truth_memory_bytes(
+        n_test=v.n_test, n_theta=v.n_theta, n_inputs=inputs.dim, n_designs=len(designs),
+        n_variants=len(variants)).items()})
     for name, o in variants.items():        # structures that state their memory
         check_memory(memory_needs(o, "surrogate" if name == "main" else
                                   f"validation.variants.{name}"))

@@ -99,6 +99,17 @@ class TrainedSurrogate:
                 "fe_cache_hits": self.fe_cache_hits, **dict(self.info)}
 
 
+def kriging_bytes(n: int) -> float:
+    """Peak bytes of a Kriging fit on ``n`` points: ~10 ``n × n`` matrices of 8 B (smt KRG's
+    correlation matrix, its Cholesky factor and the likelihood's work arrays) and ~16 values
+    per point (``core.memory``).
+
+    >>> kriging_bytes(1000) / 1e6
+    80.128
+    """
+    return 8.0 * (10.0 * float(n) ** 2 + 16.0 * float(n))
+
+
 @dataclass(frozen=True)
 class SamplingOptions:
     """How a structure's FE training points are computed.
@@ -203,4 +214,4 @@ def train_surrogate(spindle: Any, inputs: Any, limit: LimitState, options: Any, 
 
 
 __all__ = ["STRUCTURES", "SamplingOptions", "Structure", "SurrogateModel", "TrainedSurrogate",
-           "register_structure", "structure_of", "train_surrogate"]
+           "kriging_bytes", "register_structure", "structure_of", "train_surrogate"]

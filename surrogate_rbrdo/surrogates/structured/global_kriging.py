@@ -35,7 +35,11 @@ from surrogate_rbrdo.core.validate import check_choice, check_int, check_positiv
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling.fe import sample_positive
 from surrogate_rbrdo.surrogates.active import AKMCSOptions, GridPool, ak_mcs
-from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate, register_structure
+from surrogate_rbrdo.surrogates.structured.base import (
+    TrainedSurrogate,
+    kriging_bytes,
+    register_structure,
+)
 from surrogate_rbrdo.surrogates.structured.joint import JointDOEOptions
 from surrogate_rbrdo.surrogates.transformed import TransformedKriging, fit_transformed
 from surrogate_rbrdo.surrogates.transforms import TRANSFORMS, forward
@@ -90,6 +94,25 @@ class GlobalOptions(JointDOEOptions):
         check_positive("al_u_stop", self.al_u_stop)
         check_range("al_uncertain_frac", self.al_uncertain_frac, 0.0, 1.0)
         check_int("al_n_start", self.al_n_start, minimum=1)
+
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): the static DOE's Kriging; with active learning the
+        Kriging of up to ``al_n_initial + al_max_added`` points (blamed on the larger) and the
+        pool's predictions (mean, std, U and work arrays: ~8 values per pool point, and the
+        cross-covariances of the pool's designs and θ rows with the training points).
+
+        >>> m = GlobalOptions(active_learning=True, al_n_initial=10 ** 10).memory_bytes()
+        >>> m["al_n_initial"] > 1e20
+        True
+        """
+        out = super().memory_bytes()
+        if self.active_learning:
+            n = self.al_n_initial + self.al_max_added
+            key = "al_n_initial" if self.al_n_initial >= self.al_max_added else "al_max_added"
+            out[key] = kriging_bytes(n)
+            pd, pt = self.al_pool_designs, self.al_pool_theta
+            out["al_pool_designs*al_pool_theta"] = 64.0 * pd * pt + 16.0 * n * (pd + pt)
+        return out
 
 
 class _TransformedSpace:

@@ -19,7 +19,7 @@ import numpy as np
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.doe.infill import THETA_BOXES, joint_bounds
 from surrogate_rbrdo.surrogates.registry import SURROGATES
-from surrogate_rbrdo.surrogates.structured.base import SamplingOptions
+from surrogate_rbrdo.surrogates.structured.base import SamplingOptions, kriging_bytes
 from surrogate_rbrdo.uncertainty.box import marginal_box
 
 
@@ -67,6 +67,15 @@ class JointDOEOptions(SamplingOptions):
                              "(lower, upper) with 0 < lower < upper")
         object.__setattr__(self, "theta_bounds", (float(tb[0]), float(tb[1])))
         check_int("n_start", self.n_start, minimum=1)
+
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): a Kriging fit holds ~10 ``n × n`` matrices of its
+        ``n`` training points (smt KRG; as ``DesignModelOptions``) and a few values per point.
+
+        >>> JointDOEOptions(n_doe=10 ** 7).memory_bytes()["n_doe"] > 1e15
+        True
+        """
+        return {"n_doe": kriging_bytes(self.n_doe)}
 
     def bounds(self, spindle: Any, inputs: Any) -> np.ndarray:
         """The (d + m, 2) joint DOE box of ``spindle``'s designs and the θ of ``inputs``."""

@@ -24,7 +24,11 @@ from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.doe.infill import maximin_select
 from surrogate_rbrdo.sampling.fe import sample_positive
 from surrogate_rbrdo.spindle.evaluate import PointwiseResonance, ResponseSpec
-from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate, register_structure
+from surrogate_rbrdo.surrogates.structured.base import (
+    TrainedSurrogate,
+    kriging_bytes,
+    register_structure,
+)
 from surrogate_rbrdo.surrogates.structured.joint import JointDOEOptions
 from surrogate_rbrdo.surrogates.structured.resonance import fit_resonance_surrogate
 from surrogate_rbrdo.surrogates.transformed import fit_transformed
@@ -109,6 +113,18 @@ class ResonanceOptions(JointDOEOptions):
             raise ValueError(f"res_bg_only_r = {self.res_bg_only_r} is not allowed: must be "
                              f"<= res_bg_r_max = {self.res_bg_r_max} (the background model "
                              "is fitted only up to there)")
+
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): the sub-models' Kriging on up to ``n_doe + res_n_band
+        + res_n_band_lim`` points (blamed on the largest) and the band screening's
+        predictions on ``res_band_pool`` points (their covariances with the training points).
+
+        >>> ResonanceOptions(res_band_pool=10 ** 12).memory_bytes()["res_band_pool"] > 1e14
+        True
+        """
+        n = self.n_doe + self.res_n_band + self.res_n_band_lim
+        key = max(("n_doe", "res_n_band", "res_n_band_lim"), key=lambda k: getattr(self, k))
+        return {key: kriging_bytes(n), "res_band_pool": 8.0 * self.res_band_pool * (n + 16)}
 
     def check_response(self, response: ResponseSpec) -> None:
         if response.kind != "peak":

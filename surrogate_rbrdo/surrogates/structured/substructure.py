@@ -68,6 +68,7 @@ from surrogate_rbrdo.surrogates.multioutput import MultiOutputKriging
 from surrogate_rbrdo.surrogates.structured.base import (
     SamplingOptions,
     TrainedSurrogate,
+    kriging_bytes,
     register_structure,
 )
 from surrogate_rbrdo.surrogates.validation import LOOSummary, validation_metrics
@@ -320,6 +321,20 @@ class SubstructureOptions(SamplingOptions):
         check_int("n_doe", self.n_doe, minimum=7)
         check_int("n_start", self.n_start, minimum=1)
         check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
+
+    def memory_bytes(self) -> dict[str, float]:
+        """Peak bytes (``core.memory``): the multi-output Kriging on ``n_doe`` designs and
+        its outputs, ``2 · sub_n_speeds · r²`` per design for ``r`` retained DOFs (at least
+        12: the tool tip and two bearings, 4 DOFs each; a lower bound, the geometry is not
+        known here), and one design's rotor dynamic stiffness, ``sub_n_speeds`` complex
+        ``r × r`` matrices or more.
+
+        >>> SubstructureOptions(sub_n_speeds=10 ** 8).memory_bytes()["sub_n_speeds"] > 1e11
+        True
+        """
+        r2 = 12.0 ** 2
+        return {"n_doe": kriging_bytes(self.n_doe),
+                "sub_n_speeds": 8.0 * 2 * self.sub_n_speeds * r2 * (self.n_doe + 2)}
 
     def check_response(self, response: ResponseSpec) -> None:
         if response.kind == "peak_unbalance":
