@@ -132,3 +132,17 @@ def test_the_shipped_configs_build(name):
     assert prep.plan.options.nuisance.gain_sd == 0.02
     hidden = [e.name for e in prep.plan.rig.rig.truth.hidden]
     assert hidden == ([] if "null" in name else ["housing"])
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+@pytest.mark.parametrize(("name", "named"), [("discrepancy.toml", ["housing"]),
+                                             ("discrepancy_null.toml", [])])
+def test_the_shipped_configs_find_what_is_hidden(tmp_path, name, named):
+    """The hidden housing stage is named alone (no second, stand-in name), the null case
+    says nothing is missing (about 40 s each)."""
+    run = run_experiment(ROOT / "experiments" / name, results_dir=tmp_path, run_id="r",
+                         progress=False)
+    f = json.loads((run.path / "findings.json").read_text())
+    assert f["verdict"] == ("named" if named else "nothing_missing")
+    assert [e["name"] for e in f["effects"]] == named
