@@ -5,15 +5,21 @@ from __future__ import annotations
 import csv
 import json
 import tomllib
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from surrogate_rbrdo.core.schema import parse
-from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.discrepancy.experiment import (
+    DiscrepancyTable,
+    analyse,
+    data_from_folder,
+    options_from_dict,
+)
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
+from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
 from surrogate_rbrdo.rig.config import RigTable
 from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 
@@ -74,3 +80,10 @@ def test_a_folder_of_phasors_is_analysed(spindle, tmp_path):
     assert json.loads(paths["findings"].read_text())["verdict"] == "nothing_missing"
     with pytest.raises(ValueError, match="no phasors.csv"):
         data_from_folder(tmp_path / "run")
+
+
+def test_the_table_has_the_options_fields_and_defaults():
+    """[discrepancy] mirrors DiscrepancyOptions (nuisance as a table with a preset)."""
+    assert [f.name for f in fields(DiscrepancyTable)] == [
+        f.name for f in fields(DiscrepancyOptions)]
+    assert DiscrepancyTable().options() == DiscrepancyOptions()
