@@ -141,7 +141,17 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--base-seed", type=int, default=0,
                     help="root of the scenarios' seeds (another value: an independent sample)")
+    ap.add_argument("--report", nargs="+", default=[],
+                    help="only print the rates of earlier runs' --out CSVs, pooled")
     args = ap.parse_args()
+    if args.report:
+        rows = []
+        for path in args.report:
+            with open(path, newline="") as fh:
+                rows += list(csv.DictReader(fh))
+        print(f"{len(rows)} scenarios from {len(args.report)} file(s)")
+        _report(rows)
+        return
     t0 = time.perf_counter()
     sp = reference_spindle()
     g = sp.geometry_for(sp.baseline)
