@@ -46,12 +46,7 @@ class CandidateFit:
     at_bound : bool
         A strength parameter sits on its physical bound (not the off state), or a shape
         parameter on a bound other than a natural zero (a massless, undamped housing is
-        physical; a softening exponent at the end of its range means the law is stretched), or
-        the fit drives one of the model's own bounded parameters (a bearing's stiffness or
-        damping factor) onto its bound when the base fit had it inside: the candidate then
-        explains the data only by trading its signature against a model parameter pushed to
-        the edge of its physical range (at 1x, cross-coupling ``k_xy`` acts as a damping
-        ``-k_xy/Ω`` and would stand in for a damping factor pinned at its lower bound).
+        physical; a softening exponent at the end of its range means the law is stretched).
     significant : bool
         Some strength's interval, conditional on the fitted shapes, excludes the off state
         (the effect is on).
@@ -142,21 +137,11 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
             best, best_slot = f, slot
     if len(starts) > 1:                              # finish the best start
         best = fit(problem, best.par, best.x, max_nfev=max_nfev)
-    return describe(c, best_slot, best, base)
+    return describe(c, best_slot, best, base.chi2)
 
 
-def _pinned(f: Fit, n: int) -> np.ndarray:
-    """Which of the first ``n`` parameters of ``f`` (θ and damping factors, log units) sit on
-    a bound of their range (within 0.1 % of its width: a bounded trust-region fit stops just
-    short of an active bound)."""
-    lo, hi = f.par.bounds()
-    x = f.x[:n]
-    tol = 1e-3 * np.abs(hi[:n] - lo[:n])
-    return (np.abs(x - lo[:n]) <= tol) | (np.abs(x - hi[:n]) <= tol)
-
-
-def describe(c: Candidate, slot: Slot, f: Fit, base: Fit) -> CandidateFit:
-    """Parameters, intervals and plausibility flags of a candidate's fit on top of ``base``."""
+def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit:
+    """Parameters, intervals and plausibility flags of a candidate's fit."""
     k0 = f.x.size - len(slot.free)
     lo_ci, hi_ci = f.wald_ci()
     # significance is judged conditional on the fitted shapes: a shape parameter is not
@@ -167,9 +152,7 @@ def describe(c: Candidate, slot: Slot, f: Fit, base: Fit) -> CandidateFit:
     lo_s, hi_s = f.wald_ci(fixed=shape)
     vals = f.par.slot_values(f.x)[-1]
     params = c.physical(vals)
-    nt, nd = base.par.sizes[:2]
-    ci, significant = {}, False
-    at_bound = bool(np.any(_pinned(f, nt + nd) & ~_pinned(base, nt + nd)))
+    ci, at_bound, significant = {}, False, False
     for i, p in enumerate(slot.free):
         a, b = float(lo_ci[k0 + i]), float(hi_ci[k0 + i])
         if p in c.strength:
@@ -188,5 +171,5 @@ def describe(c: Candidate, slot: Slot, f: Fit, base: Fit) -> CandidateFit:
         ci[p] = [a, b]
     if slot.scope:
         params["bearings"] = list(slot.scope)
-    return CandidateFit(c.name, slot, f, max(base.chi2 - f.chi2, 0.0), params, ci,
+    return CandidateFit(c.name, slot, f, max(base_chi2 - f.chi2, 0.0), params, ci,
                         at_bound, significant)
