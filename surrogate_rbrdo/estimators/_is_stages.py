@@ -120,7 +120,8 @@ class Stages:
         # run from a fixed density (an inverse-variance combination would favour the runs
         # that land low, whose reported errors are small too)
         last = stages[-1]
-        out.pf[i] = last["r"].p if self.dp.beta >= 0 else 1.0 - last["r"].p
+        # a probability: the control-variate estimate (or its complement) projected on [0, 1]
+        out.pf[i] = np.clip(last["r"].p if self.dp.beta >= 0 else 1.0 - last["r"].p, 0.0, 1.0)
         out.se[i] = last["r"].se
         out.stages[i, : len(stages)] = [st["r"].p for st in stages]
         out.nfail[i] = sum(int(st["fail"].sum()) for st in stages)

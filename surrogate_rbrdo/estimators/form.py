@@ -185,9 +185,9 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
     ``beta_max``, when ``G`` is flat there (its change over a finite-difference step below
     ``FLAT`` of its scale: inputs of bounded support, such as a uniform-disk radius, at the end
     of their support, where ``y`` saturates below the threshold; the point is then carried out
-    radially to ``beta_max`` and kept there if ``G`` still has the sign of ``G(0)``), or when the step towards the
-    linearised design point leaves the physical domain twice in a row and ``G`` keeps its sign
-    up to the domain's edge.
+    radially to ``beta_max`` and kept there if ``G`` still has the sign of ``G(0)``), or when
+    the step towards the linearised design point leaves the physical domain twice in a row and
+    ``G`` keeps its sign up to the domain's edge.
 
     ``start = (u0, G(0))`` starts the search at ``u0`` instead of the origin (the sign and scale
     of ``G(0)``, known from an earlier search, are then not recomputed); ``stop(u)`` ends the
