@@ -153,7 +153,7 @@ class Collect:
     def __init__(self, p: int, m: int, k: int) -> None:
         self.pf, self.se, self.beta = nan_p(p), nan_p(p), nan_p(p)
         self.diag = {key: nan_p(p) for key in ("ess", "pareto_k", "other_share",
-                                               "shell_share")}
+                                               "shell_share", "n_mc_strata")}
         self.nfail, self.ndis, self.nout = (np.zeros(p, int) for _ in range(3))
         self.n_other, self.n_dp = np.zeros(p, int), np.zeros(p, int)
         self.ustar, self.betas = np.full((p, m), np.nan), np.full((p, k), np.nan)

@@ -197,10 +197,11 @@ def integrate(node: Callable[[np.ndarray], tuple[float, Any]], cols: tuple, *, n
         keys = list(product([Fraction(j, k) for j in range(k)], repeat=len(cols)))
         for key in keys:
             if key not in cache:
-                cache[key] = node(lo + span * np.array([float(f) for f in key]))
+                phase = lo + span * np.array([float(f) for f in key])
+                cache[key] = node(phase)
                 if not np.isfinite(cache[key][0]):
-                    return Quadrature(np.nan, np.nan, k, np.empty((0, len(cols))),
-                                      np.empty(0), [cache[key][1]])
+                    return Quadrature(np.nan, np.nan, k, phase[None, :], np.array([np.nan]),
+                                      [cache[key][1]])
         pfs = np.array([cache[key][0] for key in keys])
         pf = float(pfs.mean())
         coarse = [cache[key][0] for key in keys if all((f * k).numerator % 2 == 0
@@ -272,9 +273,12 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
     d = dps[int(np.argmax(q.pfs))] if q.pfs.size else dps[0]
     keep, m = Conditioned(inputs, cols, np.zeros(len(cols))).keep, int(inputs.dim)
     beta = float(-special.ndtri(q.pf)) if np.isfinite(q.pf) else d.beta
-    msg = d.message if status == "failed" else (
+    bad = [j for j, x in enumerate(dps) if x.status == "failed"]
+    msg = (f"{dps[bad[0]].message} (search conditional on the phase(s) "
+           f"{np.round(q.phases[bad[0]], 2).tolist()})"
+           if status == "failed" and bad else d.message if status == "failed" else (
         f"{status} (conditional on {len(cols)} periodic input(s), {q.n_nodes} nodes each, "
-        f"quadrature error {q.error:.2g}; at the dominant node: {d.message})")
+        f"quadrature error {q.error:.2g}; at the dominant node: {d.message})"))
     dp = replace(d, beta=beta, u_star=lift(d.u_star, keep, m, np.nan),
                  alpha=lift(d.alpha, keep, m, np.nan), grad=lift(d.grad, keep, m, np.nan),
                  converged=status == "converged", calls=calls[0], message=msg, status=status,

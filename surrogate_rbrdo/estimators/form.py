@@ -388,7 +388,8 @@ class FORM:
             raise ModelError(
                 f"FORM did not converge for design {p}: {dp.message} after {dp.n_iter} "
                 f"iterations (beta={dp.beta:.6g}, G(u)={dp.g_star:.3g}); increase max_iter, "
-                "loosen tol_g/tol_u, or pass on_failure='nan'"
+                "loosen tol_g/tol_u, pass on_failure='nan', or use an estimator that needs no "
+                "converged design point ('is' on periodic inputs, 'ais', 'subset', 'mc')"
             )
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,

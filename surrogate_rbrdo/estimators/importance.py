@@ -54,6 +54,7 @@ from surrogate_rbrdo.estimators._common import (
     normal_ci,
 )
 from surrogate_rbrdo.estimators._design_points import design_points
+from surrogate_rbrdo.estimators._is_density import is_weights_estimate
 from surrogate_rbrdo.estimators._is_stages import Collect, Stages
 from surrogate_rbrdo.estimators._periodic import Conditioned, Stratum, cells, lift, periodic_columns
 from surrogate_rbrdo.estimators._tail import EstimatorWarning
@@ -199,24 +200,29 @@ class ImportanceSampling:
         m, cs = inputs.dim, cells(cols, self.phase_strata)
         n_k = u.shape[0] // len(cs)
         sub = Collect(len(cs), m, self.n_design_points)
+        n_mc = 0
         lo = np.array([c[1] for c in cols])
         span = np.array([c[2] - c[1] for c in cols])
         for k, (a, b) in enumerate(cs):
             cond = Conditioned(inputs, cols, lo + span * 0.5 * (a + b))
             Gc = LimitStateU(response, cond, limit, x_row)
             dp = self.form.run(Gc, cond.dim)
-            self.form.check(dp, i)
             pts = [dp]
             if dp.status == "converged" and dp.beta >= 0:
                 pts = design_points(Gc, cond.dim, dp, self.form,
                                     max_points=self.n_design_points)
             G = LimitStateU(response, Stratum(inputs, cols, a, b), limit, x_row)
-            sub.status[k] = dp.status
+            sub.status[k] = "converged" if dp.status == "failed" else dp.status
             if dp.status != "failed":
                 pts = [replace(q, u_star=lift(q.u_star, cond.keep, m),
                                alpha=lift(q.alpha, cond.keep, m),
                                grad=lift(q.grad, cond.keep, m)) for q in pts]
                 Stages(self, G, pts, u[k * n_k:(k + 1) * n_k]).run(sub, k)
+            else:   # no design point: the cell's own distribution (crude MC in the cell)
+                fail = G(u[k * n_k:(k + 1) * n_k]) < 0
+                sub.pf[k], sub.se[k], sub.diag["ess"][k] = is_weights_estimate(
+                    fail, np.zeros(fail.size))
+                sub.nfail[k], n_mc = int(fail.sum()), n_mc + 1
             out.form_calls += Gc.calls
             out.calls += Gc.calls + G.calls
         st = set(sub.status.tolist())
@@ -237,6 +243,7 @@ class ImportanceSampling:
         out.diag["pareto_k"][i] = float(np.nanmax(sub.diag["pareto_k"], initial=-np.inf))
         out.diag["other_share"][i] = float(np.nansum(w * sub.diag["other_share"]))
         out.diag["shell_share"][i] = float(np.nanmean(sub.diag["shell_share"]))
+        out.diag["n_mc_strata"][i] = n_mc
 
     @staticmethod
     def _warn(khat: np.ndarray, share: np.ndarray, nother: np.ndarray) -> None:
