@@ -8,7 +8,8 @@ fractions uniform over the ISO tolerance disk (bounded: ≤ 1) and the relative 
 largest possible y, both planes at their tolerance and the worst phase, is 0.35 µm: the limit
 state is never reached) and ``X_MID`` (P_f ≈ 0.023). References are independent of the code
 under test: crude Monte Carlo of the FE model with 10⁵ samples (computed here, seed fixed;
-`python3 /tmp/estimators3/mcref.py` gave 0.99991, 0, 0.02273 ± 0.00047 with seed 123), and for
+`benchmarks/bench_credible_estimators.py --reference` gave 0.99991, 0, 0.02273 ± 0.00047
+with seed 123), and for
 ``X_NEVER`` a grid over the support's corner. Before the fix FORM, SORM and IS raised
 ``ModelError`` ("line search stalled") at all three designs.
 """
