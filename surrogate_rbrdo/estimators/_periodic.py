@@ -238,18 +238,22 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
     ``Φ(−β_max)``), and ``calls`` of every node; and the :class:`Quadrature`.
     """
     calls, prev = [0], []
+    span = np.array([c[2] - c[1] for c in cols])
 
     def node(phases: np.ndarray) -> tuple[float, Any]:
         cond = Conditioned(inputs, cols, phases)
         G = LimitStateU(response, cond, limit, x_row)
         g0 = float(G(np.zeros((1, cond.dim)))[0])
-        # warm start at the previous node's design point (neighbouring phases have nearby
-        # design points) when G(0) has the same sign there; else from the origin
-        near = [d for d in prev if d.status == "converged" and (d.g_origin >= 0) == (g0 >= 0)]
-        dp = form.run(G, cond.dim, start=(near[-1].u_star, g0) if near else None)
+        # warm start at the design point of the nearest node in phase (periodic distance;
+        # neighbouring phases have nearby design points) where G(0) has the same sign; else
+        # from the origin
+        near = [(float(np.sum(np.minimum(np.abs(ph - phases), span - np.abs(ph - phases)))), d)
+                for ph, d in prev if d.status == "converged" and (d.g_origin >= 0) == (g0 >= 0)]
+        start = min(near, key=lambda t: t[0])[1].u_star if near else None
+        dp = form.run(G, cond.dim, start=None if start is None else (start, g0))
         if dp.status == "failed" and near:
             dp = form.run(G, cond.dim)
-        prev.append(dp)
+        prev.append((phases, dp))
         pf = np.nan
         if dp.status == "not_reached" or (dp.status == "converged" and correct is None):
             pf = float(special.ndtr(-dp.beta))
