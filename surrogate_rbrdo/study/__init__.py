@@ -15,6 +15,7 @@ from surrogate_rbrdo.study.problem import (
     Problem,
     credible_problem,
     reference_problem,
+    unbalance_design_cases,
 )
 from surrogate_rbrdo.study.stages import (
     Optimisation,
@@ -33,5 +34,6 @@ __all__ = [
     "DESIGN_NAMES", "RESIDUAL_STD", "TABLE4_STD", "OptimizationOptions", "Optimisation",
     "Problem", "Refinement", "Verification", "VerificationOptions", "chosen_designs",
     "credible_problem", "expression_constraints", "formulation", "merge_calls", "optimise",
-    "reference_problem", "refine", "run_label", "spindle_constraints", "verify",
+    "reference_problem", "refine", "run_label", "spindle_constraints",
+    "unbalance_design_cases", "verify",
 ]
