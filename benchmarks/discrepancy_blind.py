@@ -139,7 +139,19 @@ def main() -> None:
     ap.add_argument("--noise", nargs="+", default=list(FACTORS))
     ap.add_argument("--out", default="")
     ap.add_argument("--draws", type=int, default=400)
+    ap.add_argument("--base-seed", type=int, default=0,
+                    help="root of the scenarios' seeds (another value: an independent sample)")
+    ap.add_argument("--report", nargs="+", default=[],
+                    help="only print the rates of earlier runs' --out CSVs, pooled")
     args = ap.parse_args()
+    if args.report:
+        rows = []
+        for path in args.report:
+            with open(path, newline="") as fh:
+                rows += list(csv.DictReader(fh))
+        print(f"{len(rows)} scenarios from {len(args.report)} file(s)")
+        _report(rows)
+        return
     t0 = time.perf_counter()
     sp = reference_spindle()
     g = sp.geometry_for(sp.baseline)
@@ -166,7 +178,7 @@ def main() -> None:
     lib = {c.name: c.one_sided[0] for c in library(ctx.options.library, ("front", "rear"))}
     pairs = confounded_pairs(cn, cos, lib)
     print("confounded pairs:", pairs)
-    grid = build_grid(ctx, cal, noises, args.seeds, pairs)
+    grid = build_grid(ctx, cal, noises, args.seeds, pairs, base_seed=args.base_seed)
     print(f"{len(grid)} scenarios")
     t1 = time.perf_counter()
     rows = Parallel(n_jobs=args.jobs, verbose=0)(delayed(run_scenario)(ctx, sc) for sc in grid)

@@ -1,7 +1,7 @@
 """The worked example of docs/discrepancy.md: the experiment configs run end to end on the
 virtual rig (what the runner's kind `discrepancy` will do), with timings.
 
-    PYTHONPATH=$PWD python3 benchmarks/discrepancy_example.py experiments/pending/discrepancy.toml \
+    PYTHONPATH=$PWD python3 benchmarks/discrepancy_example.py experiments/discrepancy.toml \
         --out /tmp/<you>/discrepancy
 
 Simulates the rig campaign of ``[rig]`` (``rig.campaign.run_campaign``: time-domain records,

@@ -13,7 +13,13 @@ Prints, per run of the study (``rbrdo 10%`` …):
 3. the fronts checked by the FE model (``front_verification.csv``): verified designs,
    FE-non-dominated ones and how far apart they are (largest distance in % of the box);
 4. the reliability constraint's activity (front designs with CRN P_f > 0.9 P_target, chosen
-   designs with an FE failure) and the MBR rows (``mbr.csv``) of every seed.
+   designs with an FE failure) and the MBR rows (``mbr.csv``) of every seed;
+5. each MBR step over the seeds: mean and [min, max], and whether the constraint acted at
+   either level in any seed (an MBR between two levels where it acts at neither is noise);
+6. with ``--common-theta N`` (runs of the credible problem, ``study.credible_problem()``):
+   every seed's compromise designs on ONE fresh sample of N θ through the exact fast path, so
+   the spread over seeds is the designs' own, free of the per-seed verification samples'
+   sampling error (which section 2 contains).
 """
 
 from __future__ import annotations
@@ -24,6 +30,8 @@ import json
 from pathlib import Path
 
 import numpy as np
+
+from surrogate_rbrdo.study import credible_problem
 
 NAMES = ("preload_N", "span_mm", "diameter_mm")
 
@@ -37,9 +45,26 @@ def fnum(r: dict[str, str], k: str) -> float:
     return float(v) if v not in ("", None) else float("nan")
 
 
+def common(per: dict[str, list[dict]], n: int) -> None:
+    """Section 6: every compromise on one common θ sample (the exact fast path)."""
+    pr = credible_problem()
+    theta = pr.inputs.sample(n, rng=np.random.default_rng(20261124))
+    resp = pr.fe_response("condensed")
+    print(f"\n6. compromises on one common sample of {n} θ (exact fast path): μ, σ (µm), "
+          "spread over seeds in % of the mean (SE of μ ≈ σ/√N)")
+    for lab, lst in per.items():
+        y = resp(np.array([e["x"] for e in lst]), theta) * 1e6
+        mu, sd = y.mean(1), y.std(1, ddof=1)
+        print(f"  {lab:18s} μ {np.round(mu, 4).tolist()} σ {np.round(sd, 4).tolist()}; spread "
+              f"μ {np.ptp(mu) / mu.mean() * 100:.2f} %, σ {np.ptp(sd) / sd.mean() * 100:.2f} %"
+              f" (SE of μ {sd.mean() / np.sqrt(n):.5f}); max y {y.max():.3f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("runs", nargs="+", type=Path, help="run folders (one per seed)")
+    ap.add_argument("--common-theta", type=int, default=0,
+                    help="evaluate every compromise on one common θ sample of this size")
     args = ap.parse_args()
     folders = [p for p in args.runs if (p / "compromises.csv").is_file()]
     box = None
@@ -73,7 +98,7 @@ def main() -> None:
                   f"{e['mu_fe']:.4f} σ {e['sd_fe']:.4f} P_f {e['pf_fe']:.2f} %; first critical "
                   f"{e['crit']:.0f} rpm (in range: {e['in_range']}); front {e['front']}, "
                   f"active {e['active'] or '-'}")
-    print("\n2. spread over seeds (max − min)")
+    print("\n2. spread over seeds (max − min; in % of the box, and of μ_FE's mean)")
     for lab, lst in per.items():
         X = np.array([e["x"] for e in lst])
         mu = np.array([e["mu_fe"] for e in lst])
@@ -99,11 +124,28 @@ def main() -> None:
                   f"box); FE μ {min(fnum(r, 'mean_um_fe') for r in lst):.4f}–"
                   f"{max(fnum(r, 'mean_um_fe') for r in lst):.4f} µm")
     print("\n4. MBR (mbr.csv) per seed")
+    by_step: dict[tuple[str, str, str], list[dict[str, str]]] = {}
     for f in folders:
         for r in rows(f / "mbr.csv"):
-            print(f"  {f.name} {r['source']:16s} {r.get('from_pct', r.get('p_from', ''))}→"
-                  f"{r.get('to_pct', r.get('p_to', ''))}: MBR {fnum(r, 'mbr_um_per_pp'):.4f} "
-                  f"µm/pp, Δμ {fnum(r, 'delta_mean_um'):+.4f}, Δσ {fnum(r, 'delta_std_um'):+.4f}")
+            step = (r["source"], r.get("from_pct", ""), r.get("to_pct", ""))
+            by_step.setdefault(step, []).append(r)
+            print(f"  {f.name} {r['source']:16s} {step[1]}→{step[2]}: MBR "
+                  f"{fnum(r, 'mbr_um_per_pp'):.2e} µm/pp, Δμ {fnum(r, 'delta_mean_um'):+.2e}, "
+                  f"Δσ {fnum(r, 'delta_std_um'):+.2e}; constraint "
+                  f"{r.get('constraint', '?')} ({r.get('active_from', '?')}/"
+                  f"{r.get('active_to', '?')} front designs near P_target)")
+    print("\n5. MBR over the seeds: mean, [min, max] (µm/pp); Δσ [min, max] (µm)")
+    for (src, a, b), lst in by_step.items():
+        m = np.array([fnum(r, "mbr_um_per_pp") for r in lst])
+        ds = np.array([fnum(r, "delta_std_um") for r in lst])
+        states = sorted({r.get("constraint", "?") for r in lst})
+        noise = " — pure noise: no constraint active" if states == [
+            "inactive at both levels"] else ""
+        print(f"  {src:16s} {a}→{b}: {m.mean():.2e} [{m.min():.2e}, {m.max():.2e}]; Δσ "
+              f"[{ds.min():+.2e}, {ds.max():+.2e}] ({len(lst)} seeds; constraint "
+              f"{', '.join(states)}){noise}")
+    if args.common_theta:
+        common(per, args.common_theta)
     walls = [e["wall"] for lst in per.values() for e in lst if e["wall"]]
     if walls:
         print(f"\nwall time per run: {min(walls):.0f}–{max(walls):.0f} s")

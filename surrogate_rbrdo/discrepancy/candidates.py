@@ -183,6 +183,31 @@ def _default_start(cls: type, p: str, bound: tuple[float, float]) -> float:
     return 0.5 * (lo + hi) if math.isfinite(hi) else lo
 
 
+def check_library(names: tuple[str, ...]) -> tuple[str, ...]:
+    """``names`` if it is a non-empty list of distinct registered effects that can be
+    candidates (each has ``off_params``: the value at which it is absent).
+
+    >>> check_library(("housing", "anisotropy"))
+    ('housing', 'anisotropy')
+    >>> check_library(("housing", "housing"))
+    Traceback (most recent call last):
+    ...
+    ValueError: library = ['housing', 'housing'] is not allowed: a name appears twice
+    """
+    names = tuple(names)
+    if not names:
+        raise ValueError("library = [] is not allowed: give at least one registered effect, "
+                         f"e.g. {list(DEFAULT_LIBRARY)}")
+    if len(set(names)) != len(names):
+        raise ValueError(f"library = {list(names)} is not allowed: a name appears twice")
+    fit = sorted(n for n in EFFECTS if dict(EFFECTS.get(n).off_params))
+    for i, n in enumerate(names):
+        if n not in fit:
+            raise ValueError(f"library[{i}] = {n!r} is not allowed: must be one of {fit} "
+                             "(registered effects with off_params)")
+    return names
+
+
 def library(names: tuple[str, ...], bearings: tuple[str, ...]) -> tuple[Candidate, ...]:
     """Candidates for the registry names ``names`` (unknown names raise, listing the known)."""
     if len(set(names)) != len(names):

@@ -1,34 +1,49 @@
 """What the experiment kind ``discrepancy`` composes: the ``[discrepancy]`` table → options, a
 measured-data folder → observables, and the analysis → a frozen result and its files.
 
-The runner (``rbrdo run experiments/discrepancy.toml``) is expected to do, in order:
+The kind (``surrogate_rbrdo/runner/experiments/discrepancy.py``, ``rbrdo run
+experiments/discrepancy.toml``) does, in order:
 
-1. the model: ``spindle_from_config(cfg["spindle"])`` → its geometry at the baseline design and
-   its effects;
-2. the data: with ``[rig] effects = [...]``, the virtual rig's campaign into ``<run>/rig``
-   (``rig.config.RigTable(...).config()`` then ``rig.campaign.run_campaign``); with ``[data] path``
-   a folder of the user's measurements; either way :func:`data_from_folder`;
-3. :func:`analyse` with :func:`options_from_dict` of ``[discrepancy]`` and the experiment's seed;
+1. the model: ``build_spindle([spindle])`` → its geometry at the baseline design and its effects;
+2. the data: with ``[rig]``, the virtual rig's campaign into ``<run>/campaign``
+   (``rig.campaign.run_campaign``); with ``[data] path`` a finished rig run folder, a folder
+   with ``phasors.csv`` or a dataset folder (``docs/measured-data.md``); either way
+   :func:`data_from_folder`;
+3. :func:`analyse` with :class:`DiscrepancyTable` ``.options()`` and the experiment's seed;
 4. the figures: ``reporting.plots_discrepancy.plot_all(result, <run>)``.
+
+``[discrepancy]`` is checked by :func:`~surrogate_rbrdo.core.schema.parse` against
+:class:`DiscrepancyTable` (strict types, unknown keys refused, errors name the dotted field):
 
 >>> o = options_from_dict({"alpha": 0.01, "nuisance": {"preset": "probe_chain"}})
 >>> o.nuisance.gain_sd, o.alpha
 (0.02, 0.01)
+>>> options_from_dict({"alpha": 0.5})
+Traceback (most recent call last):
+...
+ValueError: discrepancy.alpha = 0.5 is not allowed: must lie in [1e-06, 0.2]
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.core.validate import check_choice, check_keys
-from surrogate_rbrdo.discrepancy.measured import channel_positions, phasor_block, read_phasor_table
+from surrogate_rbrdo.core.schema import parse
+from surrogate_rbrdo.core.validate import check_choice
+from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY
+from surrogate_rbrdo.discrepancy.measured import (
+    channel_positions,
+    dataset_phasor_rows,
+    phasor_block,
+    read_phasor_table,
+)
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.report import write_run
@@ -44,32 +59,86 @@ from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 PRESETS = {"probe_chain": NuisanceOptions.probe_chain, "ideal": NuisanceOptions}
 
 
+@dataclass(frozen=True)
+class NuisanceTable:
+    """``[discrepancy.nuisance]``: a ``preset`` (``"probe_chain"``: the rig's eddy-current
+    chain, :meth:`~.nuisance.NuisanceOptions.probe_chain`; ``"ideal"``: the
+    :class:`~.nuisance.NuisanceOptions` defaults) and any of its fields, which override it."""
+
+    preset: str = "ideal"
+    theta_bounds: tuple[float, float] | None = None
+    damping: str | None = None
+    damping_bounds: tuple[float, float] | None = None
+    mass_disks: tuple[str, ...] | None = None
+    mass_sd: float | None = None
+    gain_sd: float | None = None
+    bandwidth_hz: float | None = None
+    delay_sd_s: float | None = None
+
+    def __post_init__(self) -> None:
+        check_choice("preset", self.preset, PRESETS)
+        self.options()
+
+    def options(self) -> NuisanceOptions:
+        """The preset with the given fields replaced."""
+        given = {f.name: getattr(self, f.name) for f in fields(self)
+                 if f.name != "preset" and getattr(self, f.name) is not None}
+        try:
+            return PRESETS[self.preset](**given)
+        except ValueError as exc:       # "nuisance.mass_sd = ..." -> "mass_sd = ..."
+            raise ValueError(str(exc).removeprefix("nuisance.")) from None
+
+
+@dataclass(frozen=True)
+class DiscrepancyTable:
+    """``[discrepancy]``: the fields of :class:`~.workflow.DiscrepancyOptions` (same defaults
+    and checks) with ``nuisance`` a :class:`NuisanceTable`."""
+
+    library: tuple[str, ...] = DEFAULT_LIBRARY
+    nuisance: NuisanceTable = field(default_factory=NuisanceTable)
+    alpha: float = 0.01
+    alpha_residual: float = 0.01
+    n_draws: int = 300
+    holdout_every: int = 5
+    extrapolate_fraction: float = 0.1
+    max_effects: int = 2
+    confound_delta: float = 6.63
+    holdout_tolerance: float = 10.83
+    use_identified: bool = False
+    max_nfev: int = 150
+
+    def __post_init__(self) -> None:
+        self.options()
+
+    def options(self) -> DiscrepancyOptions:
+        """The workflow's options (its ``__post_init__`` checks every field)."""
+        kw = {f.name: getattr(self, f.name) for f in fields(self)}
+        return DiscrepancyOptions(**{**kw, "nuisance": self.nuisance.options()})
+
+
 def options_from_dict(table: Mapping[str, Any]) -> DiscrepancyOptions:
-    """``[discrepancy]`` → :class:`~.workflow.DiscrepancyOptions`; ``nuisance`` may hold a
-    ``preset`` (``probe_chain`` or ``ideal``) and any field of
-    :class:`~.nuisance.NuisanceOptions`. Unknown keys raise, naming the table."""
-    fields = {f.name for f in dataclasses.fields(DiscrepancyOptions)}
-    check_keys("[discrepancy]", table, fields)
-    kw = {k: (tuple(v) if isinstance(v, list) else v) for k, v in table.items()}
-    if "nuisance" in kw:
-        nu = dict(kw["nuisance"])
-        nfields = {f.name for f in dataclasses.fields(NuisanceOptions)}
-        check_keys("[discrepancy.nuisance]", nu, nfields | {"preset"})
-        preset = check_choice("discrepancy.nuisance.preset", nu.pop("preset", "ideal"), PRESETS)
-        nu = {k: (tuple(v) if isinstance(v, list) else v) for k, v in nu.items()}
-        kw["nuisance"] = PRESETS[preset](**nu)
-    return DiscrepancyOptions(**kw)
+    """``[discrepancy]`` → :class:`~.workflow.DiscrepancyOptions` (through
+    :class:`DiscrepancyTable`; errors name ``discrepancy.<field>``)."""
+    return parse(DiscrepancyTable, table, "discrepancy").options()
 
 
 def data_from_folder(path: str | Path) -> MeasuredData:
     """Observables from a measured-data folder: ``phasors.csv`` (the rig campaign's 1x table,
     or a user's in the same columns) and the channels' positions from ``channels.json``
     (``{name: [position_mm, direction]}``) or else from the first native record of
-    ``dataset/records``."""
+    ``dataset/records``; or a dataset folder of ``docs/measured-data.md`` (``dataset.json``,
+    ``index.jsonl``, ``records/``), whose steady records are demodulated
+    (:func:`~.measured.dataset_phasor_rows`)."""
     root = Path(path)
+    if not root.is_dir():
+        raise ValueError(f"data folder {str(root)!r} is not allowed: it is not a folder")
     table = root / "phasors.csv"
+    if not table.is_file() and (root / "index.jsonl").is_file():
+        rows, pos = dataset_phasor_rows(root)
+        return MeasuredData((phasor_block(rows, pos),), provenance={"source": str(root)})
     if not table.is_file():
-        raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table)")
+        raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table) "
+                         "and no index.jsonl (a dataset folder)")
     sidecar = root / "channels.json"
     if sidecar.is_file():
         pos = {k: (float(v[0]), str(v[1])) for k, v in json.loads(sidecar.read_text()).items()}

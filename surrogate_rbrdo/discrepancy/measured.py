@@ -8,6 +8,8 @@
   format's: ``x(t) = Re(X e^{iφ})`` against the keyphasor, the FE model's own.
 * :func:`channel_positions` reads the channels' axial positions and directions from one native
   record (``records/<id>.npz``: its ``meta`` JSON), so a campaign folder needs nothing else.
+* :func:`dataset_phasor_rows` demodulates the steady records of a dataset folder (a user's
+  measurements put into the format, or the rig's) into such rows, with the channels' positions.
 * :func:`frf_block` turns averaged H1 FRFs with their coherence into an impact block; the
   variance of each line is Bendat & Piersol's (*Random Data*, 4th ed., eq. 9.90):
   ``var(Re H) = var(Im H) = |H|² (1 − γ²) / (2 n γ²)`` per component for ``n`` averages.
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -25,6 +28,8 @@ import numpy as np
 
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+from surrogate_rbrdo.rig.demod import demodulate
+from surrogate_rbrdo.rig.store import open_dataset
 
 #: the phasor table's required columns
 PHASOR_COLUMNS = ("speed_rpm", "channel", "re_m", "im_m")
@@ -66,6 +71,39 @@ def channel_positions(record_npz: str | Path) -> dict[str, tuple[float, str]]:
     if not out:
         raise ValueError(f"{path}: no displacement channel")
     return out
+
+
+def dataset_phasor_rows(root: str | Path
+                        ) -> tuple[list[dict[str, Any]], dict[str, tuple[float, str]]]:
+    """The 1x phasor rows of every steady record of the dataset folder ``root`` (each
+    record checked and demodulated against its keyphasor, :func:`~surrogate_rbrdo.rig.demod.
+    demodulate`) and the displacement channels' positions. A record's repeat is its index
+    labels ``build``, ``tool`` and ``run`` (or ``repeat``); without them, the records at one
+    speed are the repeats in the index's order."""
+    ds = open_dataset(root)
+    rows: list[dict[str, Any]] = []
+    pos: dict[str, tuple[float, str]] = {}
+    count: dict[float, int] = {}
+    for row in ds.select(kind="steady"):
+        rec = ds.load(row)
+        lab = row.get("labels", {})
+        speed = float(rec.speed_rpm)
+        run = lab.get("run", lab.get("repeat", count.get(speed, 0)))
+        count[speed] = count.get(speed, 0) + 1
+        p = demodulate(rec)
+        for j, ch in enumerate(p.channels):
+            c = rec.channel(ch).location
+            if not math.isfinite(c.position_mm) or c.direction not in ("x", "y"):
+                raise ValueError(f"{root}: record {rec.id!r}: channel {ch!r}: location needs "
+                                 "position_mm and direction x or y")
+            pos[ch] = (float(c.position_mm), c.direction)
+            rows.append({"build": lab.get("build", 0), "tool": lab.get("tool", 0), "run": run,
+                         "speed_rpm": speed, "channel": ch, "re_m": p.X[j, 0].real,
+                         "im_m": p.X[j, 0].imag})
+    if not rows:
+        raise ValueError(f"dataset {str(root)!r}: no steady records (kind = 'steady') to take "
+                         "the 1x phasors from")
+    return rows, pos
 
 
 def phasor_block(rows: Iterable[Mapping[str, Any]],

@@ -27,7 +27,12 @@ import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
-from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY, library, separating_test
+from surrogate_rbrdo.discrepancy.candidates import (
+    DEFAULT_LIBRARY,
+    check_library,
+    library,
+    separating_test,
+)
 from surrogate_rbrdo.discrepancy.fit import Fit, fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.gp import gp_correction
@@ -95,10 +100,15 @@ class DiscrepancyOptions:
     max_nfev: int = 150
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "library", tuple(self.library))
+        object.__setattr__(self, "library", check_library(self.library))
+        if not isinstance(self.nuisance, NuisanceOptions):
+            raise ValueError(f"nuisance = {self.nuisance!r} is not allowed: must be a "
+                             "NuisanceOptions")
         check_range("alpha", self.alpha, 1e-6, 0.2)
         check_range("alpha_residual", self.alpha_residual, 1e-6, 0.2)
         check_int("n_draws", self.n_draws, minimum=100)
+        check_int("holdout_every", self.holdout_every, minimum=2)
+        check_range("extrapolate_fraction", self.extrapolate_fraction, 0.0, 0.5)
         check_int("max_effects", self.max_effects, minimum=1)
         check_int("max_nfev", self.max_nfev, minimum=5)
         check_positive("confound_delta", self.confound_delta)

@@ -127,13 +127,15 @@ class LimitStateU:
     """``G(u) = limit.g(response(x_p, T(u)))`` for one design, counting model calls.
 
     A point outside the model's physical domain gets ``G = +inf`` (not a failure, see the module
-    docstring); ``n_outside`` counts them and ``last_y`` is NaN there.
+    docstring); ``n_outside`` counts them and ``last_y`` is NaN there. ``scale`` is
+    ``|threshold|``, the scale against which a design-point search judges ``|G| ≈ 0``.
     """
 
     def __init__(self, response: Callable, inputs: Any, limit: LimitState,
                  x_row: np.ndarray) -> None:
         self.response, self.inputs, self.limit = response, inputs, limit
         self.x_row = x_row.reshape(1, -1)
+        self.scale = abs(float(limit.threshold))
         self.calls = 0
         self.n_outside = 0
         self.last_y = np.empty(0)

@@ -80,6 +80,10 @@ class Deflected:
     def calls(self) -> int:
         return self.G.calls
 
+    @property
+    def scale(self) -> float:
+        return float(getattr(self.G, "scale", 0.0))
+
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = np.atleast_2d(u)
         return self.G(u) + sum((b(u) for b in self.bulges), np.zeros(u.shape[0]))

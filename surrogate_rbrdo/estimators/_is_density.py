@@ -34,10 +34,18 @@ MIN_SHELL_HITS = 5.0
 
 
 def is_weights_estimate(fail: np.ndarray, logw: np.ndarray) -> tuple[float, float, float]:
-    """``(pf, se, ess)`` from failure indicators and log-weights of a plain IS sample."""
+    """``(pf, se, ess)`` from failure indicators and log-weights of a plain IS sample.
+
+    The mean of the weights can exceed 1 when P_f is close to 1 (review of issue 13: 1.0027
+    for P_f = Φ(4)); ``pf`` is clipped to 1, a projection onto ``[0, 1]`` that can only move
+    the estimate closer to any probability, ``se`` is that of the unclipped mean.
+
+    >>> is_weights_estimate(np.array([True, True]), np.log(np.array([1.2, 1.0])))[0]
+    1.0
+    """
     n = fail.size
     w = np.where(fail, np.exp(np.where(fail, logw, 0.0)), 0.0)
-    pf = float(w.mean())
+    pf = min(float(w.mean()), 1.0)
     se = float(w.std(ddof=1) / np.sqrt(n)) if n > 1 else np.nan
     return pf, se, _ess(w)
 

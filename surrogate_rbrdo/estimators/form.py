@@ -25,10 +25,19 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate
+from surrogate_rbrdo.estimators._periodic import (
+    conditional_search,
+    dominant_theta,
+    periodic_columns,
+)
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
 #: outcome of a design-point search
 STATUSES = ("converged", "not_reached", "failed")
+#: relative change of G over a finite-difference step below which G is flat (round-off level)
+FLAT = 1e-10
+#: relative error of β accepted where the iteration can make no further progress
+SETTLED_BETA = 1e-3
 
 
 @dataclass(frozen=True)
@@ -80,6 +89,21 @@ def fd_gradient(G: LimitStateU, u: np.ndarray, g_u: float, step: float,
 def _alignment(u: np.ndarray, alpha: np.ndarray) -> float:
     """Angle-like distance of ``u`` from the line through ``α`` (relative to ``max(1, ‖u‖)``)."""
     return float(np.linalg.norm(u - (alpha @ u) * alpha)) / max(1.0, float(np.linalg.norm(u)))
+
+
+def _settled(u: np.ndarray, g: float, grad: np.ndarray, scale: float, tol_g: float,
+             tol_u: float) -> bool:
+    """Converged as far as the iteration can tell where it makes no further progress (a stalled
+    line search, ``max_iter``): ``|G|`` within ``√tol_g`` of its scale and an estimated error
+    of ``β`` — ``|G|/‖∇G‖`` (distance to the limit state) plus ``‖u‖ ε²/2`` (``ε`` the angle
+    between ``u`` and ``−∇G``: the distance minus the linearised index) — below
+    ``SETTLED_BETA · max(1, ‖u‖)``; or the alignment itself below ``√tol_u``."""
+    ng = float(np.linalg.norm(grad))
+    if not (np.isfinite(ng) and ng > 0 and abs(g) <= np.sqrt(tol_g) * max(scale, ng)):
+        return False
+    eps, nu = _alignment(u, -grad / ng), float(np.linalg.norm(u))
+    return bool(eps <= np.sqrt(tol_u)
+                or abs(g) / ng + 0.5 * nu * eps**2 <= SETTLED_BETA * max(1.0, nu))
 
 
 def _boundary(G: LimitStateU, u: np.ndarray, g: float, d: np.ndarray, lam_in: float,
@@ -147,16 +171,23 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
           stop: Callable[[np.ndarray], bool] | None = None) -> DesignPoint:
     """Run iHL-RF on ``G`` from the origin; never raises on non-convergence (see ``status``).
 
-    Convergence: ``|G(u)| <= tol_g · max(|G(0)|, ‖∇G(u)‖)`` — relative to ``G(0)``, or, where
+    Convergence: ``|G(u)| <= tol_g · max(|G(0)|, |threshold|, ‖∇G(u)‖)`` — relative to
+    ``G(0)`` or the threshold (``G.scale``), or, where
     ``G(0)`` is itself tiny (a design next to its limit state, whose ``G`` is then limited by
     round-off), a distance ``|G|/‖∇G‖ <= tol_g`` from the limit state in standard space — and
     the relative distance of ``u`` from the line through ``α``,
-    ``‖u − (α·u)α‖ / max(1, ‖u‖) <= tol_u``. When the line search cannot improve at a point
-    with ``|G|`` converged and that distance below ``√tol_u`` (the accuracy a finite-difference
-    gradient allows; the error of ``β`` is second order in it), the search has converged too.
+    ``‖u − (α·u)α‖ / max(1, ‖u‖) <= tol_u``. When the line search cannot improve, or at
+    ``max_iter``, at a point with ``|G|`` within ``√tol_g`` and that distance below ``√tol_u``
+    (the accuracy a finite-difference gradient allows; the error of ``β`` is first order in the
+    former, second order in the latter), the search has converged too (review of issue 13:
+    β = −3.47 with ``G = −8e-13`` m for a 1 µm limit was reported as a stall).
     The limit state is *not reached* when an iterate still on the side of ``G(0)`` lies beyond
-    ``beta_max``, or when the step towards the linearised design point leaves the physical
-    domain twice in a row and ``G`` keeps its sign up to the domain's edge.
+    ``beta_max``, when ``G`` is flat there (its change over a finite-difference step below
+    ``FLAT`` of its scale: inputs of bounded support, such as a uniform-disk radius, at the end
+    of their support, where ``y`` saturates below the threshold; the point is then carried out
+    radially to ``beta_max`` and kept there if ``G`` still has the sign of ``G(0)``), or when
+    the step towards the linearised design point leaves the physical domain twice in a row and
+    ``G`` keeps its sign up to the domain's edge.
 
     ``start = (u0, G(0))`` starts the search at ``u0`` instead of the origin (the sign and scale
     of ``G(0)``, known from an earlier search, are then not recomputed); ``stop(u)`` ends the
@@ -167,7 +198,9 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
         return DesignPoint(np.nan, u, np.full(m, np.nan), np.full(m, np.nan), g, False, 0,
                            G.calls, "start point outside the physical domain", "failed",
                            g_origin)
-    scale = abs(g_origin)
+    # |G| is judged against |G(0)| and the threshold's own scale (G = threshold - y: a G of
+    # 1e-12 m is converged for a 1 µm limit whatever G(0) is)
+    scale = max(abs(g_origin), float(getattr(G, "scale", 0.0)))
     sign0 = 1.0 if g_origin >= 0 else -1.0
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)
     msg, status, it, blocked = "maximum number of iterations reached", "failed", 0, 0
@@ -182,6 +215,17 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
             msg = "stopped by the caller"
             break
         ng = float(np.linalg.norm(grad))
+        if it > 1 and sign0 * g > 0 and ng * fd_step <= FLAT * max(scale, abs(g)):
+            status = "not_reached"   # e.g. bounded inputs at the end of their support
+            if np.isfinite(beta_max) and np.linalg.norm(u) > 0:
+                ub = u * (beta_max / float(np.linalg.norm(u)))   # checked out to beta_max
+                gb = float(G(ub[None, :])[0])
+                if np.isfinite(gb) and sign0 * gb > 0:
+                    u, g = ub, gb
+            msg = ("limit state not reached: G is flat (its change over a finite-difference "
+                   f"step is below {FLAT:g} of its scale) at |beta| = {np.linalg.norm(u):.4g} "
+                   "with the sign of G(0)")
+            break
         if not np.isfinite(ng) or ng == 0.0:
             msg = f"zero or non-finite gradient of the limit state at u={u.tolist()}"
             break
@@ -206,13 +250,16 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
         grad = fd_gradient(G, u, g, fd_step, fd_scheme)
         if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
-            ng = float(np.linalg.norm(grad))
-            if (np.isfinite(ng) and ng > 0 and abs(g) <= tol_g * max(scale, ng)
-                    and _alignment(u, -grad / ng) <= np.sqrt(tol_u)):
+            if _settled(u, g, grad, scale, tol_g, tol_u):
                 status = "converged"
-                msg = ("converged (the line search cannot improve further: the alignment is "
+                msg = ("converged (the line search cannot improve further: the accuracy is "
                        "limited by the finite-difference gradient)")
                 break
+    else:
+        if _settled(u, g, grad, scale, tol_g, tol_u):
+            status = "converged"
+            msg = ("converged (at max_iter, within the accuracy a finite-difference gradient "
+                   "allows)")
     ng = float(np.linalg.norm(grad))
     alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
     beta = sign0 * min(float(np.linalg.norm(u)),
@@ -261,6 +308,19 @@ class FORM:
     beta_max : float
         Distance beyond which an unreached limit state is reported as a bound
         (``Φ(−10) = 7.6e-24``).
+    phase_nodes, phase_max_nodes : int
+        Periodic inputs (phases, ``Uniform(..., periodic=True)``) are conditioned on, not
+        searched: one search per node of a trapezoidal rule over each phase, ``phase_nodes``
+        nodes doubled up to ``phase_max_nodes`` (:mod:`._periodic`).
+    phase_rtol : float
+        The nodes double until the rule on ``K`` and on ``K/2`` nodes agree within this
+        relative tolerance; their difference is ``diagnostics["pf_quadrature_error"]``.
+
+    **Periodic inputs.** With a phase the result is ``P_f = mean_j Φ(−β(φ_j))`` over the
+    nodes: ``beta`` is the generalised index ``−Φ⁻¹(P_f)``, ``u_star``/``alpha`` those of the
+    node contributing most (NaN in the phase columns; ``theta_star`` holds its phase),
+    ``status`` ``"converged"`` if every node converged, ``"not_reached"`` if some never fail
+    (they contribute their bound), ``phase_nodes`` the nodes per phase used.
 
     Examples
     --------
@@ -289,6 +349,9 @@ class FORM:
     fd_scheme: str = "forward"
     on_failure: str = "raise"
     beta_max: float = 10.0
+    phase_nodes: int = 8
+    phase_max_nodes: int = 32
+    phase_rtol: float = 0.05
 
     def __post_init__(self) -> None:
         check_int("max_iter", self.max_iter, minimum=1)
@@ -298,6 +361,11 @@ class FORM:
         check_choice("fd_scheme", self.fd_scheme, ("forward", "central"))
         check_choice("on_failure", self.on_failure, ("raise", "nan"))
         check_positive("beta_max", self.beta_max)
+        check_int("phase_nodes", self.phase_nodes, minimum=2)
+        if check_int("phase_max_nodes", self.phase_max_nodes, minimum=2) < self.phase_nodes:
+            raise ValueError(f"phase_max_nodes = {self.phase_max_nodes} is not allowed: must "
+                             f"be >= phase_nodes = {self.phase_nodes}")
+        check_positive("phase_rtol", self.phase_rtol)
 
     def search(self, response: Any, inputs: Any, limit: LimitState,
                x_row: np.ndarray) -> DesignPoint:
@@ -320,7 +388,8 @@ class FORM:
             raise ModelError(
                 f"FORM did not converge for design {p}: {dp.message} after {dp.n_iter} "
                 f"iterations (beta={dp.beta:.6g}, G(u)={dp.g_star:.3g}); increase max_iter, "
-                "loosen tol_g/tol_u, or pass on_failure='nan'"
+                "loosen tol_g/tol_u, pass on_failure='nan', or use an estimator that needs no "
+                "converged design point ('is' on periodic inputs, 'ais', 'subset', 'mc')"
             )
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
@@ -328,11 +397,18 @@ class FORM:
         """Design-point search for every design of ``x`` (``rng`` and ``u`` are unused)."""
         x, _ = check_args(inputs, limit, x, rng, u)
         p, m = x.shape[0], inputs.dim
-        beta, nit = np.full(p, np.nan), np.zeros(p, int)
+        cols = periodic_columns(inputs)
+        beta, nit, pf = np.full(p, np.nan), np.zeros(p, int), np.full(p, np.nan)
         ustar, alpha = np.full((p, m), np.nan), np.full((p, m), np.nan)
         calls, msgs, per, status = 0, [], np.zeros(p, int), []
+        theta = np.full((p, m), np.nan)
+        nodes, qerr = np.zeros(p, int), np.full(p, np.nan)
         for i in range(p):
-            dp = self.search(response, inputs, limit, x[i])
+            if cols:
+                dp, q = conditional_search(self, response, inputs, limit, x[i], cols)
+                nodes[i], qerr[i] = q.n_nodes, q.error
+            else:
+                dp = self.search(response, inputs, limit, x[i])
             self.check(dp, i)
             calls += dp.calls
             per[i], nit[i] = dp.calls, dp.n_iter
@@ -340,19 +416,17 @@ class FORM:
             status.append(dp.status)
             if dp.status != "failed":
                 beta[i], ustar[i], alpha[i] = dp.beta, dp.u_star, dp.alpha
+                pf[i] = q.pf if cols else special.ndtr(-dp.beta)
+                theta[i] = (dominant_theta(inputs, cols, q) if cols
+                            else inputs.from_standard(dp.u_star[None, :])[0])
         status = np.array(status)
-        ok = status != "failed"
-        theta = np.full((p, m), np.nan)
-        if ok.any():
-            theta[ok] = inputs.from_standard(ustar[ok])
-        pf = special.ndtr(-beta)
         return make_estimate(
             "form", calls, p, pf=pf,
             diagnostics={"beta": beta, "u_star": ustar, "theta_star": theta, "alpha": alpha,
                          "importance_factors": alpha**2, "converged": status == "converged",
                          "status": status, "pf_bound": bound_labels(beta, status),
-                         "n_iter": nit, "calls": per,
-                         "message": msgs},
+                         "n_iter": nit, "calls": per, "phase_nodes": nodes,
+                         "pf_quadrature_error": qerr, "message": msgs},
         )
 
 

@@ -39,7 +39,7 @@ are not failures (:mod:`._common`).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -51,17 +51,13 @@ from surrogate_rbrdo.estimators._common import (
     LimitStateU,
     check_args,
     make_estimate,
-    nan_p,
     normal_ci,
 )
-from surrogate_rbrdo.estimators._design_points import design_point_from, design_points
-from surrogate_rbrdo.estimators._is_density import (
-    MixtureDraws,
-    ScaledGaussians,
-    cv_estimate,
-    shell_share,
-)
-from surrogate_rbrdo.estimators._tail import EstimatorWarning, pareto_khat
+from surrogate_rbrdo.estimators._design_points import design_points
+from surrogate_rbrdo.estimators._is_density import is_weights_estimate
+from surrogate_rbrdo.estimators._is_stages import Collect, Stages
+from surrogate_rbrdo.estimators._periodic import Conditioned, Stratum, cells, lift, periodic_columns
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.form import FORM, bound_labels
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
 
@@ -70,10 +66,6 @@ KHAT_LIMIT = 0.7
 #: share of P_f from failures outside every design point's half-space above which IS reports
 #: other failure regions
 OTHER_SHARE_LIMIT = 0.2
-#: share of the second stage drawn from the first stage's mixture (defensive, Hesterberg 1995)
-STAGE2_DEFENSIVE = 0.2
-#: searches for further design points started from first-stage samples
-DISCOVERY_TRIES = 2
 
 
 def check_form(value: Any) -> None:
@@ -117,6 +109,11 @@ class ImportanceSampling:
         [0, 0.9], where it can find other regions (:func:`~._is_density.shell_share`); 0: never.
     shell : float
         Inner radius of the shell as a fraction of ``|β|``, in (0, 1].
+    phase_strata : int
+        With periodic inputs (phases, ``Uniform(..., periodic=True)``): cells per phase of the
+        stratified estimate (:mod:`._periodic`): in each, the two stages at the design points
+        of a search conditional on the cell's centre phase, the phase uniform in the cell;
+        ``pf`` is the mean over the cells and ``pf_se`` their combined error.
 
     Examples
     --------
@@ -135,6 +132,7 @@ class ImportanceSampling:
     pilot: float = 0.25
     defensive: float = 0.3
     shell: float = 0.9
+    phase_strata: int = 8
 
     def __post_init__(self) -> None:
         check_int("n_samples", self.n_samples, minimum=4)
@@ -145,6 +143,7 @@ class ImportanceSampling:
         check_range("defensive", self.defensive, 0.0, 0.9)
         if check_range("shell", self.shell, 0.0, 1.0) == 0.0:
             raise ValueError("shell = 0.0 is not allowed: must lie in (0.0, 1.0]")
+        check_int("phase_strata", self.phase_strata, minimum=1)
 
     def estimate(self, response: Any, inputs: Any, limit: LimitState, x: np.ndarray, *,
                  rng: np.random.Generator, u: np.ndarray | None = None) -> Estimate:
@@ -153,8 +152,16 @@ class ImportanceSampling:
         p, m = x.shape[0], inputs.dim
         if u is None:
             u = inputs.standard_sample(self.n_samples, rng=rng)
-        out = _Collect(p, m, self.n_design_points)
+        out = Collect(p, m, self.n_design_points)
+        cols = periodic_columns(inputs)
+        n_cells = self.phase_strata ** len(cols)
+        if cols and u.shape[0] < 4 * n_cells:
+            raise ValueError(f"n_samples = {u.shape[0]} is not allowed with {len(cols)} periodic "
+                             f"input(s): need >= 4 per phase stratum ({4 * n_cells})")
         for i in range(p):
+            if cols:
+                self._stratified(response, inputs, limit, x[i], cols, u, out, i)
+                continue
             G = LimitStateU(response, inputs, limit, x[i])
             dp = self.form.run(G, m)
             self.form.check(dp, i)
@@ -164,7 +171,7 @@ class ImportanceSampling:
                 if dp.status == "converged" and dp.beta >= 0:
                     pts = design_points(G, m, dp, self.form, max_points=self.n_design_points)
                 out.form_calls += G.calls
-                _Stages(self, G, pts, u).run(out, i)
+                Stages(self, G, pts, u).run(out, i)
             else:
                 out.form_calls += G.calls
             out.calls += G.calls
@@ -183,6 +190,60 @@ class ImportanceSampling:
                          "n_samples": u.shape[0], "status": status, "pf_bound": bound,
                          "n_outside_domain": out.nout, "n_other_failures": out.n_other,
                          "pf_stages": out.stages, **out.diag})
+
+    def _stratified(self, response: Any, inputs: Any, limit: LimitState, x_row: np.ndarray,
+                    cols: tuple, u: np.ndarray, out: Collect, i: int) -> None:
+        """Row ``i`` of ``out`` by stratified IS over the phase cells (:mod:`._periodic`): in
+        each cell the two stages at the design points of a search conditional on the cell's
+        centre phase, the phase drawn uniformly in the cell; the rows of ``u`` are split among
+        the cells in order."""
+        m, cs = inputs.dim, cells(cols, self.phase_strata)
+        n_k = u.shape[0] // len(cs)
+        sub = Collect(len(cs), m, self.n_design_points)
+        n_mc = 0
+        lo = np.array([c[1] for c in cols])
+        span = np.array([c[2] - c[1] for c in cols])
+        for k, (a, b) in enumerate(cs):
+            cond = Conditioned(inputs, cols, lo + span * 0.5 * (a + b))
+            Gc = LimitStateU(response, cond, limit, x_row)
+            dp = self.form.run(Gc, cond.dim)
+            pts = [dp]
+            if dp.status == "converged" and dp.beta >= 0:
+                pts = design_points(Gc, cond.dim, dp, self.form,
+                                    max_points=self.n_design_points)
+            G = LimitStateU(response, Stratum(inputs, cols, a, b), limit, x_row)
+            sub.status[k] = "converged" if dp.status == "failed" else dp.status
+            if dp.status != "failed":
+                pts = [replace(q, u_star=lift(q.u_star, cond.keep, m),
+                               alpha=lift(q.alpha, cond.keep, m),
+                               grad=lift(q.grad, cond.keep, m)) for q in pts]
+                Stages(self, G, pts, u[k * n_k:(k + 1) * n_k]).run(sub, k)
+            else:   # no design point: the cell's own distribution (crude MC in the cell)
+                fail = G(u[k * n_k:(k + 1) * n_k]) < 0
+                sub.pf[k], sub.se[k], sub.diag["ess"][k] = is_weights_estimate(
+                    fail, np.zeros(fail.size))
+                sub.nfail[k], n_mc = int(fail.sum()), n_mc + 1
+            out.form_calls += Gc.calls
+            out.calls += Gc.calls + G.calls
+        st = set(sub.status.tolist())
+        out.status[i] = ("failed" if "failed" in st else
+                         "converged" if st == {"converged"} else "not_reached")
+        out.pf[i] = float(np.mean(sub.pf))
+        out.se[i] = float(np.sqrt(np.sum(sub.se**2))) / len(cs)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out.beta[i] = -special.ndtri(out.pf[i])
+        j = int(np.nanargmax(sub.pf)) if np.isfinite(sub.pf).any() else 0
+        out.ustar[i] = lift(sub.ustar[j][cond.keep], cond.keep, m, np.nan)
+        out.betas[i], out.n_dp[i] = sub.betas[j], sub.n_dp[j]
+        out.stages[i] = np.mean(sub.stages, axis=0)
+        for name in ("nfail", "ndis", "nout", "n_other"):
+            getattr(out, name)[i] = int(getattr(sub, name).sum())
+        w = sub.pf / sub.pf.sum() if sub.pf.sum() > 0 else np.full(len(cs), 1 / len(cs))
+        out.diag["ess"][i] = float(np.sum(sub.diag["ess"]))
+        out.diag["pareto_k"][i] = float(np.nanmax(sub.diag["pareto_k"], initial=-np.inf))
+        out.diag["other_share"][i] = float(np.nansum(w * sub.diag["other_share"]))
+        out.diag["shell_share"][i] = float(np.nanmean(sub.diag["shell_share"]))
+        out.diag["n_mc_strata"][i] = n_mc
 
     @staticmethod
     def _warn(khat: np.ndarray, share: np.ndarray, nother: np.ndarray) -> None:
@@ -204,138 +265,3 @@ class ImportanceSampling:
                 EstimatorWarning, stacklevel=3)
 
 
-class _Stages:
-    """The two IS stages for one design (see the module docstring)."""
-
-    def __init__(self, est: ImportanceSampling, G: LimitStateU, pts: list, u: np.ndarray
-                 ) -> None:
-        self.est, self.G, self.u, self.pts, self.dp = est, G, u, list(pts), pts[0]
-        m, n = u.shape[1], u.shape[0]
-        beta, centres, shares = _geometry(self.pts)
-        a = (0.0 if self.dp.status == "not_reached"      # one region by construction
-             else shell_share(est.defensive, est.shell, self.dp.beta, m, n))
-        n_shell = int(round(a * n))
-        self.two = est.pilot < 1.0 and self.dp.status == "converged"
-        self.n1 = n_shell + max(2, int(round(est.pilot * (n - n_shell)))) if self.two else n
-        self.two = self.two and n - self.n1 >= 2
-        self.q1 = MixtureDraws(centres, shares, est.shell * abs(self.dp.beta),
-                               n_shell / self.n1 if self.two else a)
-        # the tail beyond the design points: failures when the mean is safe, survivals when it
-        # fails; for a limit state not reached, the superset {G <= G(u_b)} ({G >= G(u_b)})
-        self.level = self.dp.g_star if self.dp.status == "not_reached" else 0.0
-
-    def _tail(self, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        g = self.G(v)
-        if self.dp.status == "not_reached":
-            fail = g <= self.level if self.dp.beta >= 0 else g < self.level
-        else:
-            fail = g < 0
-        return (fail if self.dp.beta >= 0 else ~fail), fail
-
-    def _stage(self, v: np.ndarray, logq: Any, pts: list) -> dict:
-        beta, c, _ = _geometry(pts)
-        tail, fail = self._tail(v)
-        logw = -0.5 * np.einsum("ij,ij->i", v, v) - logq(v)
-        w_floor = float(np.exp(np.max(-0.5 * np.sum(c * c, axis=1) - logq(c))))
-        half = v @ c.T >= np.sum(c * c, axis=1)
-        r = cv_estimate(tail, half, logw, beta, w_floor)
-        wt = np.where(tail, np.exp(np.where(tail, logw, 0.0)), 0.0)
-        outside = ~half.any(axis=1)
-        return {"r": r, "v": v, "wt": wt, "fail": fail, "outside": tail & outside,
-                "n_other": int(np.sum(tail & outside)),
-                "other": wt[outside].sum() / wt.sum() if wt.sum() > 0 else 0.0}
-
-    def _discover(self, s1: dict) -> list:
-        """Further design points from the first stage's tail samples outside every known
-        half-space (found there by the shell): a search on the deflected function from the
-        heaviest of them, then from the mirror image of what it found, while any remain (at
-        most ``DISCOVERY_TRIES`` searches from samples: on a failure domain that bends back
-        every search ends in a bulge)."""
-        pts = list(self.pts)
-        if self.dp.status != "converged" or self.dp.beta < 0:
-            return pts
-        v, wt = s1["v"], s1["wt"]
-        tried = np.zeros(v.shape[0], dtype=bool)
-        for _ in range(DISCOVERY_TRIES):
-            if len(pts) >= self.est.n_design_points:
-                break
-            c = _geometry(pts)[1]
-            left = (wt > 0) & ~(v @ c.T >= np.sum(c * c, axis=1)).any(axis=1) & ~tried
-            if not left.any():
-                break
-            j = np.flatnonzero(left)[np.argmax(wt[left])]
-            tried[j] = True
-            dp = design_point_from(self.G, v.shape[1], pts, self.est.form, v[j])
-            if dp is None:
-                continue
-            pts.append(dp)
-            mirror = design_point_from(self.G, v.shape[1], pts, self.est.form, -dp.u_star)
-            if mirror is not None and len(pts) < self.est.n_design_points:
-                pts.append(mirror)
-        return pts
-
-    def run(self, out: _Collect, i: int) -> None:
-        """Fill row ``i`` of ``out``."""
-        n_out0 = self.G.n_outside
-        v1, comp = self.q1.points(self.u[: self.n1])
-        s1 = self._stage(v1, self.q1.logpdf, self.pts)
-        stages, pts = [s1], self.pts
-        khat = pareto_khat(s1["wt"][comp >= 0])
-        if self.two:
-            pts = self._discover(s1)
-            _, centres, shares = _geometry(pts)
-            comp_all = comp if len(pts) == len(self.pts) else np.where(comp >= 0, comp, -1)
-            sg = ScaledGaussians.fit(v1, s1["wt"], comp_all, centres, shares)
-            u2 = self.u[self.n1:]
-            nd = int(round(STAGE2_DEFENSIVE * u2.shape[0]))
-            v2 = np.vstack([self.q1.points(u2[:nd])[0], sg.points(u2[nd:])])
-
-            def logq2(v: np.ndarray) -> np.ndarray:
-                return np.logaddexp(np.log(STAGE2_DEFENSIVE) + self.q1.logpdf(v),
-                                    np.log1p(-STAGE2_DEFENSIVE) + sg.logpdf(v))
-
-            stages.append(self._stage(v2, logq2, pts))
-            khat = pareto_khat(stages[1]["wt"])
-        # the estimate is the last stage's: given the first stage, the second is a plain IS
-        # run from a fixed density (an inverse-variance combination would favour the runs
-        # that land low, whose reported errors are small too)
-        last = stages[-1]
-        out.pf[i] = last["r"].p if self.dp.beta >= 0 else 1.0 - last["r"].p
-        out.se[i] = last["r"].se
-        out.stages[i, : len(stages)] = [st["r"].p for st in stages]
-        out.nfail[i] = sum(int(st["fail"].sum()) for st in stages)
-        out.ndis[i] = sum(st["r"].n_disagree for st in stages)
-        out.n_other[i] = last["n_other"]
-        out.nout[i] = self.G.n_outside - n_out0
-        beta = _geometry(pts)[0]
-        out.beta[i], out.ustar[i], out.n_dp[i] = self.dp.beta, self.dp.u_star, beta.size
-        out.betas[i, : beta.size] = beta
-        out.diag["ess"][i] = last["r"].ess
-        out.diag["shell_share"][i] = self.q1.a
-        out.diag["pareto_k"][i] = khat
-        out.diag["other_share"][i] = last["other"]
-
-
-def _geometry(pts: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``β_k = ±‖u_k‖``, centres ``u_k`` and shares ``π_k ∝ Φ(−|β_k|)`` of a list of design
-    points (the distance itself, not FORM's β clipped at ``beta_max`` when not reached: the
-    half-space at ``u_k`` has probability ``Φ(−‖u_k‖)``)."""
-    beta = np.array([np.copysign(np.linalg.norm(q.u_star), q.beta) for q in pts])
-    shares = special.ndtr(-np.abs(beta))
-    shares = shares / shares.sum() if shares.sum() > 0 else np.full(len(pts), 1 / len(pts))
-    return beta, np.array([q.u_star for q in pts]), shares
-
-
-class _Collect:
-    """Per-design results of :class:`ImportanceSampling` (arrays of length P)."""
-
-    def __init__(self, p: int, m: int, k: int) -> None:
-        self.pf, self.se, self.beta = nan_p(p), nan_p(p), nan_p(p)
-        self.diag = {key: nan_p(p) for key in ("ess", "pareto_k", "other_share",
-                                               "shell_share")}
-        self.nfail, self.ndis, self.nout = (np.zeros(p, int) for _ in range(3))
-        self.n_other, self.n_dp = np.zeros(p, int), np.zeros(p, int)
-        self.ustar, self.betas = np.full((p, m), np.nan), np.full((p, k), np.nan)
-        self.stages = np.full((p, 2), np.nan)
-        self.status = np.full(p, "failed", dtype=object)
-        self.calls = self.form_calls = 0

@@ -18,6 +18,7 @@ finds the limit state not reached, its first-order value is reported (``status``
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -28,6 +29,8 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate, nan_p
+from surrogate_rbrdo.estimators._periodic import conditional_search, periodic_columns
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.form import FORM, bound_labels
 from surrogate_rbrdo.estimators.importance import check_form
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
@@ -88,7 +91,13 @@ class SORM:
     """Second-order reliability method from the FORM design point.
 
     Diagnostics: ``beta``, ``beta_sorm = −Φ⁻¹(P_f)``, ``curvatures`` ``(P, m − 1)``,
-    ``pf_form``, ``converged``. ``mean``/``std`` and errors are NaN.
+    ``pf_form``, ``converged``, ``pf_quadrature_error``. ``mean``/``std`` and errors are NaN.
+
+    With periodic inputs (phases) the second-order P_f is computed conditional on the phase at
+    the nodes of FORM's phase rule and integrated over it (:mod:`._periodic`); ``beta`` is then
+    the generalised index ``−Φ⁻¹(P_f)``, ``curvatures`` and ``pf_form`` are NaN. A node where
+    the second-order formula is not applicable (``1 + ψκ ≤ 0``) contributes its first-order
+    value; ``n_first_order_nodes`` counts them and an :class:`~._tail.EstimatorWarning` says so.
 
     Parameters
     ----------
@@ -125,7 +134,19 @@ class SORM:
         conv, calls = np.zeros(p, bool), 0
         status = np.full(p, "failed", dtype=object)
         kappas = np.full((p, max(inputs.dim - 1, 0)), np.nan)
+        cols = periodic_columns(inputs)
+        qerr, n_first = nan_p(p), np.zeros(p, int)
         for i in range(p):
+            if cols:   # conditional on the phases, integrated over them (:mod:`._periodic`)
+                first = [0]
+                dp, q = conditional_search(self.form, response, inputs, limit, x[i], cols,
+                                           correct=lambda G, d, f=first: self._correct(G, d, f))
+                self.form.check(dp, i)
+                n_first[i] = first[0]
+                calls += dp.calls
+                status[i], beta[i], pf[i], qerr[i] = dp.status, dp.beta, q.pf, q.error
+                conv[i] = dp.status != "failed"
+                continue
             dp = self.form.search(response, inputs, limit, x[i])
             self.form.check(dp, i)
             calls += dp.calls
@@ -150,10 +171,28 @@ class SORM:
                     raise ModelError(
                         f"SORM is not applicable for design {i}: a curvature factor 1 + psi*kappa"
                         f" <= 0 (beta={dp.beta:.4g}, curvatures={np.round(kap, 4).tolist()})")
+        if n_first.any():
+            bad = np.flatnonzero(n_first)
+            warnings.warn(f"SORM: for design(s) {bad[:10].tolist()} the second-order formula is "
+                          f"not applicable at {n_first[bad[:10]].tolist()} phase node(s) "
+                          "(1 + psi*kappa <= 0): their first-order value is used",
+                          EstimatorWarning, stacklevel=2)
         with np.errstate(divide="ignore"):
             beta_sorm = -special.ndtri(pf)
         status = status.astype(str)
         return make_estimate("sorm", calls, p, pf=pf, diagnostics={
             "beta": beta, "beta_sorm": beta_sorm, "curvatures": kappas, "pf_form": pf_form,
             "converged": conv, "status": status, "pf_bound": bound_labels(beta, status),
+            "pf_quadrature_error": qerr, "n_first_order_nodes": n_first,
             "formula": self.formula})
+
+    def _correct(self, G: LimitStateU, dp: Any, first: list) -> float:
+        """SORM's P_f at a converged design point of ``G``; FORM's where the second-order
+        formula is not applicable (counted in ``first[0]``)."""
+        kap = curvatures(G, dp.u_star, dp.alpha, float(np.linalg.norm(dp.grad)),
+                         self.hessian_step)
+        pf = sorm_pf(dp.beta, kap, self.formula)
+        if np.isfinite(pf):
+            return pf
+        first[0] += 1
+        return float(special.ndtr(-dp.beta))

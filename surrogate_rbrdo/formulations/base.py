@@ -95,6 +95,7 @@ class Formulation:
     estimator: Any = None
     estimator_seed: int = 0
     design_constraints: tuple[DesignConstraint, ...] = ()
+    design_theta: np.ndarray | None = None
     _theta: np.ndarray = field(init=False, repr=False)
     _theta_nominal: np.ndarray = field(init=False, repr=False)
 
@@ -109,7 +110,13 @@ class Formulation:
         theta = np.array(self.inputs.from_standard(self.u), dtype=float)
         theta.flags.writeable = False
         object.__setattr__(self, "_theta", theta)
-        nominal = np.array(self.inputs.from_standard(np.zeros((1, self.u.shape[1]))), dtype=float)
+        nominal = (self.inputs.from_standard(np.zeros((1, self.u.shape[1])))
+                   if self.design_theta is None else self.design_theta)
+        nominal = np.array(nominal, dtype=float)
+        if nominal.ndim != 2 or nominal.shape[1] != theta.shape[1] or nominal.shape[0] < 1 \
+                or not np.all(np.isfinite(nominal)):
+            raise ValueError(f"design_theta has shape {nominal.shape}: must be finite (k >= 1, "
+                             f"{theta.shape[1]}), one θ row per design case")
         nominal.flags.writeable = False
         object.__setattr__(self, "_theta_nominal", nominal)
 
@@ -121,8 +128,10 @@ class Formulation:
 
     @property
     def theta_nominal(self) -> np.ndarray:
-        """Nominal θ, shape ``(1, m)``: the image of ``u = 0`` (the mean for a Gaussian);
-        read-only, the same object on every access (so a θ-block cache hits)."""
+        """The design-basis θ rows ``(k, m)`` of the deterministic formulation: ``design_theta``
+        if given (e.g. a problem's stated unbalance cases), else the image of ``u = 0`` (the
+        mean for a Gaussian; ``k = 1``); read-only, the same object on every access (so a
+        θ-block cache hits)."""
         return self._theta_nominal
 
     @property
@@ -173,10 +182,12 @@ class Formulation:
         return est, values
 
     def _nominal(self, x: np.ndarray) -> Estimate:
-        y = np.asarray(self.response(x, self.theta_nominal), dtype=float)[:, 0]
+        # the worst of the stated design cases (one case: the nominal response itself)
+        values = np.asarray(self.response(x, self.theta_nominal), dtype=float)
+        y = values.max(axis=1)
         nan = np.full_like(y, np.nan)
         return Estimate(mean=y, std=nan, pf=nan, mean_se=nan, std_se=nan, pf_se=nan,
-                        pf_ci=np.full((y.size, 2), np.nan), n_calls=int(y.size),
+                        pf_ci=np.full((y.size, 2), np.nan), n_calls=int(values.size),
                         method="nominal", diagnostics={})
 
     def assess(self, x: np.ndarray) -> Estimate:
@@ -264,6 +275,7 @@ def make_formulation(
     deterministic: Callable[[np.ndarray], Mapping[str, np.ndarray]] | None = None,
     extra_reliability: tuple[ReliabilityConstraint, ...] = (),
     constraints: tuple[DesignConstraint, ...] = (),
+    design_theta: np.ndarray | None = None,
 ) -> Formulation:
     """Build a registered formulation and draw its common-random-number sample.
 
@@ -293,6 +305,10 @@ def make_formulation(
     constraints : tuple of DesignConstraint
         Generic deterministic design constraints ``g(x) <= 0`` (Python callables or parsed
         expressions, :mod:`~.constraints`), appended after ``g_det``.
+    design_theta : ndarray (k, m), optional
+        The deterministic design basis: the ``deterministic`` formulation minimises the largest
+        response over these θ rows (e.g. the stated unbalance cases of
+        ``ThetaSpec.unbalance_cases``); ``None``: the image of ``u = 0``.
     """
     cls = FORMULATIONS.get(name)
     options = FormulationOptions() if options is None else options
@@ -312,6 +328,12 @@ def make_formulation(
     names = [c.name for c in constraints]
     if len(set(names)) != len(names):
         raise ValueError(f"constraints: names {names} are not allowed: each name once")
+    if design_theta is not None:
+        dt = np.asarray(design_theta, dtype=float)
+        if dt.ndim != 2 or dt.shape[1] != int(inputs.dim) or not dt.shape[0] \
+                or not np.all(np.isfinite(dt)):
+            raise ValueError(f"design_theta has shape {dt.shape}: must be finite (k >= 1, "
+                             f"{inputs.dim}), one θ row per design case")
     estimator = None
     if options.estimator != "mc":
         estimator = get_estimator(options.estimator, **options.estimator_options)
@@ -323,4 +345,5 @@ def make_formulation(
     seed = int(rng.integers(0, 2**63 - 1))
     return cls(response=response, inputs=inputs, limit=limit, u=u, options=options,
                constraints_det=det, extra_reliability=tuple(extra_reliability),
-               estimator=estimator, estimator_seed=seed, design_constraints=tuple(constraints))
+               estimator=estimator, estimator_seed=seed, design_constraints=tuple(constraints),
+               design_theta=design_theta)

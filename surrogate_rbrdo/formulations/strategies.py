@@ -3,7 +3,7 @@
 =================  ===================  ==========================================
 name               objectives           constraints (all ``<= 0``)
 =================  ===================  ==========================================
-``deterministic``  y(x, θ_nominal)      g_det
+``deterministic``  max_k y(x, θ_k)      g_det
 ``rdo``            μ_y, σ_y             g_det
 ``rbdo``           μ_y                  P_f / P_target − 1, g_det
 ``rbrdo``          μ_y, σ_y             P_f / P_target − 1, g_det
@@ -25,7 +25,8 @@ from surrogate_rbrdo.formulations.base import FORMULATIONS, Formulation
 @FORMULATIONS.register("deterministic")
 @dataclass(frozen=True, eq=False)
 class DeterministicFormulation(Formulation):
-    """Minimise the response at nominal θ subject to g_det only."""
+    """Minimise the response at the design-basis θ (the worst of its rows: a problem's stated
+    design cases, or the image of ``u = 0``) subject to g_det only."""
 
     name = "deterministic"
     objective_names = ("nominal",)

@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.files import atomic_write_text
-from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
 from surrogate_rbrdo.reporting.plots_identification import write_identification_figures
 from surrogate_rbrdo.reporting.plots_rig import write_rig_report
 from surrogate_rbrdo.reporting.plots_validation import write_validation_report
@@ -281,8 +280,6 @@ def write_loop_report(out_dir: str | Path, *, truth: Any, campaign: Any, campaig
          "cov": np.asarray(mvn.cov).tolist(), "provenance": theta.provenance},
         indent=1, default=str))
     write_validation_report(validation, root / "validation")
-    if discrepancy.ran:
-        plot_all(discrepancy.result, root / "discrepancy")
     ver2, res2 = updated
     if res2 is not None:
         write_validation_report(res2, root / "validation_updated")

@@ -137,9 +137,19 @@ def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...],
              in_loop: str = "surrogate") -> list[dict[str, Any]]:
     """``mbr.csv``: marginal benefit ratios between the P_target levels, from the compromises
     of the model in the loop on the CRN sample (``<in_loop>_crn``: ``surrogate_crn`` or
-    ``fe_crn``), their FE verification and the ends of each feasible front."""
+    ``fe_crn``), their FE verification and the ends of each feasible front.
+
+    An MBR measures what relaxing P_target buys only where the reliability constraint acts.
+    Every row says whether it does: ``active_from`` / ``active_to`` count the designs of each
+    level's feasible archive front whose CRN P_f exceeds 0.9 P_target, and ``constraint``
+    is ``"active"`` when either count is positive, else ``"inactive at both levels"`` — the
+    Δμ and Δσ of such a row are the optimiser's and the sample's noise, not a benefit (a
+    seed sweep gives their spread: ``benchmarks/study_seed_stability.py``)."""
     comp = opt.compromises(weights)
     rb = [(pt, lab) for (n, pt), lab in zip(opt.runs, opt.labels, strict=True) if n == "rbrdo"]
+    res = opt.by_label()
+    active = {round(pt * 100, 9): int(np.sum(res[lab].archive.pf[archive_front(res[lab])]
+                                             > 0.9 * pt)) for pt, lab in rb}
     levels_s = [(pt, comp[lab].mean, comp[lab].std) for pt, lab in rb if comp[lab] is not None]
     rows: list[dict[str, Any]] = []
     if len(levels_s) >= 2:
@@ -151,7 +161,6 @@ def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...],
     # the ends of each feasible front (least μ, least σ: from different designs) do not jump
     # between branches as a compromise can, and under CRN they can only worsen as P_target
     # tightens (the feasible set shrinks; an optimiser's fronts only approximately so)
-    res = opt.by_label()
     levels_e = []
     for pt, lab in rb:
         F = res[lab].archive.F[archive_front(res[lab])]
@@ -159,6 +168,10 @@ def mbr_rows(opt: Optimisation, ver: Verification, weights: tuple[float, ...],
             levels_e.append((pt, F[:, 0].min(), F[:, 1].min()))
     if len(levels_e) >= 2:
         rows += [{"source": "front_ends_crn", **r} for r in mbr_table(levels_e)]
+    for r in rows:
+        a0, a1 = active[round(r["from_pct"], 9)], active[round(r["to_pct"], 9)]
+        r.update(active_from=a0, active_to=a1,
+                 constraint="active" if a0 or a1 else "inactive at both levels")
     return rows
 
 

@@ -21,7 +21,7 @@ from pydantic import AliasChoices, Field
 from surrogate_rbrdo.core.files import require_disk
 from surrogate_rbrdo.core.memory import available_memory, require_memory
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.core.validate import check_int, check_positive
+from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.formulations import DeterministicOptions
 from surrogate_rbrdo.identification.study import stiffness_block_from
 from surrogate_rbrdo.runner.runfolder import check_name
@@ -37,8 +37,12 @@ from surrogate_rbrdo.study.problem import (
     TABLE4_STD,
     UnbalanceOptions,
     peak_unbalance_inputs,
+    unbalance_design_cases,
 )
 from surrogate_rbrdo.uncertainty import stiffness_factors
+
+#: what the deterministic strategy designs against (``[deterministic] design_basis``)
+DESIGN_BASES = ("unbalance_cases", "median")
 
 
 @dataclass(frozen=True)
@@ -288,7 +292,11 @@ class DeterministicTable:
     each design up to ``search_factor`` × the top speed) or ``"none"``; ``practice``: the
     checks a spindle designer imposes (``spindle.practice``: bearing speed capability, ISO 281
     life, ISO 76 static safety, motor length against span, run-up time), with
-    ``[deterministic.practice_spec]`` (``PracticeSpec`` fields) replacing their data."""
+    ``[deterministic.practice_spec]`` (``PracticeSpec`` fields) replacing their data.
+    ``design_basis``: what the deterministic strategy designs against, ``"unbalance_cases"``
+    (the API RP 684 unbalance arrangements, every plane at its ISO 21940-11 limit, in phase
+    and in couple: ``study.unbalance_design_cases``; the default with a random unbalance) or
+    ``"median"`` (the image of u = 0; the default otherwise)."""
 
     stress: bool = True
     yield_strength_pa: float = 930e6
@@ -298,6 +306,23 @@ class DeterministicTable:
     search_factor: float = 1.5
     practice: bool = False
     practice_spec: PracticeSpec | None = None
+    design_basis: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.design_basis is not None:
+            check_choice("design_basis", self.design_basis, DESIGN_BASES)
+
+    def design_theta(self, inputs: Any, response: ResponseSpec) -> np.ndarray | None:
+        """The deterministic strategy's design-basis θ rows (``None``: the image of u = 0)."""
+        unbalance = response.kind == "peak_unbalance"
+        basis = self.design_basis or ("unbalance_cases" if unbalance else "median")
+        if basis == "median":
+            return None
+        if not unbalance:
+            raise ValueError(f"deterministic.design_basis = {basis!r} is not allowed with "
+                             f"response.kind = {response.kind!r}: the unbalance is not random "
+                             "(use 'median' or kind = 'peak_unbalance')")
+        return unbalance_design_cases(inputs, response)
 
     def options(self, speed_max_rpm: float) -> DeterministicOptions:
         """The g_det of the design model (the separation guard is a design constraint)."""

@@ -114,6 +114,41 @@ class ThetaSpec:
     def dim(self) -> int:
         return len(self.names)
 
+    def unbalance_cases(self, theta0: np.ndarray) -> np.ndarray:
+        """The deterministic design basis: the unbalance arrangements of an API RP 684 / API
+        617 unbalance response analysis, each plane at its ISO 21940-11 permissible value.
+
+        Rows ``(k, dim)``: ``theta0`` (the other columns, e.g. the median θ) with every
+        magnitude fraction 1 and the phases of (a) every plane in phase (the static unbalance
+        that excites the first, translatory/bending mode) and (b) alternate planes at 180°
+        (the couple unbalance that excites the conical/pivotal mode; absent with one plane).
+        API RP 684 (2nd ed., 2005) §2.6 and API 617 §2.6.2.7 place the unbalance to excite
+        each mode in turn and check the response of every arrangement; a deterministic design
+        is then judged by the worse of the two. For two planes the worse of (a) and (b) is at
+        least the root-sum-square of the single-plane responses at every speed
+        (|a + b|² + |a − b|² = 2|a|² + 2|b|²), so no design can pass it by a cancellation of
+        the planes, and at most √2 below the worst relative phase (|a| + |b|).
+
+        >>> ThetaSpec().unbalance_cases(np.array([1.0, 1.0, 0.7, 0.7, 180.0])).tolist()
+        [[1.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 180.0]]
+        """
+        t0 = np.asarray(theta0, dtype=float).reshape(-1)
+        if t0.shape != (self.dim,) or not np.all(np.isfinite(t0)):
+            raise ValueError(f"theta0 has shape {np.shape(theta0)}: must be finite ({self.dim},)"
+                             f" with columns {list(self.names)}")
+        P, names = self.n_planes, self.names
+        phases = [np.zeros(P)] + ([np.where(np.arange(P) % 2 == 1, 180.0, 0.0)] if P > 1
+                                  else [])
+        first = 1 if self.relative_phase else 0
+        rows = []
+        for ph in phases:
+            row = t0.copy()
+            if self.magnitude == "disk":
+                row[[names.index(f"u_frac[{j}]") for j in range(P)]] = 1.0
+            row[[names.index(f"phase_deg[{j}]") for j in range(first, P)]] = ph[first:]
+            rows.append(row)
+        return np.array(rows)
+
     def split(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray | None, np.ndarray,
                                                 np.ndarray]:
         """Stiffness factors ``(N, m)``, thermal state ``(N,)`` or None, magnitude fractions

@@ -16,6 +16,7 @@ from surrogate_rbrdo.study.problem import (
     Problem,
     credible_problem,
     reference_problem,
+    unbalance_design_cases,
 )
 from surrogate_rbrdo.study.stages import (
     Optimisation,
@@ -35,5 +36,6 @@ __all__ = [
     "Problem", "Refinement", "Verification", "VerificationOptions", "check_study_memory",
     "chosen_designs",
     "credible_problem", "expression_constraints", "formulation", "merge_calls", "optimise",
-    "reference_problem", "refine", "run_label", "spindle_constraints", "verify",
+    "reference_problem", "refine", "run_label", "spindle_constraints",
+    "unbalance_design_cases", "verify",
 ]

@@ -74,6 +74,10 @@ class Problem:
     constraints : tuple of DesignConstraint
         Further deterministic design constraints ``g(x) <= 0`` (practice checks, the exact
         separation guard, expressions), given to every formulation.
+    design_theta : ndarray (k, m) or None
+        The deterministic strategy's design basis: it minimises the largest ``y`` over these θ
+        rows (:func:`unbalance_design_cases`: the API RP 684 unbalance arrangements at the ISO
+        limit). ``None``: the image of ``u = 0`` (the mean stiffness factors).
     """
 
     spindle: ReferenceSpindle
@@ -83,6 +87,7 @@ class Problem:
     deterministic: DeterministicOptions = field(default_factory=DeterministicOptions)
     baseline: np.ndarray | None = None
     constraints: tuple[DesignConstraint, ...] = ()
+    design_theta: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.limit, LimitState):
@@ -105,6 +110,15 @@ class Problem:
         cnames = [c.name for c in self.constraints]
         if len(set(cnames)) != len(cnames):
             raise ValueError(f"constraints: names {cnames} are not allowed: each name once")
+        if self.design_theta is not None:
+            dt = np.array(self.design_theta, dtype=float)
+            if dt.ndim != 2 or dt.shape[1] != len(names) or not dt.shape[0] \
+                    or not np.all(np.isfinite(dt)):
+                raise ValueError(f"design_theta has shape {dt.shape}: must be finite (k >= 1, "
+                                 f"{len(names)}), one row per design case, columns "
+                                 f"{list(names)}")
+            dt.flags.writeable = False
+            object.__setattr__(self, "design_theta", dt)
         base = self.spindle.baseline if self.baseline is None else self.baseline
         object.__setattr__(self, "baseline",
                            self.spindle.design_map.check(np.asarray(base, dtype=float)))
@@ -185,6 +199,23 @@ def peak_unbalance_inputs(spindle: ReferenceSpindle, stiffness: Any, *, thermal_
                                                                    tolerances=tol)
 
 
+def unbalance_design_cases(inputs: Any, response: PeakUnbalanceSpec) -> np.ndarray:
+    """The deterministic design basis of a random-unbalance problem: the median θ (the image
+    of ``u = 0``: stiffness factors 1) with the unbalance arrangements of an API RP 684
+    unbalance response analysis, every plane at its ISO 21940-11 limit, in phase and in
+    couple (``ThetaSpec.unbalance_cases``).
+
+    >>> c = credible_problem()
+    >>> unbalance_design_cases(c.inputs, c.response).tolist()
+    [[1.0, 1.0, 1.0, 1.0, 0.0], [1.0, 1.0, 1.0, 1.0, 180.0]]
+    """
+    if not isinstance(response, PeakUnbalanceSpec):
+        raise ValueError(f"response = {response!r} is not allowed: unbalance design cases need "
+                         "a PeakUnbalanceSpec (kind = 'peak_unbalance')")
+    theta0 = np.asarray(inputs.from_standard(np.zeros((1, int(inputs.dim)))), dtype=float)[0]
+    return response.theta_spec.unbalance_cases(theta0)
+
+
 def credible_problem(*, delta_lim_um: float = 1.0) -> Problem:
     """The credible reference problem (docs/reference-spindle.md, each choice with its
     source): ``credible_spindle()`` (front preload 190–1 140 N, the catalogue classes of a
@@ -193,7 +224,8 @@ def credible_problem(*, delta_lim_um: float = 1.0) -> Problem:
     θ = stiffness factors around the speed trend (CoV 1.5 % / 3.3 %) + unbalance fractions
     and relative phase; δ_lim = 1 µm (the permissible eccentricity G/Ω_max of G 2.5 at
     24 000 rpm); the stress check (σ_yield 930 MPa), the practice checks and the exact API
-    separation guard."""
+    separation guard. The deterministic strategy designs against the API RP 684 unbalance
+    cases at the ISO limit (:func:`unbalance_design_cases`)."""
     sp = credible_spindle()
     inputs, response = peak_unbalance_inputs(sp, MultivariateNormal([1.0, 1.0],
                                                                     std=list(RESIDUAL_STD)))
@@ -203,8 +235,10 @@ def credible_problem(*, delta_lim_um: float = 1.0) -> Problem:
                                            resonance="none",
                                            omega_max=sp.geometry.speed_max_rpm * RPM),
         baseline=sp.baseline,
-        constraints=spindle_constraints(sp, practice=PracticeSpec(), resonance="separation"))
+        constraints=spindle_constraints(sp, practice=PracticeSpec(), resonance="separation"),
+        design_theta=unbalance_design_cases(inputs, response))
 
 
 __all__ = ["DESIGN_NAMES", "RESIDUAL_STD", "TABLE4_STD", "Problem", "credible_problem",
-           "UnbalanceOptions", "peak_unbalance_inputs", "reference_problem"]
+           "UnbalanceOptions", "peak_unbalance_inputs", "reference_problem",
+           "unbalance_design_cases"]

@@ -118,7 +118,7 @@ def formulation(problem: Problem, model: Any, design_model: Any, name: str, p_ta
     return make_formulation(
         name, response=model, inputs=problem.inputs, limit=problem.limit,
         deterministic=design_model, rng=np.random.default_rng(crn),
-        constraints=problem.constraints,
+        constraints=problem.constraints, design_theta=problem.design_theta,
         options=FormulationOptions(p_target=p_target, n_theta=options.n_theta,
                                    estimator=options.estimator,
                                    estimator_options=options.estimator_options,

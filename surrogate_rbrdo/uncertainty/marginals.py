@@ -139,20 +139,32 @@ class LogNormal(_Marginal):
 
 @dataclass(frozen=True)
 class Uniform(_Marginal):
-    """Uniform marginal on ``[lo, hi]``.
+    """Uniform marginal on ``[lo, hi]``; ``periodic=True`` marks an angle (a phase) on which
+    the response depends periodically with period ``hi − lo`` (``lo ≡ hi``).
+
+    The transform ``θ = lo + (hi − lo) Φ(u)`` puts both ends of the interval at ``u = ±∞``, so
+    a periodic response whose worst value lies at ``lo ≡ hi`` has no design point in standard
+    space; the design-point estimators (FORM, SORM, IS) condition on periodic columns instead
+    (:mod:`surrogate_rbrdo.estimators._periodic`).
 
     >>> round(float(Uniform(0.0, 1.0).std[0]) ** 2 * 12, 12)
     1.0
+    >>> Uniform(0.0, 360.0, periodic=True).periodic
+    True
     """
 
     lo: float
     hi: float
+    periodic: bool = False
 
     def __post_init__(self) -> None:
         check_finite("lo", self.lo)
         check_finite("hi", self.hi)
         if not self.hi > self.lo:
             raise ValueError(f"hi = {self.hi!r} is not allowed: must be > lo = {self.lo!r}")
+        if not isinstance(self.periodic, bool):
+            raise ValueError(f"periodic = {self.periodic!r} is not allowed: must be True or "
+                             "False")
 
     def _mean(self) -> float:
         return 0.5 * (self.lo + self.hi)

@@ -12,7 +12,8 @@ BlockIndependent`), in the spec's column order:
 * unbalance magnitude fractions ``r_j``: radius of a point uniform over the tolerance disk
   (:class:`~surrogate_rbrdo.uncertainty.disk.UniformDiskRadius`, only with
   ``magnitude = "disk"``);
-* phases ``U(0°, 360°)``, one per plane or per plane after the first.
+* phases ``U(0°, 360°)``, one per plane or per plane after the first, marked ``periodic``
+  (an angle: 0° ≡ 360°).
 
 >>> from types import SimpleNamespace
 >>> spec = SimpleNamespace(stiffness_std=(0.015, 0.033), stiffness_corr=None,
@@ -54,7 +55,7 @@ def theta_random_vector(spec: Any, stiffness: Any = None) -> BlockIndependent:
     if spec.magnitude == "disk":
         rest += [UniformDiskRadius(1.0) for _ in range(spec.n_planes)]
     n_phase = spec.n_planes - (1 if spec.relative_phase else 0)
-    rest += [Uniform(0.0, 360.0) for _ in range(n_phase)]
+    rest += [Uniform(0.0, 360.0, periodic=True) for _ in range(n_phase)]
     if rest:
         blocks.append(Independent(rest))
     return BlockIndependent(blocks)

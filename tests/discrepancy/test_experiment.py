@@ -5,24 +5,32 @@ from __future__ import annotations
 import csv
 import json
 import tomllib
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from surrogate_rbrdo.core.schema import parse
-from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.discrepancy.experiment import (
+    DiscrepancyTable,
+    analyse,
+    data_from_folder,
+    options_from_dict,
+)
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
+from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
 from surrogate_rbrdo.rig.config import RigTable
 from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
 
 from .conftest import campaign_data
 
-PENDING = Path(__file__).resolve().parents[2] / "experiments" / "pending"
+EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
 
 
 @pytest.mark.parametrize("name", ["discrepancy.toml", "discrepancy_null.toml"])
 def test_configs_parse(name):
-    cfg = tomllib.loads((PENDING / name).read_text())
+    cfg = tomllib.loads((EXPERIMENTS / name).read_text())
     assert cfg["experiment"]["kind"] == "discrepancy"
     o = options_from_dict(cfg["discrepancy"])
     assert o.nuisance.gain_sd == 0.02 and "housing" in o.library
@@ -32,10 +40,21 @@ def test_configs_parse(name):
 
 
 def test_bad_tables_name_the_key():
-    with pytest.raises(ValueError, match=r"\[discrepancy\]"):
+    with pytest.raises(ValueError, match=r"unknown key discrepancy.alpha_typo; allowed"):
         options_from_dict({"alpha_typo": 0.1})
-    with pytest.raises(ValueError, match="preset"):
+    with pytest.raises(ValueError, match=r"discrepancy.nuisance.preset = 'nope' is not allowed"):
         options_from_dict({"nuisance": {"preset": "nope"}})
+    with pytest.raises(ValueError, match=r"discrepancy.nuisance.mass_sd = 0.9 is not allowed"):
+        options_from_dict({"nuisance": {"preset": "probe_chain", "mass_sd": 0.9}})
+    with pytest.raises(ValueError, match=r"discrepancy.library\[1\] = 'warp' is not allowed"):
+        options_from_dict({"library": ["housing", "warp"]})
+
+
+def test_a_preset_is_overridden_field_by_field():
+    o = options_from_dict({"nuisance": {"preset": "probe_chain", "gain_sd": 0.05}})
+    p = NuisanceOptions.probe_chain()
+    assert o.nuisance == replace(p, gain_sd=0.05)
+    assert options_from_dict({}).nuisance == NuisanceOptions()
 
 
 def test_a_folder_of_phasors_is_analysed(spindle, tmp_path):
@@ -61,3 +80,10 @@ def test_a_folder_of_phasors_is_analysed(spindle, tmp_path):
     assert json.loads(paths["findings"].read_text())["verdict"] == "nothing_missing"
     with pytest.raises(ValueError, match="no phasors.csv"):
         data_from_folder(tmp_path / "run")
+
+
+def test_the_table_has_the_options_fields_and_defaults():
+    """[discrepancy] mirrors DiscrepancyOptions (nuisance as a table with a preset)."""
+    assert [f.name for f in fields(DiscrepancyTable)] == [
+        f.name for f in fields(DiscrepancyOptions)]
+    assert DiscrepancyTable().options() == DiscrepancyOptions()

@@ -1,5 +1,7 @@
 """FORM and FOSM against closed-form answers, and FORM's failure modes."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from scipy import special
@@ -99,8 +101,17 @@ def test_form_converges_next_to_its_limit_state():
     assert est.diagnostics["beta"][0] == pytest.approx(beta_ref, abs=FORM().tol_g)
 
 
+def _curved():
+    """y = u₁ + u₂/2 + u₂²/5 > 3: one iHL-RF step from the origin does not reach the design point
+    (the paraboloid's first step lands on it exactly, and is then accepted at max_iter)."""
+    inputs = MultivariateNormal(np.zeros(2), cov=np.eye(2))
+    return SimpleNamespace(
+        inputs=inputs, limit=LimitState(3.0), x=np.zeros((1, 0)),
+        response=lambda x, t: (t[:, 0] + 0.5 * t[:, 1] + 0.2 * t[:, 1] ** 2)[None, :])
+
+
 def test_form_non_convergence_raises_or_returns_nan():
-    prob = paraboloid(beta=3.0, kappa=0.3, dim=3)
+    prob = _curved()
     est = FORM(max_iter=1, on_failure="nan").estimate(prob.response, prob.inputs, prob.limit,
                                                       prob.x, rng=RNG)
     assert np.isnan(est.pf[0]) and not est.diagnostics["converged"][0]
@@ -109,7 +120,7 @@ def test_form_non_convergence_raises_or_returns_nan():
 
 
 def test_form_iteration_limit_reported():
-    prob = paraboloid(beta=3.0, kappa=0.3, dim=3)
+    prob = _curved()
     with pytest.raises(ModelError, match="maximum number of iterations"):
         form(prob, max_iter=1)
 

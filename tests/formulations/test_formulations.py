@@ -76,6 +76,27 @@ def test_deterministic_uses_nominal_theta():
     assert ev.n_surrogate_calls == 2 and np.isnan(ev.estimate.std).all()
 
 
+def test_deterministic_designs_against_the_worst_stated_case():
+    cases = np.array([[1.0, 2.0], [2.0, 0.5], [0.0, 3.0]])
+    form = make_formulation("deterministic", response=resp, inputs=inputs(),
+                            limit=LimitState(2.5), rng=np.random.default_rng(0),
+                            options=FormulationOptions(deterministic=NO_DET, n_theta=10),
+                            design_theta=cases)
+    x = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 1.0]])
+    ev = form.evaluate(x)
+    np.testing.assert_allclose(ev.F[:, 0], [3.0, 4.0, 3.0])    # max over the rows of x θᵀ
+    assert ev.n_surrogate_calls == 9
+
+
+@pytest.mark.parametrize("bad", [np.ones(2), np.ones((2, 3)), np.empty((0, 2)),
+                                 np.array([[1.0, np.nan]])])
+def test_design_theta_shape_is_checked(bad):
+    with pytest.raises(ValueError, match="design_theta has shape"):
+        make_formulation("deterministic", response=resp, inputs=inputs(),
+                         limit=LimitState(2.5), rng=np.random.default_rng(0),
+                         options=FormulationOptions(deterministic=NO_DET), design_theta=bad)
+
+
 def test_common_random_numbers_across_formulations():
     a, b = build("rdo", n_theta=64), build("rbrdo", n_theta=64)
     np.testing.assert_array_equal(a.u, b.u)

@@ -130,6 +130,25 @@ trial_unbalance = [0.0, 5e-5, 0.0]
 delta_lim_um = 1.0
 """
 
+DISC = """[experiment]
+name = "d"
+kind = "discrepancy"
+[discrepancy]
+n_draws = 100
+[rig]
+figures = false
+[rig.campaign]
+speeds_rpm = { start = 1000.0, stop = 24000.0, num = 10 }
+repeats = 2
+duration_s = 0.4
+runup = []
+impacts_per_direction = 0
+"""
+
+#: the discrepancy kind on measured data: a data folder (phasors.csv) in the test's folder
+DISC_DATA = DISC.split("[rig]")[0] + "[data]\npath = 'm'\n"
+PHASORS = "run,speed_rpm,channel,re_m,im_m\n0,1000.0,front_x,1e-6,0.0\n"
+
 
 def _set(base: str, table: str, line: str) -> str:
     """Add ``line`` at the top of ``[table]`` (the table is created if missing)."""
@@ -189,6 +208,10 @@ DS_NO_TRIAL = {
 
 def ID(line: str) -> str:                     # noqa: N802
     return _set(IDENT, "identification", line)
+
+
+def D(table: str, line: str) -> str:          # noqa: N802
+    return _set(DISC, table, line)
 
 
 ARR = r"must be an array of"
@@ -976,6 +999,70 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      {"meta.json": '{"kind": "identification", "status": "failed"}',
       "uncertainty.json": "{}"}, [], r"uncertainty.from = '.' is not allowed: not a complete "
      r"identification run \(its meta.json: kind 'identification', status 'failed'\)"),
+    # ------------------------------------------------------------------ kind discrepancy
+    ("disc_key", D("discrepancy", "alpah = 0.01"), {}, [],
+     r"unknown key discrepancy.alpah; allowed: \[.*'alpha'"),
+    ("disc_alpha", D("discrepancy", "alpha = 0.5"), {}, [],
+     r"discrepancy.alpha = 0.5 is not allowed: must lie in \[1e-06, 0.2\]"),
+    ("disc_alpha_str", D("discrepancy", "alpha = '0.01'"), {}, [],
+     r"discrepancy.alpha = '0.01' is not allowed: " + NUM),
+    ("disc_n_draws", _sub(DISC, "n_draws = 100", "n_draws = 10"), {}, [],
+     r"discrepancy.n_draws = 10 is not allowed: must be an integer >= 100"),
+    ("disc_library_unknown", D("discrepancy", "library = ['housing', 'warp']"), {}, [],
+     r"discrepancy.library\[1\] = 'warp' is not allowed: must be one of \[.*'housing'"),
+    ("disc_library_empty", D("discrepancy", "library = []"), {}, [],
+     r"discrepancy.library = \[\] is not allowed: give at least one registered effect"),
+    ("disc_library_twice", D("discrepancy", "library = ['housing', 'housing']"), {}, [],
+     r"discrepancy.library = \['housing', 'housing'\] is not allowed: a name appears twice"),
+    ("disc_library_str", D("discrepancy", "library = 'housing'"), {}, [],
+     r"discrepancy.library = 'housing' is not allowed: " + ARR),
+    ("disc_holdout", D("discrepancy", "holdout_every = 1"), {}, [],
+     r"discrepancy.holdout_every = 1 is not allowed: must be an integer >= 2"),
+    ("disc_extrapolate", D("discrepancy", "extrapolate_fraction = 0.9"), {}, [],
+     r"discrepancy.extrapolate_fraction = 0.9 is not allowed: must lie in \[0.0, 0.5\]"),
+    ("disc_max_effects", D("discrepancy", "max_effects = 0"), {}, [],
+     r"discrepancy.max_effects = 0 is not allowed: must be an integer >= 1"),
+    ("disc_identified", D("discrepancy", "use_identified = 'no'"), {}, [],
+     r"discrepancy.use_identified = 'no' is not allowed: " + BOOL),
+    ("disc_preset", D("discrepancy", "nuisance = { preset = 'lab' }"), {}, [],
+     r"discrepancy.nuisance.preset = 'lab' is not allowed: must be one of \['probe_chain', "
+     r"'ideal'\]"),
+    ("disc_nuisance_key", D("discrepancy", "nuisance = { gains = 0.1 }"), {}, [],
+     r"unknown key discrepancy.nuisance.gains; allowed: \[.*'gain_sd'"),
+    ("disc_nuisance_damping", D("discrepancy", "nuisance = { damping = 'all' }"), {}, [],
+     r"discrepancy.nuisance.damping = 'all' is not allowed: must be one of \['common', "),
+    ("disc_nuisance_theta", D("discrepancy", "nuisance = { theta_bounds = [1.2, 1.5] }"), {},
+     [], r"discrepancy.nuisance.theta_bounds\[0\] = 1.2 is not allowed: must lie in"),
+    ("disc_nuisance_mass", D("discrepancy", "nuisance = { preset = 'probe_chain', "
+                                            "mass_sd = 0.9 }"), {}, [],
+     r"discrepancy.nuisance.mass_sd = 0.9 is not allowed: must lie in"),
+    ("disc_table", D("study", "x = 1"), {}, [],
+     r"unknown table study; allowed: \['data', 'discrepancy', 'rig', 'spindle'\]"),
+    ("disc_neither", DISC.split("[rig]")[0], {}, [],
+     r"\[rig\] or \[data\] is missing: give \[rig\] .* or \[data\] path"),
+    ("disc_both", DISC_DATA + DISC[DISC.index("[rig]"):], {"m/phasors.csv": PHASORS}, [],
+     r"\[rig\] and \[data\] are not allowed together"),
+    ("disc_rig_design", D("rig", "design = [3000.0, 350.0, 75.0]"), {}, [],
+     r"rig.design = \[3000.0, 350.0, 75.0\] is not allowed: the model is spindle.baseline = "
+     r"\[2000.0, 500.0, 65.0\]"),
+    ("disc_spindle_file", D("spindle", "geometry = 'g.toml'"), {"g.toml": GEOMETRY_OK}, [],
+     r"spindle.geometry = 'g.toml' is not allowed: the data come from the virtual rig"),
+    ("disc_rig_effect", D("rig", "effects = [{name = 'warp'}]"), {}, [],
+     r"rig.effects\[0\]: name = 'warp' is not allowed: unknown effect 'warp'"),
+    ("disc_rig_unstable", D("rig", "effects = [{name = 'cross_coupling', kappa = 0.3}]"), {},
+     [], r"rig.effects = \[.*\] is not allowed: the truth is unstable at"),
+    ("disc_data_path_int", DISC_DATA.replace("path = 'm'", "path = 3"), {}, [],
+     r"data.path = 3 is not allowed: " + STR),
+    ("disc_data_path_missing", DISC_DATA.replace("path = 'm'\n", ""), {}, [],
+     r"data.path is missing: it is required"),
+    ("disc_data_key", DISC_DATA.replace("path = 'm'", "path = 'm'\nfolder = 'x'"),
+     {"m/phasors.csv": PHASORS}, [], r"unknown key data.folder; allowed: \['path'\]"),
+    ("disc_data_nowhere", DISC_DATA, {}, [],
+     r"data.path = 'm' is not allowed: '.*m' holds no phasors.csv, no dataset"),
+    ("disc_data_not_rig", DISC_DATA, {"m/meta.json": '{"kind": "study", "status": '
+                                                     '"complete"}'}, [],
+     r"data.path = '.*m' is not allowed: a run folder that is not a finished rig campaign "
+     r"\(meta.json: kind 'study'"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

@@ -23,6 +23,7 @@ def test_bad_input_gives_one_line_and_no_folder(tmp_path, capsys, monkeypatch, n
                                                 files, args, pattern):
     monkeypatch.chdir(tmp_path)
     for fname, content in files.items():
+        (tmp_path / fname).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / fname).write_text(content)
     cfg = tmp_path / "exp.toml"
     cfg.write_text(text) if "\x00" not in text else cfg.write_bytes(text.encode())

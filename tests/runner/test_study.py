@@ -87,6 +87,14 @@ def test_tiny_study_writes_the_expected_files(tmp_path):
                                    end("rbrdo 1%", col) - end("rbrdo 10%", col), atol=1e-9)
     np.testing.assert_allclose(float(ends["mbr_um_per_pp"]),
                                abs(float(ends["delta_std_um"])) / 9.0, rtol=1e-9)
+    # every row says whether the reliability constraint acts at its two levels: front designs
+    # with P_f > 0.9 P_target (pareto_fronts.csv holds each front)
+    for lev, key in ((10.0, "active_from"), (1.0, "active_to")):
+        n = sum(float(r["pf_pct"]) > 0.9 * lev for r in fronts if r["run"] == f"rbrdo {lev:g}%")
+        assert all(int(r[key]) == n for r in mbr)
+    assert {r["constraint"] for r in mbr} == {
+        "active" if int(mbr[0]["active_from"]) + int(mbr[0]["active_to"]) else
+        "inactive at both levels"}
 
 
 def test_refine_round_evaluates_the_chosen_designs(tmp_path):

@@ -38,12 +38,13 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_choice
-from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
+from surrogate_rbrdo.discrepancy.experiment import DiscrepancyTable
 from surrogate_rbrdo.discrepancy.report import updated_spindle
 from surrogate_rbrdo.identification.experiment import IdentificationOptions, check_source
 from surrogate_rbrdo.reporting.end_to_end import write_loop_report
 from surrogate_rbrdo.rig.config import RigTable
 from surrogate_rbrdo.rig.truth import spindle_truth
+from surrogate_rbrdo.runner.experiments import discrepancy as disc_kind
 from surrogate_rbrdo.runner.experiments import identification as ident_kind
 from surrogate_rbrdo.runner.experiments import rig as rig_kind
 from surrogate_rbrdo.runner.experiments import study as study_kind
@@ -103,7 +104,7 @@ class EndToEndConfig(StudyConfig):
     identification: IdentificationOptions = field(default_factory=IdentificationOptions)
     validation: ValidationOptions = field(default_factory=ValidationOptions)
     model: ModelTable = field(default_factory=ModelTable)
-    discrepancy: dict[str, Any] = field(default_factory=dict)
+    discrepancy: DiscrepancyTable = field(default_factory=DiscrepancyTable)
     loop: LoopTable = field(default_factory=LoopTable)
 
 
@@ -124,12 +125,11 @@ class Plan:
 
 @dataclass(frozen=True, eq=False)
 class DiscrepancyStage:
-    """Whether the discrepancy workflow ran, why, its result and files."""
+    """Whether the discrepancy workflow ran, why, and its result."""
 
     ran: bool
     reason: str
     result: Any = None
-    files: Mapping[str, str] = field(default_factory=dict)
 
 
 def part_context(ctx: StageContext, part: str) -> StageContext:
@@ -205,12 +205,7 @@ def build(c: EndToEndConfig, base_dir: Path) -> Plan:
                          "coefficients + 2)")
     o = validation_options(c.rig, c.validation)
     _check_agreement(c, o, spindle)
-    try:
-        disc = options_from_dict(c.discrepancy)
-    except (TypeError, ValueError) as exc:
-        msg = str(exc)
-        raise ValueError(msg if "discrepancy" in msg.split(" ", 1)[0] else
-                         f"discrepancy.{msg}") from None
+    disc = c.discrepancy.options()
     return Plan(c, rig, study, ident, o, disc, rig.disk_need, Path(base_dir))
 
 
@@ -412,6 +407,14 @@ def _model(p: Plan, done: Mapping[str, Any], ctx: StageContext, updated: bool = 
 
 
 # ---------------------------------------------------------------- discrepancy
+def discrepancy_plan(p: Plan, ctx: StageContext) -> Any:
+    """The ``discrepancy`` kind's plan on this run's campaign: the model is ``[spindle]`` at
+    the campaign's design (the study's baseline)."""
+    pr = p.study.problem
+    return disc_kind.Plan(replace(pr.spindle, baseline=pr.baseline), spindle_section(p),
+                          p.discrepancy, None, ctx.run_dir / "campaign", None)
+
+
 def _discrepancy(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> DiscrepancyStage:
     bad = done["model"].disagreements
     when = p.config.loop.discrepancy
@@ -422,15 +425,9 @@ def _discrepancy(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> Discrep
     why = ("loop.discrepancy = 'always'" if when == "always" else
            f"{len(bad)} model-vs-rig disagreement(s): "
            + "; ".join(f"{v.design} {v.quantity} {v.metric}" for v in bad))
-    pr = p.study.problem
-    with ctx.bar("discrepancy", "part") as progress:
-        progress(0, 1, "naming what the model misses")
-        res, paths = analyse(data_from_folder(ctx.run_dir / "campaign"),
-                             pr.spindle.geometry_for(pr.baseline), tuple(pr.spindle.effects),
-                             spindle_section=spindle_section(p), options=p.discrepancy,
-                             rng=part_context(ctx, "discrepancy").stream(0),
-                             out_dir=ctx.run_dir / "discrepancy")
-    return DiscrepancyStage(True, why, res, {k: str(v) for k, v in paths.items()})
+    res = disc_kind._analyse(discrepancy_plan(p, ctx), {"campaign": ctx.run_dir / "campaign"},
+                             part_context(ctx, "discrepancy"))
+    return DiscrepancyStage(True, why, res)
 
 
 # ---------------------------------------------------------------- report
@@ -453,6 +450,10 @@ def _study_report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext,
 def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
     for updated in (False, True):
         _study_report(p, done, run, ctx, updated)
+    if done["discrepancy"].ran:
+        disc_kind._report(discrepancy_plan(p, ctx), {"campaign": run.path / "campaign",
+                                                    "analyse": done["discrepancy"].result},
+                          subfolder(run.path, "discrepancy"), part_context(ctx, "discrepancy"))
     pr, c = p.study.problem, p.config
     timings = {k: float(v.get("time_s", 0.0)) for k, v in run.meta.get("stages", {}).items()}
     return write_loop_report(

@@ -145,8 +145,9 @@ def build(c: StudyConfig, base_dir: Path) -> StudyPlan:
         raise ValueError(f"refine.rounds = {c.refine.rounds} is not allowed with "
                          f"surrogate.structure = {sur.structure!r}: {why} (use rounds = 0)")
     base = c.report.baseline if c.report.baseline is not None else spindle.baseline
+    basis = c.deterministic.design_theta(inputs, r)
     try:
-        problem = Problem(spindle, inputs, c.limit.limit(), r, det, base, cons)
+        problem = Problem(spindle, inputs, c.limit.limit(), r, det, base, cons, basis)
     except ValueError as exc:
         raise ValueError(f"report.baseline: {exc}") from None
     check_study_memory(problem, sur, c.optimization, c.verification,
