@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_positive, check_range
+from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
 from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
 from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict
 from surrogate_rbrdo.spindle.geometry import PreloadLaw, SpindleGeometry, Unbalance
@@ -39,6 +39,11 @@ from surrogate_rbrdo.spindle.reference import (
     BALANCE_SPEED_RPM,
     iso_unbalance_kgm,
     reference_spindle,
+)
+from surrogate_rbrdo.spindle.unbalance import (
+    PlaneTolerance,
+    UnbalanceTolerances,
+    permissible_unbalance,
 )
 
 
@@ -56,7 +61,8 @@ class Variability:
         ISO 21940-11 balance quality grade the rotor is balanced to.
     unbalance_fraction : (lo, hi)
         Residual unbalance per plane as a fraction of the plane's share of the permissible
-        unbalance, uniform in ``[lo, hi]``; phase uniform in [0, 360°) per plane.
+        unbalance, uniform in ``[lo, hi]`` (``unbalance_magnitude = "uniform"``); phase uniform
+        in [0, 360°) per plane.
     thermal_preload_cov : float
         CoV of the preload per run (thermal state at the start of a run), lognormal;
         the stiffness follows as ``F^{exponent}``.
@@ -66,6 +72,16 @@ class Variability:
         CoV of a ``tool_interface`` effect's stiffnesses per tool change (lognormal).
     tool_disk : str
         Name of the geometry's disk that is the tool/holder.
+    unbalance_allocation : {"equal", "iso"}
+        How the rotor's permissible residual unbalance ``U = m G / Ω`` is shared by the planes:
+        ``"equal"`` — equal shares (the rig's first model); ``"iso"`` — each plane keeps the
+        permissible residual of the parts balanced in it (ISO 21940-11 §7 allocation, as
+        ``spindle.unbalance``): the tool disk's mass in the plane at the tool disk, the rest of
+        the rotor in the other plane (two planes). This is the credible problem's model.
+    unbalance_magnitude : {"uniform", "disk"}
+        ``"uniform"`` — the fraction of the share is uniform in ``unbalance_fraction``;
+        ``"disk"`` — the residual is uniform over its tolerance disk (radius fraction ``√V``,
+        ``V ~ U(0, 1)``: maximum entropy inside the accepted disk, the credible problem's model).
     """
 
     bearing_k_cov: float = 0.05
@@ -76,8 +92,14 @@ class Variability:
     tool_mass_cov: float = 0.03
     interface_k_cov: float = 0.15
     tool_disk: str = "tool_holder"
+    unbalance_allocation: str = "equal"
+    unbalance_magnitude: str = "uniform"
 
     def __post_init__(self) -> None:
+        check_choice("variability.unbalance_allocation", self.unbalance_allocation,
+                     ("equal", "iso"))
+        check_choice("variability.unbalance_magnitude", self.unbalance_magnitude,
+                     ("uniform", "disk"))
         for name in ("bearing_k_cov", "bearing_damping_cov", "thermal_preload_cov",
                      "tool_mass_cov", "interface_k_cov"):
             check_range(f"variability.{name}", getattr(self, name), 0.0, 1.0)
@@ -130,6 +152,8 @@ class Truth:
     theta_bearings: tuple[str, ...] | None = None
     random_phase: bool = True
     _u_perm: float = dataclasses.field(init=False, repr=False, compare=False, default=0.0)
+    _u_planes: np.ndarray = dataclasses.field(init=False, repr=False, compare=False,
+                                              default=None)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "effects", tuple(self.effects))
@@ -139,13 +163,33 @@ class Truth:
         object.__setattr__(self, "theta_bearings", tb)
         if not self.geometry.unbalances:
             raise ValueError("truth.geometry has no unbalance planes: the rig needs at least one")
-        m = build_model(self.geometry, ()).rotor_mass_kg
+        model = build_model(self.geometry, ())
         object.__setattr__(self, "_u_perm", iso_unbalance_kgm(
-            m, self.variability.balance_grade_mm_s, BALANCE_SPEED_RPM))
+            model.rotor_mass_kg, self.variability.balance_grade_mm_s, BALANCE_SPEED_RPM))
+        object.__setattr__(self, "_u_planes", self._plane_shares(model))
 
     @property
     def all_effects(self) -> tuple[Effect, ...]:
         return self.effects + self.hidden
+
+    def _plane_shares(self, model: SpindleModel) -> np.ndarray:
+        """Permissible residual per plane (kg m) under ``variability.unbalance_allocation``."""
+        v, g = self.variability, self.geometry
+        n_pl = len(g.unbalances)
+        if v.unbalance_allocation == "equal":
+            return np.full(n_pl, self._u_perm / n_pl)
+        disks = {d.name: d for d in g.disks}
+        tool = disks.get(v.tool_disk)
+        if n_pl != 2 or tool is None:
+            raise ValueError(f"variability.unbalance_allocation = 'iso' is not allowed here: it "
+                             f"needs two unbalance planes (the geometry has {n_pl}) and the "
+                             f"tool disk {v.tool_disk!r} (disks: {sorted(disks)})")
+        at_tool = [abs(u.position_mm - tool.position_mm) for u in g.unbalances]
+        j = int(np.argmin(at_tool))
+        planes = [PlaneTolerance(v.balance_grade_mm_s, None)] * 2
+        planes[j] = PlaneTolerance(v.balance_grade_mm_s, (v.tool_disk,))
+        tol = UnbalanceTolerances(tuple(planes), BALANCE_SPEED_RPM)
+        return permissible_unbalance(model, tol)
 
     def permissible_unbalance_kgm(self) -> float:
         """ISO 21940-11 permissible residual unbalance ``U = m G / Ω`` of the nominal rotor at
@@ -167,9 +211,11 @@ class Truth:
         k = _lognormal(rng, v.bearing_k_cov, nb)
         c = _lognormal(rng, v.bearing_damping_cov, nb)
         n_pl = len(self.geometry.unbalances)
-        frac = rng.uniform(*v.unbalance_fraction, size=n_pl)
+        disk = v.unbalance_magnitude == "disk"
+        frac = rng.uniform(*((0.0, 1.0) if disk else v.unbalance_fraction), size=n_pl)
+        frac = np.sqrt(frac) if disk else frac      # uniform over the tolerance disk
         phase = rng.uniform(0.0, 360.0, size=n_pl)
-        U = self.permissible_unbalance_kgm() / n_pl * frac
+        U = self._u_planes * frac
         return {"k_factor": k.tolist(), "damping_factor": c.tolist(),
                 "unbalance_kgm": U.tolist(),
                 "unbalance_phase_deg": phase.tolist() if self.random_phase

@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth
+from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth, spindle_truth
+from surrogate_rbrdo.spindle.assembly import build_model
 from surrogate_rbrdo.spindle.effects import CrossCoupling
+from surrogate_rbrdo.spindle.reference import credible_spindle
 
 
 def test_levels_are_nested_and_reproducible():
@@ -51,3 +53,35 @@ def test_bad_variability_names_the_field():
             "sections": [{"length_mm": 100, "outer_diameter_mm": 50}],
             "bearings": [{"name": "a", "position_mm": 0,
                           "law": {"type": "constant", "k_N_per_m": 1e8}}]}))
+
+
+def test_iso_allocation_is_the_permissible_residual_of_the_parts_in_each_plane():
+    """ISO 21940-11 §7 allocation: the tool plane keeps the tool holder's own permissible
+    residual m_tool G / Ω, the motor plane the rest of the rotor's (hand-computed from the
+    geometry's masses, not from the code under test); "disk" magnitudes are uniform over the
+    tolerance disk: E[r] = 2/3 and E[r²] = 1/2 of the plane's limit."""
+    sp = credible_spindle()
+    t = spindle_truth(sp, (), Variability(unbalance_allocation="iso",
+                                          unbalance_magnitude="disk"))
+    g = t.geometry
+    omega = 24_000.0 * 2 * np.pi / 60
+    m_tool = next(d.mass_kg for d in g.disks if d.name == "tool_holder")
+    m_rotor = build_model(g, ()).rotor_mass_kg
+    want = np.array([m_tool, m_rotor - m_tool]) * 2.5e-3 / omega
+    r = np.array([t.draw_build(c)["unbalance_kgm"]
+                  for c in np.random.SeedSequence(7).spawn(4000)])
+    tool_first = g.unbalances[0].position_mm <= g.unbalances[1].position_mm
+    np.testing.assert_allclose(r.max(axis=0), want if tool_first else want[::-1], rtol=0.01)
+    frac = r / r.max(axis=0)
+    np.testing.assert_allclose(frac.mean(axis=0), 2 / 3, atol=0.02)
+    np.testing.assert_allclose((frac**2).mean(axis=0), 0.5, atol=0.02)
+    equal = spindle_truth(sp, (), Variability()).draw_build(np.random.SeedSequence(1))
+    assert len(equal["unbalance_kgm"]) == 2
+
+
+def test_iso_allocation_needs_two_planes_and_the_tool_disk():
+    with pytest.raises(ValueError, match="unbalance_allocation = 'iso' is not allowed"):
+        reference_truth(variability=Variability(unbalance_allocation="iso",
+                                                tool_disk="no_such_disk"))
+    with pytest.raises(ValueError, match="unbalance_magnitude"):
+        Variability(unbalance_magnitude="gauss")
