@@ -58,15 +58,19 @@ class Fit:
         return self.n_obs - self.n_params
 
     def covariance(self, fixed: np.ndarray | None = None) -> np.ndarray:
-        """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular); with
+        """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular; a
+        parameter the residuals do not depend on gets an infinite variance); with
         ``fixed`` (boolean mask) those parameters are held at their values (zero rows)."""
         keep = np.ones(self.x.size, dtype=bool) if fixed is None else ~np.asarray(fixed)
         cov = np.zeros((self.x.size, self.x.size))
         J = self.jac[:, keep]
         d = np.linalg.norm(J, axis=0)
+        blind = d == 0                         # the data do not see it: unbounded variance
         d = np.where(d > 0, d, 1.0)            # columns scaled: parameters differ by 1e20
         Js = J / d
-        cov[np.ix_(keep, keep)] = np.linalg.pinv(Js.T @ Js) / np.outer(d, d)
+        sub = np.linalg.pinv(Js.T @ Js) / np.outer(d, d)
+        sub[blind, blind] = np.inf
+        cov[np.ix_(keep, keep)] = sub
         return cov
 
     def wald_ci(self, level: float = 0.95, fixed: np.ndarray | None = None

@@ -5,8 +5,11 @@ Files (:func:`write_run`); the figures are drawn by
 :func:`surrogate_rbrdo.reporting.plots_discrepancy.plot_all`.
 
 ``findings.json`` (:func:`findings`) holds at least what the issue fixes — ``verdict``,
-``effects`` (``name``, ``parameters``, ``ci``), ``confounded_with``, ``test`` (``statistic``,
-``p_value``, ``threshold``) and ``gap`` (``before``/``after`` with ``rmse``, ``max_abs`` in µm and
+``effects`` (``name``, ``parameters``, ``ci``, ``identified``: those of the final joint
+fit, exactly what ``spindle_updated.toml`` carries; ``ci`` is ``null`` for a parameter the data
+cannot tell from off), ``updated_effects`` (every effect the spindle adds),
+``confounded_with``, ``test`` (``statistic``, ``p_value``, ``threshold``)
+and ``gap`` (``before``/``after`` with ``rmse``, ``max_abs`` in µm and
 ``chi2_dof`` on held-out speeds) — plus the residual tests, the ranking of every candidate, the
 recalibrated nuisance, the held-out split and the options. Infinite values (a rigid interface, an
 open interval) are written as ``null``.
@@ -27,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.discrepancy.search import slot_estimate
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyResult
 from surrogate_rbrdo.spindle.effects import Effect
 
@@ -48,12 +52,11 @@ def _clean(v: Any) -> Any:
 
 def findings(result: DiscrepancyResult) -> dict[str, Any]:
     """The machine-readable answer (module doc)."""
-    effects = [{"name": a.name, "parameters": a.fit.parameters, "ci": a.fit.ci,
-                "test": {"statistic": a.delta_chi2, "p_value": a.p_adjusted,
-                         "threshold": result.options.alpha}} for a in result.effects]
     out = {
         "verdict": result.verdict,
-        "effects": effects,
+        "effects": _effects(result),
+        "updated_effects": [{"name": n, "parameters": e.parameters, "ci": e.ci,
+                             "identified": e.identified} for n, e in result.fitted_effects],
         "confounded_with": list(result.confounded_with),
         "separating_test": result.separating,
         "test": result.test,
@@ -82,6 +85,25 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
         "seconds": result.seconds,
     }
     return _clean(out)
+
+
+def _effects(result: DiscrepancyResult) -> list[dict[str, Any]]:
+    """The named (or confounded) effects. A named effect's parameters are those of the final
+    joint fit (what ``spindle_updated.toml`` carries; an effect named in an early stage is
+    refitted with those named after it, ``parameters_when_named`` keeps its stage fit); a
+    confounded member's are its own fit (the alternatives are separate models)."""
+    fitted = dict(result.fitted_effects) if result.verdict == "named" else {}
+    out = []
+    for a in result.effects:
+        e = fitted.get(a.name) or slot_estimate(a.fit.fit, len(a.fit.fit.par.slots) - 1)
+        d = {"name": a.name, "parameters": e.parameters, "ci": e.ci,
+             "identified": e.identified,
+             "test": {"statistic": a.delta_chi2, "p_value": a.p_adjusted,
+                      "threshold": result.options.alpha}}
+        if a.name in fitted:
+            d["parameters_when_named"] = a.fit.parameters
+        out.append(d)
+    return out
 
 
 def effect_dict(e: Effect) -> dict[str, Any]:

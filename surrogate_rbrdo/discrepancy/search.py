@@ -140,36 +140,71 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
     return describe(c, best_slot, best, base.chi2)
 
 
-def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit:
-    """Parameters, intervals and plausibility flags of a candidate's fit."""
-    k0 = f.x.size - len(slot.free)
+@dataclass(frozen=True)
+class SlotEstimate:
+    """One effect's parameters in a fit, with their intervals.
+
+    Attributes
+    ----------
+    parameters : dict
+        Own units (reciprocals undone; ``bearings`` when scoped).
+    ci : dict
+        95 % Wald intervals (own units); ``None`` for a strength parameter that is not
+        identified.
+    identified : dict
+        Per fitted parameter: ``False`` for a strength whose interval contains its off state
+        (zero, or a rigid interface for a compliance). Such an estimate sits on or near the
+        boundary of its range, where the Wald interval is not valid (Self & Liang 1987, JASA
+        82:605): the data cannot tell the parameter from off, so no interval is reported.
+    at_bound, significant : bool
+        As :class:`CandidateFit`.
+    """
+
+    parameters: dict
+    ci: dict
+    identified: dict
+    at_bound: bool
+    significant: bool
+
+
+def slot_estimate(f: Fit, index: int) -> SlotEstimate:
+    """Parameters and intervals of slot ``index`` of fit ``f`` (see :class:`SlotEstimate`)."""
+    slots = f.par.slots
+    slot, c = slots[index], slots[index].candidate
+    k0 = f.par.n_nuisance + sum(len(s.free) for s in slots[:index])
     lo_ci, hi_ci = f.wald_ci()
     # significance is judged conditional on the fitted shapes: a shape parameter is not
     # identified when the strength is small, and its correlation with the strength would
     # otherwise blow the strength's interval up (the reported intervals are unconditional)
     shape = np.zeros(f.x.size, dtype=bool)
-    shape[k0:] = [p not in c.strength for p in slot.free]
+    shape[k0:k0 + len(slot.free)] = [p not in c.strength for p in slot.free]
     lo_s, hi_s = f.wald_ci(fixed=shape)
-    vals = f.par.slot_values(f.x)[-1]
-    params = c.physical(vals)
-    ci, at_bound, significant = {}, False, False
+    params = c.physical(f.par.slot_values(f.x)[index])
+    ci, identified, at_bound, significant = {}, {}, False, False
     for i, p in enumerate(slot.free):
         a, b = float(lo_ci[k0 + i]), float(hi_ci[k0 + i])
+        x = f.x[k0 + i]
+        identified[p] = True
         if p in c.strength:
             j = c.strength.index(p)
             off, lo, hi = c.off[j], c.lower[j], c.upper[j]
-            x = f.x[k0 + i]
             edge = hi if x > off else lo
             at_bound |= bool(edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30))
             significant |= not (lo_s[k0 + i] <= off <= hi_s[k0 + i])
+            identified[p] = not (a <= off <= b)
             if c.reciprocal[j]:
                 a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         else:                          # a shape pinned at a bound that is not a natural zero
             a_s, b_s = c.shape_bounds[c.shape.index(p)]
-            x = f.x[k0 + i]
             at_bound |= any(e != 0 and abs(x - e) <= 1e-6 * abs(e) for e in (a_s, b_s))
-        ci[p] = [a, b]
+        ci[p] = [a, b] if identified[p] else None
     if slot.scope:
         params["bearings"] = list(slot.scope)
-    return CandidateFit(c.name, slot, f, max(base_chi2 - f.chi2, 0.0), params, ci,
-                        at_bound, significant)
+    return SlotEstimate(params, ci, identified, at_bound, significant)
+
+
+def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit:
+    """Parameters, intervals and plausibility flags of a candidate's fit (its last slot)."""
+    e = slot_estimate(f, len(f.par.slots) - 1)
+    return CandidateFit(c.name, slot, f, max(base_chi2 - f.chi2, 0.0), e.parameters, e.ci,
+                        e.at_bound, e.significant)

@@ -48,6 +48,7 @@ from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jac
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -148,6 +149,16 @@ class DiscrepancyResult:
         return tuple(s.candidate.effect(s.scope, v) for s, v in
                      zip(self.final.par.slots, self.final.par.slot_values(self.final.x),
                          strict=True))
+
+    @property
+    def fitted_effects(self) -> tuple[tuple[str, SlotEstimate], ...]:
+        """``(name, estimate)`` of every effect the updated model adds, from the final joint
+        fit — the parameters :attr:`named_effects` carries (a stage's own fit of an effect
+        named earlier is refitted with the effects named after it)."""
+        if self.verdict not in ("named", "confounded"):
+            return ()
+        return tuple((s.candidate.name, slot_estimate(self.final, i))
+                     for i, s in enumerate(self.final.par.slots))
 
     def recalibration(self, fit: Fit | None = None) -> dict:
         f = self.final if fit is None else fit

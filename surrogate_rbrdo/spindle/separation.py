@@ -12,8 +12,13 @@ give the critical speeds as the fixed points ``ω_k(Ω) = Ω`` (the bearings sof
 a few ``eigh`` calls of half the model's size per critical speed. Damping is left out (the
 damped 1x crossings of ``modal.critical_speeds`` differ by ``O(ζ²)``); the modal damping ratio
 of each critical, ``ζ = uᵀ C u / (2 Ω uᵀ (M − G T) u)``, gives its amplification factor
-``AF = 1 / (2ζ)``. Rotors that are not rotationally invariant raise a ``ValueError``; use
-``modal.critical_speeds`` for them.
+``AF = 1 / (2ζ)``. An isotropic housing stage under a bearing (a non-rotating
+mass–spring–damper, ``effects.Support``) keeps the rotor rotationally invariant: its x DOF joins
+the plane with its mass and no gyroscopic term. Anisotropic bearings (``k_xx ≠ k_yy``) split
+each critical speed; :func:`bounding_critical_speeds` brackets the split pair between the
+isotropic rotors with every bearing at ``k_yy`` and at ``k_xx`` (exact bound, see there), and
+the guard requires the whole interval to be separated. Cross-coupled bearings raise a
+``ValueError``; use ``modal.critical_speeds`` for them.
 
 **Separation margins** (API 617 7th ed. §2.6.2.10, reproduced in API RP 684 2nd ed. §1.3): a
 critical speed with ``AF ≥ 2.5`` must lie below the minimum operating speed by
@@ -61,15 +66,23 @@ class CriticalSpeeds:
         return 1.0 / (2.0 * self.damping_ratio)
 
 
-class _Plane:
-    """``K_t``, ``M − G T`` and ``C`` on the x–slope plane of one model and θ: the speed-free
-    parts built once, the bearings added per speed."""
+#: the isotropic rotors that bound an anisotropic one: every bearing's stiffness and damping
+#: taken from its x term, its y term, or their mean (:func:`bounding_critical_speeds`)
+AXES = ("x", "y", "mean")
 
-    def __init__(self, model: SpindleModel, theta) -> None:
-        if any(s is not None for s in model.supports):
-            raise ValueError("forward_critical_speeds: a housing stage is not handled here; "
-                             "use modal.critical_speeds")
-        self.model, self.theta = model, model.check_theta(theta)[:1]
+
+class _Plane:
+    """``K_t``, ``M − G T`` and ``C`` on the x–slope plane of one model and θ (plus the x DOF
+    of every housing stage): the speed-free parts built once, the bearings added per speed.
+    ``axis`` (one of :data:`AXES`) takes each bearing's coefficients from that diagonal term;
+    ``None`` requires isotropic bearings."""
+
+    def __init__(self, model: SpindleModel, theta, axis: str | None = None,
+                 backward: bool = False) -> None:
+        if axis is not None:
+            check_choice("axis", axis, AXES)
+        sign = 1.0 if backward else -1.0                  # M ± G T: backward, forward
+        self.model, self.theta, self.axis = model, model.check_theta(theta)[:1], axis
         n = model.n_dof
         idx = np.sort(np.concatenate([np.arange(0, n, 4), np.arange(2, n, 4)]))   # x, a
         T = np.zeros((n, n))                              # 90° rotation: x → y, a → b
@@ -78,24 +91,52 @@ class _Plane:
         T[np.arange(0, n, 4), np.arange(1, n, 4)] = T[np.arange(2, n, 4),
                                                       np.arange(3, n, 4)] = -1
         ix = np.ix_(idx, idx)
-        self.M = (model.M - model.gyro_scale * model.G @ T)[ix]
-        self.K0 = model.K[ix]
-        self.C0 = (model.alpha * model.M + model.beta * model.K)[ix]
-        # the x DOF of node i is row 2i of the plane
+        # housing stages: one x DOF each after the rotor's, mass, spring and damper to ground
+        # and no gyroscopic term (they do not spin); an isotropic stage keeps the rotor
+        # rotationally invariant (effects.Support is isotropic)
+        sup = [(j, s) for j, s in enumerate(model.supports) if s is not None]
+        m, r = idx.size + len(sup), idx.size
+        self.M, self.K0, self.C0 = np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m))
+        self.M[:r, :r] = (model.M + sign * model.gyro_scale * model.G @ T)[ix]
+        self.K0[:r, :r] = model.K[ix]
+        self.C0[:r, :r] = (model.alpha * model.M + model.beta * model.K)[ix]
+        # the x DOF of node i is row 2i of the plane; a bearing's outer side is its housing
         self.rows = np.array([2 * node for node in model.bearing_nodes])
+        self.outer = self.rows.copy()
+        for h, (j, s) in enumerate(sup):
+            self.outer[j] = r + h
+            self.M[r + h, r + h] = s.m_kg
+            self.K0[r + h, r + h] = s.k_N_per_m
+            self.C0[r + h, r + h] = s.c_Ns_per_m
+        self.housed = self.outer != self.rows
+
+    def _diagonal(self, A: np.ndarray, what: str) -> np.ndarray:
+        """The bearings' x–x coefficient of ``A`` (nb, 2, 2) for this plane's ``axis``."""
+        if self.axis is None:
+            iso = np.allclose(A[:, 0, 0], A[:, 1, 1], rtol=1e-12)
+            if not iso:
+                raise ValueError(f"forward_critical_speeds: bearing {what} is not isotropic; "
+                                 "use bounding_critical_speeds or modal.critical_speeds")
+        if not (np.allclose(A[:, 0, 1], 0.0) and np.allclose(A[:, 1, 0], 0.0)):
+            raise ValueError(f"forward_critical_speeds: bearing {what} has cross-coupling; "
+                             "use modal.critical_speeds")
+        if self.axis == "y":
+            return A[:, 1, 1]
+        if self.axis == "mean":
+            return 0.5 * (A[:, 0, 0] + A[:, 1, 1])
+        return A[:, 0, 0]
 
     def at(self, omega: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``K_t``, ``M − G T``, ``C`` at speed ``omega`` (rad/s)."""
         Kb, Cb = self.model.bearing_coefficients(np.array([[omega]]), self.theta)
-        Kb, Cb = Kb[0, 0], Cb[0, 0]                                     # (nb, 2, 2)
-        iso = np.allclose(Kb[:, 0, 0], Kb[:, 1, 1], rtol=1e-12) and np.allclose(
-            Kb[:, 0, 1], 0.0) and np.allclose(Kb[:, 1, 0], 0.0)
-        if not iso:
-            raise ValueError("forward_critical_speeds: bearings are not isotropic without "
-                             "cross-coupling; use modal.critical_speeds")
+        kb, cb = self._diagonal(Kb[0, 0], "stiffness"), self._diagonal(Cb[0, 0], "damping")
         K, C = self.K0.copy(), self.C0.copy()
-        np.add.at(K, (self.rows, self.rows), Kb[:, 0, 0])
-        np.add.at(C, (self.rows, self.rows), Cb[:, 0, 0])
+        for A, b in ((K, kb), (C, cb)):
+            np.add.at(A, (self.rows, self.rows), b)
+            h, o, bh = self.rows[self.housed], self.outer[self.housed], b[self.housed]
+            np.add.at(A, (o, o), bh)
+            np.add.at(A, (h, o), -bh)
+            np.add.at(A, (o, h), -bh)
         return K, self.M, C
 
     def omega_k(self, n_rpm: float, k: int) -> tuple[float, np.ndarray]:
@@ -114,12 +155,18 @@ class _Plane:
 
 
 def forward_critical_speeds(model: SpindleModel, up_to_rpm: float, theta=None,
-                            *, rtol: float = 1e-9) -> CriticalSpeeds:
-    """Undamped forward critical speeds (rpm) up to ``up_to_rpm``, with damping ratios."""
+                            *, rtol: float = 1e-9, axis: str | None = None,
+                            backward: bool = False) -> CriticalSpeeds:
+    """Undamped forward critical speeds (rpm) up to ``up_to_rpm``, with damping ratios.
+
+    ``axis`` (``"x"``, ``"y"``, ``"mean"``): of the isotropic rotor whose bearings all take
+    that diagonal term of their coefficients (:func:`bounding_critical_speeds`); ``None``
+    requires isotropic bearings. ``backward``: the synchronous backward whirl instead
+    (``M + G T``)."""
     check_positive("up_to_rpm", up_to_rpm)
-    plane = _Plane(model, theta)
+    plane = _Plane(model, theta, axis, backward)
     speeds, zetas = [], []
-    for k in range(model.n_dof // 2):
+    for k in range(plane.M.shape[0]):
         seen: dict[float, float] = {}       # brentq asks for the bracket ends again
 
         def h(n: float, k: int = k, seen: dict[float, float] = seen) -> float:
@@ -139,6 +186,67 @@ def forward_critical_speeds(model: SpindleModel, up_to_rpm: float, theta=None,
     if not all(np.isfinite(speeds)):
         raise ModelError("forward_critical_speeds: non-finite critical speed")
     return CriticalSpeeds(np.array(speeds), np.array(zetas))
+
+
+@dataclass(frozen=True)
+class CriticalBands:
+    """Per critical speed, the interval (rpm) it lies in and the smallest modal damping ratio
+    of its ends (:func:`bounding_critical_speeds`); a point for a rotationally invariant
+    rotor."""
+
+    lower_rpm: np.ndarray
+    upper_rpm: np.ndarray
+    damping_ratio: np.ndarray
+
+    @property
+    def amplification(self) -> np.ndarray:
+        return 1.0 / (2.0 * self.damping_ratio)
+
+
+def _isotropic(model: SpindleModel, up_to_rpm: float, theta) -> bool:
+    """Bearings isotropic (x and y stiffness and damping equal) across the search range."""
+    omega = np.linspace(0.0, up_to_rpm * RPM, 5)[None]
+    Kb, Cb = model.bearing_coefficients(omega, model.check_theta(theta)[:1])
+    return all(np.allclose(A[..., 0, 0], A[..., 1, 1], rtol=1e-12) for A in (Kb, Cb))
+
+
+def bounding_critical_speeds(model: SpindleModel, up_to_rpm: float, theta=None
+                             ) -> CriticalBands:
+    """Critical speeds (rpm) up to ``up_to_rpm``: exact forward ones for isotropic bearings,
+    intervals for bearings with ``k_xx ≠ k_yy`` (no cross-coupling).
+
+    With anisotropic bearings every synchronous whirl is elliptical and unbalance excites both
+    members of each split pair, so all 1x crossings count, forward and backward. They solve the
+    Hermitian definite pencil ``K(Ω) u = Ω² (M − i G) u`` on the whole model (``K`` positive
+    definite, ``M − i G`` Hermitian). The rotors whose bearings all take ``k_yy`` (softer) or
+    ``k_xx`` bound its stiffness in the Loewner order (``K_y ⪯ K ⪯ K_x``), and by the
+    Courant–Fischer theorem for definite pencils (Parlett, *The Symmetric Eigenvalue
+    Problem*, 1998, §15.3; Horn & Johnson, *Matrix Analysis*, 2013, Cor. 4.3.12) the k-th
+    synchronous frequency at every speed lies between theirs; an isotropic rotor's crossings
+    are its forward and backward ones (the plane problems ``M ∓ G T``). So the k-th critical
+    speed lies between the k-th of the two bounding rotors — for any anisotropy, as long as
+    each frequency curve meets the 1x line once (bearings that soften with speed) — checked
+    against the exact crossings and ``modal.critical_speeds`` at s = 0.05, 0.2, 0.35 in
+    ``tests/spindle/test_separation.py``. It stops holding with cross-coupled bearings
+    (``K`` not symmetric: refused). The damping ratio is the smaller of the two ends'
+    (a larger amplification, a wider required margin).
+    """
+    if _isotropic(model, up_to_rpm, theta):
+        c = forward_critical_speeds(model, up_to_rpm, theta)
+        return CriticalBands(c.speeds_rpm, c.speeds_rpm, c.damping_ratio)
+    ends = []
+    for axis in ("y", "x"):
+        cs = [forward_critical_speeds(model, up_to_rpm, theta, axis=axis, backward=b)
+              for b in (False, True)]
+        n = np.concatenate([c.speeds_rpm for c in cs])
+        z = np.concatenate([c.damping_ratio for c in cs])
+        order = np.argsort(n)
+        ends.append((n[order], z[order]))
+    size = max(e[0].size for e in ends)
+    pad = [(np.pad(n, (0, size - n.size), constant_values=np.inf),
+            np.pad(z, (0, size - z.size), constant_values=np.inf)) for n, z in ends]
+    (ny, zy), (nx, zx) = pad
+    return CriticalBands(np.minimum(ny, nx), np.maximum(ny, nx), np.minimum(zy, zx))
 
 
 def api_separation_margins(amplification: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -181,12 +289,13 @@ class ResonanceGuard:
         if self.kind == "paper":
             return 1.0 - first_natural_frequency(model) / (self.paper_factor
                                                            * g.speed_max_rpm / 60.0)
-        crit = forward_critical_speeds(model, self.search_factor * g.speed_max_rpm)
-        if crit.speeds_rpm.size == 0:
+        crit = bounding_critical_speeds(model, self.search_factor * g.speed_max_rpm)
+        if crit.lower_rpm.size == 0:
             return 1.0 - self.search_factor                 # none up to the search limit
         below, above = api_separation_margins(crit.amplification)
-        g_above = 1.0 + above - crit.speeds_rpm / g.speed_max_rpm
-        g_below = crit.speeds_rpm / g.speed_min_rpm - (1.0 - below)
+        # an interval is separated when it lies wholly below or wholly above the range
+        g_above = 1.0 + above - crit.lower_rpm / g.speed_max_rpm
+        g_below = crit.upper_rpm / g.speed_min_rpm - (1.0 - below)
         return float(np.max(np.minimum(g_above, g_below)))
 
     def __call__(self, X: np.ndarray) -> np.ndarray:
@@ -194,5 +303,5 @@ class ResonanceGuard:
         return np.array([[self.margin(x)] for x in X])
 
 
-__all__ = ["GUARDS", "CriticalSpeeds", "ResonanceGuard", "api_separation_margins",
-           "forward_critical_speeds"]
+__all__ = ["AXES", "GUARDS", "CriticalBands", "CriticalSpeeds", "ResonanceGuard",
+           "api_separation_margins", "bounding_critical_speeds", "forward_critical_speeds"]

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import json
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.report import findings, write_run
+from surrogate_rbrdo.discrepancy.search import slot_estimate
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
 from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
@@ -78,3 +80,52 @@ def test_findings_and_updated_spindle_load_back(housing_result, spindle, tmp_pat
     assert updated.effects[-1].k_N_per_m == pytest.approx(
         housing_result.effects[0].fit.parameters["k_N_per_m"])
     assert json.loads(json.dumps(findings(housing_result))) == f
+
+
+@pytest.mark.known_answer
+def test_written_spindle_and_findings_carry_the_final_joint_fit(housing_result, spindle,
+                                                                  tmp_path):
+    """Regression: findings.json reported an effect's fit from the stage that named it while
+    spindle_updated.toml carried the final joint fit (refitted with later effects). Here the
+    final fit's housing compliance is set apart from the stage fit's: both files must carry
+    the final one (known answer: the value put in)."""
+    sp, _ = spindle
+    res = housing_result
+    final = res.final
+    k = final.par.n_nuisance                         # the housing slot's compliance (1/k)
+    x = final.x.copy()
+    x[k] *= 1.25
+    moved = replace(res, final=replace(final, x=x))
+    k_final = 1.0 / x[k]
+    assert k_final != pytest.approx(res.effects[0].fit.parameters["k_N_per_m"], rel=0.1)
+    section = {"geometry": "reference", "baseline": [2000.0, 500.0, 65.0]}
+    paths = write_run(moved, tmp_path, spindle_section=section, model_effects=sp.effects)
+    f = json.loads(paths["findings"].read_text())
+    assert f["effects"][0]["parameters"]["k_N_per_m"] == pytest.approx(k_final, rel=1e-12)
+    assert f["updated_effects"][0]["parameters"]["k_N_per_m"] == pytest.approx(k_final,
+                                                                                rel=1e-12)
+    assert f["effects"][0]["parameters_when_named"]["k_N_per_m"] == pytest.approx(
+        res.effects[0].fit.parameters["k_N_per_m"])
+    table = tomllib.loads(paths["spindle"].read_text())["spindle"]
+    assert table["effects"][-1]["name"] == "housing"
+    assert table["effects"][-1]["k_N_per_m"] == pytest.approx(k_final, rel=1e-12)
+    for p in ("m_kg", "c_Ns_per_m"):
+        assert table["effects"][-1][p] == pytest.approx(f["effects"][0]["parameters"][p])
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("seen", [1e-4, 0.0])
+def test_a_strength_the_data_barely_see_is_reported_unidentified(housing_result, seen):
+    """Known answer: scaling the Jacobian column of the housing compliance by ``seen`` scales
+    its Wald half-width by ``1/seen`` (unbounded at 0), so the interval contains the rigid
+    housing: the stiffness is reported unidentified with no interval, never as a bound."""
+    final = housing_result.final
+    k = final.par.n_nuisance
+    e = slot_estimate(final, 0)
+    assert e.identified["k_N_per_m"] and e.ci["k_N_per_m"] is not None
+    jac = final.jac.copy()
+    jac[:, k] *= seen
+    blind = slot_estimate(replace(final, jac=jac), 0)
+    assert blind.identified == {**e.identified, "k_N_per_m": False}
+    assert blind.ci["k_N_per_m"] is None
+    assert blind.parameters == e.parameters
