@@ -25,6 +25,20 @@ from surrogate_rbrdo.formulations.reliability import PF_BOUNDS, RELIABILITY_MEAS
 NO_SAMPLING_ERROR = ("form", "sorm", "fosm")
 
 
+def check_reliability(reliability_measure: str, pf_bound: str, estimator: str) -> None:
+    """Check that the reliability measure, the P_f bound and the estimator go together
+    (``ValueError`` naming the field otherwise)."""
+    check_choice("reliability_measure", reliability_measure, RELIABILITY_MEASURES)
+    check_choice("pf_bound", pf_bound, PF_BOUNDS)
+    if reliability_measure == "quantile" and estimator != "mc":
+        raise ValueError(f"reliability_measure = 'quantile' is not allowed with estimator = "
+                         f"{estimator!r}: the quantile of the common sample needs 'mc'")
+    if pf_bound == "upper" and estimator in NO_SAMPLING_ERROR:
+        raise ValueError(f"pf_bound = 'upper' is not allowed with estimator = {estimator!r}: it "
+                         "has no sampling error to bound (use a sampling estimator: mc, is, ais, "
+                         "subset)")
+
+
 @dataclass(frozen=True)
 class FormulationOptions:
     """Shared options of every formulation.
@@ -75,15 +89,7 @@ class FormulationOptions:
                              "a DeterministicOptions")
         object.__setattr__(self, "estimator_options",
                            MappingProxyType(dict(self.estimator_options)))
-        check_choice("reliability_measure", self.reliability_measure, RELIABILITY_MEASURES)
-        check_choice("pf_bound", self.pf_bound, PF_BOUNDS)
-        if self.reliability_measure == "quantile" and self.estimator != "mc":
-            raise ValueError(f"reliability_measure = 'quantile' is not allowed with estimator = "
-                             f"{self.estimator!r}: the quantile of the common sample needs 'mc'")
-        if self.pf_bound == "upper" and self.estimator in NO_SAMPLING_ERROR:
-            raise ValueError(f"pf_bound = 'upper' is not allowed with estimator = "
-                             f"{self.estimator!r}: it has no sampling error to bound (use a "
-                             "sampling estimator: mc, is, ais, subset)")
+        check_reliability(self.reliability_measure, self.pf_bound, self.estimator)
 
     @property
     def beta_target(self) -> float:

@@ -31,8 +31,8 @@ from typing import Any
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 from surrogate_rbrdo.estimators import ESTIMATORS
-from surrogate_rbrdo.formulations import FORMULATIONS, PF_BOUNDS, RELIABILITY_MEASURES
-from surrogate_rbrdo.formulations.options import NO_SAMPLING_ERROR
+from surrogate_rbrdo.formulations import FORMULATIONS
+from surrogate_rbrdo.formulations.options import check_reliability
 from surrogate_rbrdo.formulations.reliability import quantile_rank
 from surrogate_rbrdo.optimization import OPTIMIZERS
 
@@ -174,14 +174,7 @@ class OptimizationOptions:
                 "pop_size*n_gen": 256.0 * self.pop_size * self.n_gen * k}
 
     def _check_reliability(self) -> None:
-        check_choice("reliability_measure", self.reliability_measure, RELIABILITY_MEASURES)
-        check_choice("pf_bound", self.pf_bound, PF_BOUNDS)
-        if self.reliability_measure == "quantile" and self.estimator != "mc":
-            raise ValueError(f"reliability_measure = 'quantile' is not allowed with estimator = "
-                             f"{self.estimator!r}: the quantile of the common sample needs 'mc'")
-        if self.pf_bound == "upper" and self.estimator in NO_SAMPLING_ERROR:
-            raise ValueError(f"pf_bound = 'upper' is not allowed with estimator = "
-                             f"{self.estimator!r}: it has no sampling error to bound")
+        check_reliability(self.reliability_measure, self.pf_bound, self.estimator)
         if self.reliability_measure == "quantile":
             for pt in sorted({p for n, p in self.runs if FORMULATIONS.get(n).reliability}):
                 if quantile_rank(self.n_theta, pt, self.pf_bound, 0.95) < 1:
