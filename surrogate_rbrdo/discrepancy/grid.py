@@ -106,7 +106,9 @@ def build_grid(ctx: Context, cal: Calibration, noises: tuple[str, ...], seeds: i
             out.append(Scenario(label, strength, hidden, nz,
                                 int(ss.spawn(1)[0].generate_state(1)[0])))
 
-    library_names = [n for n, h in HIDDEN.items() if not h.truth_only and n in ctx.options.library]
+    calibrated = {key[0] for key in cal.z}          # the grid covers what was calibrated
+    library_names = [n for n, h in HIDDEN.items()
+                     if not h.truth_only and n in ctx.options.library and n in calibrated]
     for nz in noises:
         add("nothing hidden", "-", (), nz)
         for n in library_names:
@@ -124,7 +126,7 @@ def build_grid(ctx: Context, cal: Calibration, noises: tuple[str, ...], seeds: i
             if a in library_names and b in library_names:
                 add(f"two: {a} + {b}", "strong", ((HIDDEN[a], cal.knob[(a, "strong", nz)]),
                                                   (HIDDEN[b], cal.knob[(b, "strong", nz)])), nz)
-        for n in OUTSIDE:
+        for n in (n for n in OUTSIDE if n in calibrated):
             for s in ("marginal", "strong"):
                 add(f"outside: {n}", s, ((HIDDEN[n], cal.knob[(n, s, nz)]),), nz)
     return out
