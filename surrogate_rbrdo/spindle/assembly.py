@@ -378,78 +378,20 @@ def build_model(
     shear, rotary : bool
         Timoshenko shear deformation and rotary inertia (switch off only for verification).
     """
-    effects = tuple(effects)
-    for e in effects:
-        if not isinstance(e, Effect):
-            raise ValueError(f"effects: {e!r} is not an Effect")
-    if sum(isinstance(e, Gyroscopics) for e in effects) > 1:
-        raise ValueError("effects: at most one 'gyroscopics' effect is allowed")
-    names = [b.name for b in geometry.bearings]
-    theta_bearings = tuple(names if theta_bearings is None else theta_bearings)
-    for t in theta_bearings:
-        if t not in names:
-            raise ValueError(f"theta_bearings: {t!r} is not a bearing; bearings are {names}")
-    if len(set(theta_bearings)) != len(theta_bearings):
-        raise ValueError(f"theta_bearings = {list(theta_bearings)} is not allowed: each bearing "
-                         "may carry one θ factor (a name appears twice)")
-
+    effects = _check_effects(effects)
+    theta_bearings = _check_theta_bearings(geometry, theta_bearings)
     joints = [j for e in effects if (j := e.joint()) is not None]
     if len({j.position_mm for j in joints}) != len(joints):
         raise ValueError("effects: two joints at one position")
     _check_joints(geometry, joints)
     z, sec_idx = _mesh(geometry, joints)
-    nn = z.size
-    n = 4 * nn
-    sections = tuple(
-        BeamSection(s.outer_diameter_mm * MM, s.inner_diameter_mm * MM,
-                    geometry.materials[s.material].E_Pa, geometry.materials[s.material].nu,
-                    geometry.materials[s.material].rho_kg_m3)
-        for s in geometry.sections
-    )
-    M = np.zeros((n, n))
-    K = np.zeros((n, n))
-    G = np.zeros((n, n))
-    mass = 0.0
-    emats = np.zeros((nn - 1, 3, 8, 8))
-    for e in range(nn - 1):
-        L = z[e + 1] - z[e]
-        sec = sections[sec_idx[e]]
-        if L == 0.0:  # a joint: springs between two coincident nodes, no mass
-            emats[e, 1] = _joint_matrix(next(j for j in joints
-                                             if abs(j.position_mm * MM - z[e]) < 1e-9))
-        else:
-            emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
-        Me, Ke, Ge = emats[e]
-        sl = slice(4 * e, 4 * e + 8)
-        M[sl, sl] += Me
-        K[sl, sl] += Ke
-        G[sl, sl] += Ge
-        mass += sec.rho * sec.area * L
-    for d in geometry.disks:
-        i = _node_of(z, d.position_mm)
-        M[4 * i, 4 * i] += d.mass_kg
-        M[4 * i + 1, 4 * i + 1] += d.mass_kg
-        M[4 * i + 2, 4 * i + 2] += d.diametral_inertia_kgm2
-        M[4 * i + 3, 4 * i + 3] += d.diametral_inertia_kgm2
-        G[4 * i + 2, 4 * i + 3] += d.polar_inertia_kgm2
-        G[4 * i + 3, 4 * i + 2] -= d.polar_inertia_kgm2
-        mass += d.mass_kg
-
-    def split(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        idx = np.arange(nn)
-        diag = np.stack([A[4 * i:4 * i + 4, 4 * i:4 * i + 4] for i in idx])
-        up = np.stack([A[4 * i:4 * i + 4, 4 * i + 4:4 * i + 8] for i in idx[:-1]])
-        low = np.stack([A[4 * i + 4:4 * i + 8, 4 * i:4 * i + 4] for i in idx[:-1]])
-        return diag, up, low
-
+    sections = _beam_sections(geometry)
+    M, K, G, emats, shaft_mass = _assemble_shaft(z, sec_idx, sections, joints, shear=shear,
+                                                 rotary=rotary)
+    mass = _add_disks(M, G, geometry, z, shaft_mass)
     bearing_nodes = np.array([_node_of(z, b.position_mm) for b in geometry.bearings])
     if len(set(bearing_nodes.tolist())) != len(bearing_nodes):
         raise ValueError("bearings: two bearings share one node; place them apart")
-    supports = bearing_supports(geometry, effects)
-    U = np.array([u.magnitude_kgm * np.exp(1j * np.deg2rad(u.phase_deg))
-                  for u in geometry.unbalances], dtype=complex)
-    for e in effects:
-        U = e.unbalance(U)
     return SpindleModel(
         geometry=geometry,
         effects=effects,
@@ -459,14 +401,109 @@ def build_model(
         M=M,
         K=K,
         G=G,
-        blocks={"M": split(M), "K": split(K), "G": split(G)},
+        blocks={"M": _split_blocks(M), "K": _split_blocks(K), "G": _split_blocks(G)},
         bearing_nodes=bearing_nodes,
-        supports=supports,
+        supports=bearing_supports(geometry, effects),
         unbalance_nodes=np.array([_node_of(z, u.position_mm) for u in geometry.unbalances],
                                  dtype=int),
-        unbalance=U,
+        unbalance=_unbalance_phasors(geometry, effects),
         tool_node=_node_of(z, geometry.tool_tip_mm),
         rotor_mass_kg=float(mass),
         sections=sections,
         element_mats=emats,
     )
+
+
+def _check_effects(effects: Sequence[Effect]) -> tuple[Effect, ...]:
+    """The effects as a tuple: every one an :class:`Effect`, at most one gyroscopics switch."""
+    effects = tuple(effects)
+    for e in effects:
+        if not isinstance(e, Effect):
+            raise ValueError(f"effects: {e!r} is not an Effect")
+    if sum(isinstance(e, Gyroscopics) for e in effects) > 1:
+        raise ValueError("effects: at most one 'gyroscopics' effect is allowed")
+    return effects
+
+
+def _check_theta_bearings(geometry: SpindleGeometry,
+                          theta_bearings: Sequence[str] | None) -> tuple[str, ...]:
+    """The bearings θ multiplies (default all), each a bearing of ``geometry``, none twice."""
+    names = [b.name for b in geometry.bearings]
+    theta_bearings = tuple(names if theta_bearings is None else theta_bearings)
+    for t in theta_bearings:
+        if t not in names:
+            raise ValueError(f"theta_bearings: {t!r} is not a bearing; bearings are {names}")
+    if len(set(theta_bearings)) != len(theta_bearings):
+        raise ValueError(f"theta_bearings = {list(theta_bearings)} is not allowed: each bearing "
+                         "may carry one θ factor (a name appears twice)")
+    return theta_bearings
+
+
+def _beam_sections(geometry: SpindleGeometry) -> tuple[BeamSection, ...]:
+    """The geometry's shaft sections in SI with their materials."""
+    mats = geometry.materials
+    return tuple(
+        BeamSection(s.outer_diameter_mm * MM, s.inner_diameter_mm * MM,
+                    mats[s.material].E_Pa, mats[s.material].nu, mats[s.material].rho_kg_m3)
+        for s in geometry.sections
+    )
+
+
+def _assemble_shaft(z: np.ndarray, sec_idx: np.ndarray, sections: tuple[BeamSection, ...],
+                    joints: Sequence[Joint], *, shear: bool, rotary: bool
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """Global M, K, G of the shaft's Timoshenko elements (a zero-length element is a joint:
+    springs between two coincident nodes, no mass), the element matrices and the shaft mass."""
+    nn = z.size
+    n = 4 * nn
+    M, K, G = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    mass = 0.0
+    emats = np.zeros((nn - 1, 3, 8, 8))
+    for e in range(nn - 1):
+        L = z[e + 1] - z[e]
+        sec = sections[sec_idx[e]]
+        if L == 0.0:
+            emats[e, 1] = _joint_matrix(next(j for j in joints
+                                             if abs(j.position_mm * MM - z[e]) < 1e-9))
+        else:
+            emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
+        sl = slice(4 * e, 4 * e + 8)
+        M[sl, sl] += emats[e, 0]
+        K[sl, sl] += emats[e, 1]
+        G[sl, sl] += emats[e, 2]
+        mass += sec.rho * sec.area * L
+    return M, K, G, emats, mass
+
+
+def _add_disks(M: np.ndarray, G: np.ndarray, geometry: SpindleGeometry, z: np.ndarray,
+               mass: float) -> float:
+    """Add the rigid disks' mass, diametral and polar inertia in place; ``mass`` plus theirs."""
+    for d in geometry.disks:
+        i = 4 * _node_of(z, d.position_mm)
+        M[i, i] += d.mass_kg
+        M[i + 1, i + 1] += d.mass_kg
+        M[i + 2, i + 2] += d.diametral_inertia_kgm2
+        M[i + 3, i + 3] += d.diametral_inertia_kgm2
+        G[i + 2, i + 3] += d.polar_inertia_kgm2
+        G[i + 3, i + 2] -= d.polar_inertia_kgm2
+        mass += d.mass_kg
+    return mass
+
+
+def _split_blocks(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The 4 × 4 diagonal, upper and lower node blocks of a block-tridiagonal matrix."""
+    nn = A.shape[0] // 4
+    idx = np.arange(nn)
+    diag = np.stack([A[4 * i:4 * i + 4, 4 * i:4 * i + 4] for i in idx])
+    up = np.stack([A[4 * i:4 * i + 4, 4 * i + 4:4 * i + 8] for i in idx[:-1]])
+    low = np.stack([A[4 * i + 4:4 * i + 8, 4 * i:4 * i + 4] for i in idx[:-1]])
+    return diag, up, low
+
+
+def _unbalance_phasors(geometry: SpindleGeometry, effects: tuple[Effect, ...]) -> np.ndarray:
+    """``U e^{iφ}`` of each unbalance plane, after the effects that change the unbalance."""
+    U = np.array([u.magnitude_kgm * np.exp(1j * np.deg2rad(u.phase_deg))
+                  for u in geometry.unbalances], dtype=complex)
+    for e in effects:
+        U = e.unbalance(U)
+    return U
