@@ -37,7 +37,6 @@ import numpy as np
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_choice
-from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY
 from surrogate_rbrdo.discrepancy.measured import (
     channel_positions,
     dataset_phasor_rows,
@@ -89,23 +88,27 @@ class NuisanceTable:
             raise ValueError(str(exc).removeprefix("nuisance.")) from None
 
 
+_D = DiscrepancyOptions       # the class: its attributes are the fields' defaults
+
+
 @dataclass(frozen=True)
 class DiscrepancyTable:
     """``[discrepancy]``: the fields of :class:`~.workflow.DiscrepancyOptions` (same defaults
     and checks) with ``nuisance`` a :class:`NuisanceTable`."""
 
-    library: tuple[str, ...] = DEFAULT_LIBRARY
+    # the defaults are the workflow's own (one source: DiscrepancyOptions)
+    library: tuple[str, ...] = _D.library
     nuisance: NuisanceTable = field(default_factory=NuisanceTable)
-    alpha: float = 0.01
-    alpha_residual: float = 0.01
-    n_draws: int = 300
-    holdout_every: int = 5
-    extrapolate_fraction: float = 0.1
-    max_effects: int = 2
-    confound_delta: float = 6.63
-    holdout_tolerance: float = 10.83
-    use_identified: bool = False
-    max_nfev: int = 150
+    alpha: float = _D.alpha
+    alpha_residual: float = _D.alpha_residual
+    n_draws: int = _D.n_draws
+    holdout_every: int = _D.holdout_every
+    extrapolate_fraction: float = _D.extrapolate_fraction
+    max_effects: int = _D.max_effects
+    confound_delta: float = _D.confound_delta
+    holdout_tolerance: float = _D.holdout_tolerance
+    use_identified: bool = _D.use_identified
+    max_nfev: int = _D.max_nfev
 
     def __post_init__(self) -> None:
         self.options()
