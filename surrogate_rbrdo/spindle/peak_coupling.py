@@ -39,6 +39,7 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -73,7 +74,7 @@ def _coupled_matrix(layout: RetainedLayout, S: np.ndarray, Z: np.ndarray) -> np.
     return Kc
 
 
-def _unit_forces(model: SpindleModel, layout: RetainedLayout, omega: np.ndarray) -> np.ndarray:
+def _unit_forces(layout: RetainedLayout, omega: np.ndarray) -> np.ndarray:
     """Force of a unit unbalance (1 kg m, phase 0) in each plane: ``(S, r, P)``,
     ``Ω² [1, −i]`` on the plane node's x, y (``harmonic.unbalance_load``)."""
     P = len(layout.unbalance)
@@ -114,17 +115,40 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
     Otherwise (anisotropic bearings) the whole ``K_c`` is solved.
     """
     layout = retained_layout(model) if layout is None else layout
+    sp = check_geometric(speeds_rpm)
+    th = model.check_theta(theta_nodes)
+    chain = condense_chain(model, sp, layout)
+    Z = model.bearing_impedance(np.broadcast_to(sp * RPM, (th.shape[0], sp.size)), th)
+    return tables_from_condensed(layout, sp, th, chain.S, Z,
+                                 (chain.interior_sign, chain.interior_logabs))
+
+
+def check_geometric(speeds_rpm: np.ndarray) -> np.ndarray:
+    """``speeds_rpm`` as a float array if it is a geometric grid of at least two speeds."""
     sp = np.asarray(speeds_rpm, dtype=float)
-    ls = np.log(sp)
+    ls = np.log(sp) if np.all(sp > 0) else np.full(sp.shape, np.nan)
     if sp.ndim != 1 or sp.size < 2 or not np.allclose(np.diff(ls), ls[1] - ls[0], rtol=1e-9):
         raise ValueError("speeds_rpm must be a geometric grid of at least two speeds "
                          "(np.geomspace)")
-    th = model.check_theta(theta_nodes)
-    w = sp * RPM
-    chain = condense_chain(model, sp, layout)
-    S = chain.S                                                         # (G, r, r)
-    Z = model.bearing_impedance(np.broadcast_to(w, (th.shape[0], sp.size)), th)
-    F = _unit_forces(model, layout, w)                                  # (G, r, P)
+    return sp
+
+
+def tables_from_condensed(layout: RetainedLayout, speeds_rpm: np.ndarray, theta_nodes: np.ndarray,
+                          S: np.ndarray, Z: np.ndarray,
+                          interior: tuple[np.ndarray, np.ndarray] | None = None
+                          ) -> CoupledTables:
+    """:class:`CoupledTables` from the condensed rotor ``S (G, r, r)`` at geometric
+    ``speeds_rpm`` and the bearing impedances ``Z (K, G, nb, 2, 2)`` at the θ rows
+    ``theta_nodes (K, m)``: one solve and determinant per (θ row, speed).
+
+    ``interior``: ``(sign, logabs)`` of ``det A_II`` per speed (``substructure.
+    condense_chain``), which makes ``D`` the whole system's determinant, free of the poles
+    of ``S``; ``None`` (e.g. ``S`` from a surrogate) leaves ``D = det K_c``, smooth in speed
+    only where ``S`` is (no clamped-interior resonance near the range).
+    """
+    sp = check_geometric(speeds_rpm)
+    ls = np.log(sp)
+    F = _unit_forces(layout, sp * RPM)                                  # (G, r, P)
     V = forward_basis(layout)
     SV = S @ V
     Sf = V.conj().T @ SV
@@ -148,10 +172,11 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
     if forward:
         q = V @ q
     sign, logdet = np.linalg.slogdet(A)
-    # det A_II · det(S + P Z Pᵀ) is the whole system's determinant: S's poles (clamped-
-    # interior resonances, e.g. behind a soft tool interface) cancel, D stays smooth in Ω
-    sign = sign * chain.interior_sign
-    logdet = logdet + chain.interior_logabs
+    if interior is not None:
+        # det A_II · det(S + P Z Pᵀ) is the whole system's determinant: S's poles (clamped-
+        # interior resonances, e.g. behind a soft tool interface) cancel, D stays smooth in Ω
+        sign = sign * interior[0]
+        logdet = logdet + interior[1]
     D = sign * np.exp(logdet - logdet.max())                            # one common scale
     t = 4 * layout.tool
     Na = D[..., None] * (q[..., t, :] + 1j * q[..., t + 1, :])
@@ -159,7 +184,7 @@ def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.
     if not (np.all(np.isfinite(Na)) and np.all(np.isfinite(D))
             and (Nb is None or np.all(np.isfinite(Nb)))):
         raise ModelError("coupled_tables: non-finite coupled response")
-    return CoupledTables(ls, th, D, Na, Nb)
+    return CoupledTables(ls, np.asarray(theta_nodes, dtype=float), D, Na, Nb)
 
 
 def check_unbalance(unbalance: np.ndarray, n_rows: int, n_planes: int) -> np.ndarray:
@@ -212,17 +237,29 @@ def peak_tool_amplitude_coupled(
     U = check_unbalance(unbalance, th.shape[0], model.unbalance_nodes.size)
     layout = retained_layout(model)
     speeds = np.geomspace(lo, hi, options.n_grid)
-    out_a, out_s = np.empty(th.shape[0]), np.empty(th.shape[0])
-    redo = np.arange(th.shape[0])
-    if theta_affine(model.geometry, model.effects, model.theta_bearings):
-        nodes, basis = theta_grid(th) if grid is None else grid
-        res, bound = peak_from_tables(coupled_tables(model, speeds, nodes, layout), basis, U,
-                                      options)
+    affine = theta_affine(model.geometry, model.effects, model.theta_bearings)
+    return peak_by_tables(lambda rows: coupled_tables(model, speeds, rows, layout), th, U,
+                          options, affine=affine, grid=grid, rtol=rtol)
+
+
+def peak_by_tables(tables: Callable[[np.ndarray], CoupledTables], theta: np.ndarray,
+                   unbalance: np.ndarray, options: CoupledPeakOptions, *, affine: bool,
+                   grid: tuple[np.ndarray, np.ndarray] | None = None, rtol: float = 1e-9
+                   ) -> PeakResult:
+    """The peak of every θ row (N, m) with its phasors ``unbalance`` (N, P) from the
+    tables ``tables(theta_rows)`` of one rotor: at the ``3^m`` nodes of ``grid`` (default
+    ``coupling.theta_grid(theta)``) when ``affine`` (every θ bearing's impedance affine in
+    its factor), and row by row for the rows whose θ-interpolation round-off bound exceeds
+    ``rtol`` (every row when not ``affine``)."""
+    out_a, out_s = np.empty(theta.shape[0]), np.empty(theta.shape[0])
+    redo = np.arange(theta.shape[0])
+    if affine:
+        nodes, basis = theta_grid(theta) if grid is None else grid
+        res, bound = peak_from_tables(tables(nodes), basis, unbalance, options)
         out_a[:], out_s[:] = res.amplitude, res.speed_rpm
         redo = np.flatnonzero(~(bound <= rtol))
     if redo.size:
-        res, _ = peak_from_tables(coupled_tables(model, speeds, th[redo], layout), None,
-                                  U[redo], options)
+        res, _ = peak_from_tables(tables(theta[redo]), None, unbalance[redo], options)
         out_a[redo], out_s[redo] = res.amplitude, res.speed_rpm
     return PeakResult(out_a, out_s)
 
@@ -287,9 +324,12 @@ __all__ = [
     "CoupledTables",
     "check_unbalance",
     "coupled_tables",
+    "check_geometric",
     "forward_basis",
+    "peak_by_tables",
     "peak_from_tables",
     "peak_tool_amplitude_coupled",
     "peak_tool_amplitude_unbalance",
+    "tables_from_condensed",
     "tool_response_per_plane",
 ]

@@ -211,16 +211,18 @@ class PeakUnbalanceResponse:
     def unbalance(self, model, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Effective stiffness factors ``(N, m)`` and unbalance phasors ``(N, P)`` (kg m) of
         ``model`` for θ rows."""
-        k, unit = self._split(model, theta)
+        k, unit = self.split(theta)
         return k, permissible_unbalance(model, self.tolerances) * unit
 
-    def _split(self, model, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Effective stiffness factors and unit phasors ``r e^{iφ}`` (design-free except the
-        preload law's exponent)."""
+    def split(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Effective stiffness factors ``(N, m)`` and unit phasors ``r e^{iφ}`` ``(N, P)``
+        for θ rows: the same for every design (the thermal state enters through the preload
+        law's exponent, which the design does not change); times each design's permissible
+        unbalance they are its phasors (:meth:`unbalance`)."""
         spec = self.theta_spec
         k, tau, r, phi = spec.split(theta)
         if tau is not None:
-            law = model.geometry.bearing(spec.preload_bearing).law
+            law = self.spindle.geometry.bearing(spec.preload_bearing).law
             e = law.exponent if isinstance(law, PreloadLaw) else 0.0
             k = k.copy()
             k[:, spec.bearings.index(spec.preload_bearing)] *= (1.0 + tau) ** e
@@ -235,7 +237,7 @@ class PeakUnbalanceResponse:
         for x in X:
             model = self.spindle.model(x)
             if k is None:
-                k, unit = self._split(model, theta)
+                k, unit = self.split(theta)
                 grid = theta_grid(k)
             U = permissible_unbalance(model, self.tolerances) * unit
             if self.method == "direct":

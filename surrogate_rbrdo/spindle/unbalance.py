@@ -27,6 +27,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.validate import check_positive
 from surrogate_rbrdo.spindle.assembly import RPM, SpindleModel
+from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,11 @@ REFERENCE_TOLERANCES = UnbalanceTolerances(
 
 def plane_masses(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.ndarray:
     """Mass (kg) balanced in each plane: its named disks, or the rest of the rotor."""
-    g = model.geometry
+    return _plane_masses(model.geometry, model.rotor_mass_kg, tolerances)
+
+
+def _plane_masses(g: SpindleGeometry, rotor_mass_kg: float,
+                  tolerances: UnbalanceTolerances) -> np.ndarray:
     if len(tolerances.planes) != len(g.unbalances):
         raise ValueError(f"tolerances give {len(tolerances.planes)} planes, the geometry has "
                          f"{len(g.unbalances)} unbalance planes")
@@ -92,21 +97,55 @@ def plane_masses(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.nda
         claimed += out[j]
     for j, p in enumerate(tolerances.planes):
         if p.disks is None:
-            out[j] = model.rotor_mass_kg - claimed
+            out[j] = rotor_mass_kg - claimed
     return out
+
+
+def geometry_rotor_mass_kg(geometry: SpindleGeometry) -> float:
+    """Rotor mass (kg) from the geometry alone: shaft sections (ρ π (r_o² − r_i²) L) and
+    disks, the mass the FE model assembles (``SpindleModel.rotor_mass_kg``) without building
+    its matrices.
+
+    >>> import numpy as np
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> sp = reference_spindle()
+    >>> x = np.array([2000.0, 500.0, 65.0])
+    >>> bool(np.isclose(geometry_rotor_mass_kg(sp.geometry_for(x)),
+    ...                 sp.model(x).rotor_mass_kg, rtol=1e-12))
+    True
+    """
+    rho = {k: m.rho_kg_m3 for k, m in geometry.materials.items()}
+    mass = sum(rho[s.material] * np.pi / 4 * (s.outer_diameter_mm**2 - s.inner_diameter_mm**2)
+               * 1e-6 * s.length_mm * 1e-3 for s in geometry.sections)
+    return float(mass + sum(d.mass_kg for d in geometry.disks))
 
 
 def permissible_unbalance(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.ndarray:
     """``U_per = m G / Ω_max`` (kg m) of each plane (ISO 21940-11 §5)."""
-    speed = tolerances.speed_rpm or model.geometry.speed_max_rpm
+    return _permissible(model.geometry, plane_masses(model, tolerances), tolerances)
+
+
+def geometry_permissible_unbalance(geometry: SpindleGeometry,
+                                   tolerances: UnbalanceTolerances) -> np.ndarray:
+    """:func:`permissible_unbalance` from the geometry alone (:func:`geometry_rotor_mass_kg`:
+    no FE matrices), e.g. at a surrogate's prediction designs."""
+    masses = _plane_masses(geometry, geometry_rotor_mass_kg(geometry), tolerances)
+    return _permissible(geometry, masses, tolerances)
+
+
+def _permissible(g: SpindleGeometry, masses: np.ndarray,
+                 tolerances: UnbalanceTolerances) -> np.ndarray:
+    speed = tolerances.speed_rpm or g.speed_max_rpm
     grades = np.array([p.grade_mm_s for p in tolerances.planes]) * 1e-3
-    return plane_masses(model, tolerances) * grades / (speed * RPM)
+    return masses * grades / (speed * RPM)
 
 
 __all__ = [
     "REFERENCE_TOLERANCES",
     "PlaneTolerance",
     "UnbalanceTolerances",
+    "geometry_permissible_unbalance",
+    "geometry_rotor_mass_kg",
     "permissible_unbalance",
     "plane_masses",
 ]
