@@ -413,9 +413,9 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"uncertainty.unbalance: .*at most one plane may take 'the rest of the rotor'"),
     ("unbalance_key", PU("uncertainty.unbalance", "phase = 'random'"), {}, [],
      r"unknown key uncertainty.unbalance.phase; allowed"),
-    ("pu_substructure", PU("surrogate", "structure = 'substructure'"), {}, [],
-     r"surrogate.structure = 'substructure' is not allowed with response.kind = "
-     r"'peak_unbalance'"),
+    ("pu_resonance", PU("surrogate", "structure = 'resonance'"), {}, [],
+     r"surrogate.structure = 'resonance' is not allowed with response.kind = "
+     r"'peak_unbalance': .*fixed unbalance.*; use 'substructure', 'global' or 'fe'"),
     ("pu_speed", PU("response", "speed_rpm = 20000.0"), {}, [],
      r"response.speed_rpm = 20000.0 is not allowed with kind = 'peak_unbalance'"),
     ("geometry_name", S("spindle", "geometry = 'credibel'"), {}, [],

@@ -39,10 +39,10 @@ from surrogate_rbrdo.surrogates.structured.resonance_train import (
     sample_resonance,
 )
 from surrogate_rbrdo.surrogates.structured.substructure import (
-    SubstructureOptions,
     SubstructureSurrogate,
     fit_substructure_surrogate,
 )
+from surrogate_rbrdo.surrogates.structured.substructure_train import SubstructureOptions
 
 __all__ = [
     "RESONANCE_OUTPUTS", "STRUCTURES", "FEOptions", "FullModel", "GlobalOptions",

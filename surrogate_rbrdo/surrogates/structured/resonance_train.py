@@ -128,9 +128,12 @@ class ResonanceOptions(JointDOEOptions):
 
     def check_response(self, response: ResponseSpec) -> None:
         if response.kind != "peak":
+            why = ("its sub-models are of the peak of the geometry's fixed unbalance (θ = the "
+                   "stiffness factors), not of random unbalance phasors" if
+                   response.kind == "peak_unbalance" else
+                   "the resonance structure models the peak over the speed range")
             raise ValueError(f"structure = 'resonance' is not allowed with response.kind = "
-                             f"{response.kind!r}: the resonance structure models the peak over "
-                             "the speed range; use 'global', 'substructure' or 'fe'")
+                             f"{response.kind!r}: {why}; use 'substructure', 'global' or 'fe'")
 
 
 def band_points(Z: np.ndarray, nc_rpm: np.ndarray, bounds: np.ndarray, n_max_rpm: float,

@@ -31,6 +31,16 @@ degree-2 polynomial in ``Ω`` plus a rational part with poles far outside the ra
 interpolation converges geometrically), and the peak is searched exactly as the FE model's
 (``harmonic.peak_search``).
 
+``kind = "peak_unbalance"`` (the credible problem: random magnitude and phase per plane): the
+response is linear in the unbalance phasors, so the interpolated ``S`` enters the exact
+coupled tables of the FE fast path (``spindle.peak_coupling.tables_from_condensed``: the
+determinant and each plane's numerator on a geometric speed grid, at the 3^m θ nodes), each
+design's permissible unbalance (ISO 21940-11, from its geometry) times θ's unit phasors
+combines the planes, and the peak is searched on the tables (``peak_by_tables``), as the
+fast path does with the FE condensation. Without the interior determinant (it would need the
+FE model at the prediction design) ``D = det K_c`` is smooth in speed only where ``S`` is:
+the same condition the Chebyshev interpolation of ``S`` already needs.
+
 The Kriging of ``S`` is :class:`~surrogate_rbrdo.surrogates.multioutput.MultiOutputKriging`
 (one correlation shared by all entries, its likelihood from the ``n × n`` matrix ``Y Yᵀ``).
 """
@@ -39,38 +49,38 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
-from surrogate_rbrdo.core.protocols import LimitState, Prediction
+from surrogate_rbrdo.core.protocols import Prediction
 from surrogate_rbrdo.core.rng import require_rng
-from surrogate_rbrdo.core.validate import check_int
-from surrogate_rbrdo.doe import lhs
-from surrogate_rbrdo.sampling.evaluate import evaluate_points
 from surrogate_rbrdo.spindle.assembly import RPM, bearing_impedance, check_theta, theta_affine
 from surrogate_rbrdo.spindle.coupling import (
     coupled_tool_amplitude,
     coupled_tool_amplitude_sample,
+    theta_grid,
 )
-from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
+from surrogate_rbrdo.spindle.peak_coupling import (
+    forward_basis,
+    peak_by_tables,
+    tables_from_condensed,
+)
+from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse
 from surrogate_rbrdo.spindle.substructure import (
-    PointwiseCondensed,
     RetainedLayout,
     condensed_from_vector,
     condensed_vector,
     retained_layout,
     unbalance_force,
 )
-from surrogate_rbrdo.surrogates.multioutput import MultiOutputKriging
-from surrogate_rbrdo.surrogates.structured.base import (
-    SamplingOptions,
-    TrainedSurrogate,
-    kriging_bytes,
-    register_structure,
+from surrogate_rbrdo.spindle.unbalance import (
+    geometry_permissible_unbalance,
+    geometry_rotor_mass_kg,
 )
+from surrogate_rbrdo.surrogates.multioutput import MultiOutputKriging
 from surrogate_rbrdo.surrogates.validation import LOOSummary, validation_metrics
 
 #: entries of S smaller than this fraction of ``sqrt(|S_ii| |S_jj|)`` at every training design
@@ -133,6 +143,8 @@ class SubstructureSurrogate:
     V_fit: np.ndarray
     peak_options: PeakOptions = field(default_factory=PeakOptions)
     info: dict[str, Any] = field(default_factory=dict)
+    unbalance_response: PeakUnbalanceResponse | None = None
+    rotor_invariant: bool = False
 
     @property
     def n_train(self) -> int:
@@ -178,14 +190,17 @@ class SubstructureSurrogate:
         return coupled_tool_amplitude(self.layout, S, Z, f)
 
     def _check(self, x: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Designs inside the box and θ of the right width, finite and > 0, else ValueError."""
+        """Designs inside the box and θ of the right width, finite and > 0, else ValueError
+        (``kind = "peak_unbalance"``: θ's columns are checked where they are split)."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         d = self.X_train.shape[1]
         if x.ndim != 2 or x.shape[1] != d:
             raise ValueError(f"x has shape {np.shape(x)}: must be (P, {d}) = designs "
                              f"{list(self.spindle.design_map.names)}")
-        return self.spindle.design_map.check_batch(x), check_theta(self.spindle.theta_bearings,
-                                                                    theta)
+        x = self.spindle.design_map.check_batch(x)
+        if self.unbalance_response is not None:
+            return x, np.atleast_2d(np.asarray(theta, dtype=float))
+        return x, check_theta(self.spindle.theta_bearings, theta)
 
     def response(self, x: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Predicted ``y`` (m), designs ``(P, d)`` × θ ``(N, m)`` → ``(P, N)``."""
@@ -196,6 +211,8 @@ class SubstructureSurrogate:
 
     def _y_from_nodes(self, X: np.ndarray, Sn: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """``y`` of designs ``X`` with node stiffnesses ``Sn`` (P, ns, r, r) at θ (N, m)."""
+        if self.kind == "peak_unbalance":
+            return self._peak_unbalance(X, Sn, theta)
         if self.kind == "at_speed":
             # all designs at once: 3^m exact solves per design and an (N, 3^m) product
             w = np.array([self.speed_rpm * RPM])
@@ -214,6 +231,38 @@ class SubstructureSurrogate:
             raise ModelError("substructure surrogate: non-finite amplitude")
         return out
 
+    def _peak_unbalance(self, X: np.ndarray, Sn: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The random-unbalance peak: ``S`` interpolated from the Chebyshev nodes to the
+        geometric speed grid of ``spindle.peak_coupling``, the bearings and θ coupled
+        exactly at the θ nodes, each design's permissible unbalance times θ's unit phasors,
+        and the peak searched on the tables (``peak_coupling.peak_by_tables``). When the
+        training condensations are invariant under rotation about the axis (an axisymmetric
+        rotor), so is the predicted ``S`` (:func:`invariant_part`; the Kriging of its
+        entries breaks it at ~1e-9), and the forward-whirl block alone is solved."""
+        resp, opt = self.unbalance_response, self.unbalance_response.options
+        k, unit = resp.split(theta)
+        g = self.spindle.geometry
+        lo, hi = resp.speed_range_rpm or (g.speed_min_rpm, g.speed_max_rpm)
+        speeds = np.geomspace(lo, hi, opt.n_grid)
+        W = barycentric_weights(self.nodes_rpm, speeds)                  # (G, ns)
+        w = speeds * RPM
+        grid = theta_grid(k)
+        out = np.empty((X.shape[0], k.shape[0]))
+        if self.rotor_invariant:
+            Sn = invariant_part(Sn, forward_basis(self.layout))
+        for i, x in enumerate(X):
+            S = np.einsum("gn,nab->gab", W, Sn[i])
+            U = geometry_permissible_unbalance(self.spindle.geometry_for(x),
+                                               resp.tolerances) * unit
+
+            def tables(rows, x=x, S=S):
+                Z = self._impedance(x[None], w, rows)[0]                  # (K, G, nb, 2, 2)
+                return tables_from_condensed(self.layout, speeds, rows, S, Z)
+
+            out[i] = peak_by_tables(tables, k, U, opt, affine=self.theta_affine,
+                                    grid=grid).amplitude
+        return out
+
     def predict(self, Z: np.ndarray) -> Prediction:
         """Point predictions at joint points; no predictive std (NaN): the Kriging of ``S``
         has one per entry of ``S``, not one of ``y``."""
@@ -228,15 +277,27 @@ class SubstructureSurrogate:
         return LOOSummary("closed_form_condensed", self.n_train, lm.r2, lm.rmse, y_tr, y_lo, {})
 
     def loo_points(self) -> tuple[np.ndarray, np.ndarray]:
-        """``y`` at the training designs (nominal θ): exact (their FE condensation, coupled)
-        and leave-one-out (closed-form LOO of the Kriging of ``S``, coupled the same way)."""
+        """``y`` at the training designs (θ of :meth:`_nominal_theta`): exact (their FE
+        condensation, coupled) and leave-one-out (closed-form LOO of the Kriging of ``S``,
+        coupled the same way)."""
         r, ns = self.layout.n_dof, self.nodes_rpm.size
         n = self.X_train.shape[0]
-        th = np.ones((1, len(self.spindle.theta_bearings)))
+        th = self._nominal_theta()
         S_true = condensed_from_vector(self.V_fit.reshape(n, ns, -1), r)
         S_loo = condensed_from_vector(self.kriging.loo().reshape(n, ns, -1), r)
-        return (self._y_from_nodes(self.X_train, S_true, th)[:, 0],
-                self._y_from_nodes(self.X_train, S_loo, th)[:, 0])
+        return (self._y_from_nodes(self.X_train, S_true, th).max(axis=1),
+                self._y_from_nodes(self.X_train, S_loo, th).max(axis=1))
+
+    def _nominal_theta(self) -> np.ndarray:
+        """θ of the LOO check: nominal stiffness; with a random unbalance the deterministic
+        design basis (every plane at its permissible value, in phase and in couple: ``y``
+        is the worse of the two rows, ``ThetaSpec.unbalance_cases``)."""
+        if self.unbalance_response is None:
+            return np.ones((1, len(self.spindle.theta_bearings)))
+        spec = self.unbalance_response.theta_spec
+        t0 = np.array([0.0 if n == "thermal_preload" or n.startswith("phase") else 1.0
+                       for n in spec.names])
+        return spec.unbalance_cases(t0)
 
     def response_points(self, Z: np.ndarray) -> np.ndarray:
         """``y`` (m) at joint points ``Z = [x, θ]`` (n, d + m)."""
@@ -248,19 +309,41 @@ class SubstructureSurrogate:
                          for i in range(X.shape[0])])
 
 
-def speed_nodes(spindle: Any, kind: str, speed_rpm: float | None, n_speeds: int) -> np.ndarray:
-    """Speeds (rpm) at which ``S`` is trained: the one speed, or Chebyshev nodes in the range."""
-    if kind == "at_speed":
-        return np.array([float(speed_rpm)])
-    g = spindle.geometry
-    return chebyshev_nodes(g.speed_min_rpm, g.speed_max_rpm, n_speeds)
+def invariant_part(S: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """The part of ``S (..., r, r)`` invariant under rotation about the axis:
+    ``V (VᴴSV) Vᴴ + V̄ (VᵀSV̄) Vᵀ`` with ``V`` the forward-whirl basis
+    (``peak_coupling.forward_basis``) and ``V̄`` the backward one (the cross blocks dropped).
+
+    >>> from surrogate_rbrdo.spindle.substructure import RetainedLayout
+    >>> from surrogate_rbrdo.spindle.peak_coupling import forward_basis
+    >>> V = forward_basis(RetainedLayout((0,), 0, (), ()))
+    >>> S = np.diag([2.0, 2.0, 3.0, 3.0]) + 0j         # isotropic: invariant already
+    >>> bool(np.allclose(invariant_part(S, V), S))
+    True
+    >>> bool(np.allclose(invariant_part(np.diag([1.0, 3.0, 0, 0]) + 0j, V)[:2, :2], 2 * np.eye(2)))
+    True
+    """
+    Vh, W = V.conj().T, V.conj()
+    return V @ (Vh @ S @ V) @ Vh + W @ (W.conj().T @ S @ W) @ W.conj().T
+
+
+def rotation_residual(S: np.ndarray, V: np.ndarray) -> float:
+    """Largest ``‖SV − V(VᴴSV)‖ / ‖SV‖`` over the matrices ``S (..., r, r)``: 0 for a rotor
+    invariant under rotation about its axis (``peak_coupling.coupled_tables`` checks it)."""
+    SV = S @ V
+    R = SV - V @ (V.conj().T @ SV)
+    return float(np.max(np.linalg.norm(R, axis=(-2, -1)) / np.linalg.norm(SV, axis=(-2, -1))))
 
 
 def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, kind: str,
                                speed_rpm: float | None, nodes_rpm: np.ndarray,
-                               rng: np.random.Generator, n_start: int = 3
+                               rng: np.random.Generator, n_start: int = 3,
+                               unbalance_response: PeakUnbalanceResponse | None = None
                                ) -> SubstructureSurrogate:
     """Fit the Kriging of ``S`` to FE condensations ``V`` (one row per design of ``X``).
+
+    ``kind = "peak_unbalance"`` needs ``unbalance_response`` (θ's columns, the unbalance
+    tolerances and the peak search; ``PeakUnbalanceSpec.fe_response(spindle, "condensed")``).
 
     ``V`` rows are ``spindle.substructure.PointwiseCondensed`` outputs at ``nodes_rpm``
     (kept, with the structural zeros applied, as ``V_fit``).
@@ -272,6 +355,7 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
     V = np.atleast_2d(np.asarray(V, dtype=float))
     m0 = spindle.model(spindle.baseline)
     layout = retained_layout(m0)
+    _check_unbalance_response(spindle, m0, kind, unbalance_response)
     r, ns = layout.n_dof, nodes_rpm.size
     S = condensed_from_vector(V.reshape(V.shape[0], ns, -1), r)        # (n, ns, r, r)
     dg = np.abs(np.einsum("knii->kni", S))
@@ -279,6 +363,7 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
     zero = np.all(ratio < STRUCTURAL_ZERO, axis=0)                       # (ns, r, r)
     S = np.where(zero, 0.0, S)
     Vc = condensed_vector(S).reshape(V.shape[0], -1)
+    invariant = rotation_residual(S, forward_basis(layout)) <= 1e-10
     t0 = time.perf_counter()
     krg = MultiOutputKriging(bounds=np.asarray(spindle.design_map.bounds, dtype=float),
                              n_start=n_start).fit(X, Vc, rng=rng)
@@ -288,96 +373,34 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
             "n_train": int(X.shape[0]), "fit_time_s": fit_s,
             "speed_nodes_rpm": nodes_rpm.tolist(), "retained_nodes": list(layout.nodes),
             "n_outputs": int(krg.vary_.sum()), "n_structural_zeros": int(zero.sum()),
-            "length_scales_unit_box": krg.length_scales, "nugget": krg.nugget_used_}
+            "length_scales_unit_box": krg.length_scales, "nugget": krg.nugget_used_,
+            "rotor_invariant": bool(invariant)}
     return SubstructureSurrogate(spindle=spindle, layout=layout, kind=kind,
                                  speed_rpm=speed_rpm, nodes_rpm=np.asarray(nodes_rpm, float),
                                  kriging=krg, force_per_w2=force, X_train=X, V_fit=Vc,
-                                 info=info)
+                                 info=info, unbalance_response=unbalance_response,
+                                 rotor_invariant=invariant)
 
 
-@dataclass(frozen=True)
-class SubstructureOptions(SamplingOptions):
-    """Options of the substructure surrogate (``structure = "substructure"``; static DOE over
-    the designs only, θ is exact).
-
-    Attributes
-    ----------
-    n_doe : int
-        Training designs (maximin LHS over the design box; one FE condensation each), >= 7.
-    n_start : int
-        Multistarts of the multi-output Kriging's likelihood optimisation.
-    sub_n_speeds : int
-        The peak response: Chebyshev speed nodes at which ``S`` is trained and between which
-        it is interpolated (the at-speed response uses its one speed).
-    """
-
-    structure: ClassVar[str] = "substructure"
-    n_doe: int = 200
-    n_start: int = 5
-    sub_n_speeds: int = 12
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_int("n_doe", self.n_doe, minimum=7)
-        check_int("n_start", self.n_start, minimum=1)
-        check_int("sub_n_speeds", self.sub_n_speeds, minimum=2)
-
-    def memory_bytes(self) -> dict[str, float]:
-        """Peak bytes (``core.memory``): the multi-output Kriging on ``n_doe`` designs and
-        its outputs, ``2 · sub_n_speeds · r²`` per design for ``r`` retained DOFs (at least
-        12: the tool tip and two bearings, 4 DOFs each; a lower bound, the geometry is not
-        known here), and one design's rotor dynamic stiffness, ``sub_n_speeds`` complex
-        ``r × r`` matrices or more.
-
-        >>> SubstructureOptions(sub_n_speeds=10 ** 8).memory_bytes()["sub_n_speeds"] > 1e11
-        True
-        """
-        r2 = 12.0 ** 2
-        return {"n_doe": kriging_bytes(self.n_doe),
-                "sub_n_speeds": 8.0 * 2 * self.sub_n_speeds * r2 * (self.n_doe + 2)}
-
-    def check_response(self, response: ResponseSpec) -> None:
-        if response.kind == "peak_unbalance":
-            raise ValueError("structure = 'substructure' is not allowed with response.kind = "
-                             "'peak_unbalance': its coupling takes the geometry's fixed "
-                             "unbalance; the exact coupling of the random-unbalance peak is "
-                             "the FE model itself (structure = 'fe'), or use 'global'")
+def _check_unbalance_response(spindle: Any, m0: Any, kind: str,
+                              resp: PeakUnbalanceResponse | None) -> None:
+    """``resp`` given exactly for ``kind = "peak_unbalance"``, for this spindle, and the
+    geometry's rotor mass (the permissible unbalance at prediction designs) the FE model's."""
+    if (kind == "peak_unbalance") != (resp is not None):
+        raise ValueError(f"unbalance_response is not allowed to be "
+                         f"{'None' if resp is None else 'given'} with kind = {kind!r}: "
+                         "give it exactly for 'peak_unbalance'")
+    if resp is None:
+        return
+    if resp.spindle is not spindle and resp.spindle != spindle:
+        raise ValueError("unbalance_response.spindle is not allowed: must be the spindle the "
+                         "surrogate is trained for")
+    mg = geometry_rotor_mass_kg(spindle.geometry_for(spindle.baseline))
+    if not np.isclose(mg, m0.rotor_mass_kg, rtol=1e-9):
+        raise ModelError(f"rotor mass from the geometry {mg:.6g} kg differs from the FE "
+                         f"model's {m0.rotor_mass_kg:.6g} kg: the surrogate's permissible "
+                         "unbalance would be wrong (an effect adds mass?)")
 
 
-@register_structure("substructure", SubstructureOptions, "Kriging of the rotor's condensed "
-                    "dynamic stiffness over the designs, bearings and θ coupled exactly")
-def train_substructure(spindle: Any, inputs: Any, limit: LimitState, response: ResponseSpec,
-                       options: SubstructureOptions, *, rng: np.random.Generator,
-                       cache: Any = None, counter: Any, progress: bool = False,
-                       label: str = "") -> TrainedSurrogate:
-    """LHS over the designs → FE condensations → fit (``inputs`` and ``limit`` are not
-    needed: θ is coupled exactly)."""
-    o = options
-    r_doe, r_fit = require_rng(rng).spawn(2)
-    start, start_cached = counter.calls, counter.cached
-    t0 = time.perf_counter()
-    xb = np.asarray(spindle.design_map.bounds, dtype=float)
-    nodes = speed_nodes(spindle, response.kind, response.speed_rpm, o.sub_n_speeds)
-    m0 = spindle.model(spindle.baseline)
-    lay = retained_layout(m0)
-    func = PointwiseCondensed(spindle, tuple(float(s) for s in nodes), lay.nodes,
-                              tuple(complex(u) for u in m0.unbalance))
-    X = lhs(o.n_doe, xb, rng=r_doe)
-    res = evaluate_points(
-        func, X, n_jobs=o.n_jobs, backend=o.backend, cache=cache, counter=counter,
-        on_nonfinite="raise", progress=progress, n_outputs=func.n_outputs(lay.n_dof),
-        client="local" if o.backend == "dask" else None,
-        desc=f"{label} FE: condensed rotor".strip())
-    sample_s = time.perf_counter() - t0
-    model = fit_substructure_surrogate(spindle, X, res.y, kind=response.kind,
-                                       speed_rpm=response.speed_rpm, nodes_rpm=nodes,
-                                       rng=r_fit, n_start=o.n_start)
-    info = {**model.info, "sampling_time_s": sample_s, "bounds": xb.tolist(),
-            "active_learning": False, "response": response.label}
-    model.info = dict(info)
-    return TrainedSurrogate("substructure", model, o, response, fe_calls=counter.calls - start,
-                            fe_cache_hits=counter.cached - start_cached, info=info)
-
-
-__all__ = ["SubstructureOptions", "SubstructureSurrogate", "barycentric_weights",
-           "chebyshev_nodes", "fit_substructure_surrogate", "speed_nodes", "train_substructure"]
+__all__ = ["STRUCTURAL_ZERO", "SubstructureSurrogate", "barycentric_weights", "chebyshev_nodes",
+           "fit_substructure_surrogate", "invariant_part", "rotation_residual"]
