@@ -4,7 +4,8 @@
 sample and the full-FE Monte Carlo at designs, the FE resonance quantities if asked);
 :func:`assess` compares one trained structure with it: point predictions at the test points,
 its leave-one-out, and μ_y, σ_y, P_f on the same θ sample (common random numbers). Every FE
-and surrogate call is counted. ``y`` is the peak tool-tip amplitude.
+and surrogate call is counted. ``y`` is the response (``spindle.evaluate.ResponseSpec``;
+default the peak tool-tip amplitude of the geometry's unbalance).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from surrogate_rbrdo.core.counting import CallCounter, CountingResponse
 from surrogate_rbrdo.core.protocols import LimitState, Prediction
 from surrogate_rbrdo.doe import lhs
 from surrogate_rbrdo.sampling.fe import sample_designs, sample_positive
-from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse, ResponseSpec
+from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.surrogates.structured.base import TrainedSurrogate, train_surrogate
 from surrogate_rbrdo.surrogates.structured.joint import JointDOEOptions
 from surrogate_rbrdo.surrogates.structured.resonance_train import sample_resonance
@@ -45,18 +46,21 @@ class FETruth:
 def fe_truth(spindle: Any, inputs: Any, X: np.ndarray, box: JointDOEOptions, *, n_test: int,
              n_theta: int, rng_test: np.random.Generator, rng_theta: np.random.Generator,
              n_theta_nc: int | None = None, cache: Any = None, mc_cache: Any = None,
-             progress: bool = False, label: str = "") -> FETruth:
+             progress: bool = False, label: str = "", response: ResponseSpec | None = None
+             ) -> FETruth:
     """FE at ``n_test`` maximin-LHS points of ``box``'s joint box, and full-FE MC of the
-    designs ``X`` on ``n_theta`` θ; with ``n_theta_nc`` also the resonance quantities (test
-    points, and designs × the first ``n_theta_nc`` θ)."""
+    designs ``X`` on ``n_theta`` θ (the FE model's own solve of ``response``, default
+    ``ResponseSpec()``: its ``"direct"`` method); with ``n_theta_nc`` also the resonance
+    quantities (test points, and designs × the first ``n_theta_nc`` θ)."""
+    response = ResponseSpec() if response is None else response
     c_test, c_mc = CallCounter(), CallCounter()
-    Z, y = sample_positive(ResponseSpec().pointwise(spindle),
+    Z, y = sample_positive(response.pointwise(spindle),
                            lhs(n_test, box.bounds(spindle, inputs), rng=rng_test),
                            n_jobs=box.n_jobs, backend=box.backend, cache=cache, counter=c_test,
                            progress=progress, desc=f"{label} FE test points".strip())
     theta = inputs.sample(n_theta, rng=rng_theta)
     X = np.atleast_2d(np.asarray(X, dtype=float))
-    y_fe = sample_designs(PeakAmplitudeResponse(spindle), X, theta, n_jobs=box.n_jobs,
+    y_fe = sample_designs(response.fe_response(spindle, "direct"), X, theta, n_jobs=box.n_jobs,
                           cache=mc_cache, counter=c_mc, progress=progress,
                           desc=f"{label} full-FE MC".strip())
     res = None
@@ -134,12 +138,13 @@ def assess(name: str, trained: TrainedSurrogate, truth: FETruth, limit: LimitSta
 
 def train_and_assess(name: str, spindle: Any, inputs: Any, limit: LimitState, options: Any,
                      truth: FETruth, *, rng: np.random.Generator, cache: Any = None,
-                     rel_tol: float = 0.05, progress: bool = False, label: str = ""
-                     ) -> Assessment:
-    """Train the structure of ``options`` (``train_surrogate``, its FE calls counted) and
-    :func:`assess` it against ``truth``."""
+                     rel_tol: float = 0.05, progress: bool = False, label: str = "",
+                     response: ResponseSpec | None = None) -> Assessment:
+    """Train the structure of ``options`` for ``response`` (``train_surrogate``, its FE
+    calls counted) and :func:`assess` it against ``truth``."""
     counter = CallCounter()
     trained = train_surrogate(spindle, inputs, limit, options, rng=rng, counter=counter,
+                              response=response,
                               cache=cache, progress=progress, label=f"{label} {name}".strip())
     return assess(name, trained, truth, limit, rel_tol=rel_tol, counter=counter)
 

@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from surrogate_rbrdo.runner.cli import run_experiment
+from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.spindle.evaluate import PeakAmplitudeResponse
-from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse
+from surrogate_rbrdo.spindle.reference import credible_spindle, reference_spindle
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 TINY = """
@@ -108,9 +110,14 @@ def test_fe_calls_counted_and_rerun_hits_cache(tiny_run):
 @pytest.mark.parametrize("extra,match", [
     ("[limit]\ndelta_lim = 19.5", "delta_lim"),
     ("[uncertainty]\nstd = [0.06, -0.06]", "std"),
-    ('[response]\nkind = "at_speed"\nspeed_rpm = 24000.0',
-     r"unknown table response; allowed: \['limit', 'spindle', 'surrogate', 'uncertainty', "
-     r"'validation'\]"),
+    ('[response]\nkind = "rms"', r"response.kind = 'rms' is not allowed"),
+    ('[response]\nkind = "at_speed"\nspeed_rpm = 90000.0',
+     r"response.speed_rpm = 90000.0 is not allowed: must lie in the spindle's speed range"),
+    ('[response]\nkind = "peak_unbalance"\n[validation.variants]\nres = {structure = '
+     '"resonance"}', r"validation.variants.res.structure = 'resonance' is not allowed with "
+     r"response.kind = 'peak_unbalance'"),
+    ('[uncertainty.unbalance]\nmagnitude = "limit"', r"uncertainty.unbalance is not allowed "
+     r"with response.kind = 'peak'"),
 ])
 def test_bad_config_names_key(tmp_path, extra, match):
     cfg = tmp_path / "bad.toml"
@@ -191,3 +198,64 @@ def test_tiny_run_with_resonance_variant(tmp_path):
     # test points: 10 scalar + 10 resonance + 2 designs × 6 θ resonance
     assert s["fe_calls"]["test"] == 10 + 10 + 12
     assert s["fe_calls"]["train_res"] == 20
+
+
+TINY_PU = """
+[experiment]
+name = "sv_tiny_pu"
+kind = "surrogate_validation"
+seed = 7
+
+[spindle]
+geometry = "credible"
+
+[uncertainty]
+std = [0.015, 0.033]
+
+[uncertainty.unbalance]
+magnitude = "disk"
+
+[response]
+kind = "peak_unbalance"
+
+[limit]
+delta_lim_um = 1.0
+
+[surrogate]
+n_doe = 14
+n_start = 1
+n_jobs = 1
+backend = "sequential"
+
+[validation]
+n_test = 9
+n_theta = 20
+
+[validation.variants.sub]
+structure = "substructure"
+n_doe = 20
+n_start = 1
+
+[validation.designs]
+optimum = [237.5, 390.0, 74.0]
+"""
+
+
+def test_tiny_run_on_the_credible_problem(tmp_path):
+    """The random-unbalance peak: θ has the unbalance columns, the FE side is the FE model's
+    own peak search (known answer: ``PeakUnbalanceResponse(method="direct")`` on the same θ
+    sample, the third child of the seed), and the substructure variant takes the problem."""
+    cfg = tmp_path / "pu.toml"
+    cfg.write_text(TINY_PU)
+    run = run_experiment(cfg, results_dir=tmp_path / "results", run_id="r1", progress=False)
+    cost = {r["variant"]: r for r in _read(run.path / "cost.csv")}
+    assert cost["sub"]["structure"] == "substructure" and int(cost["sub"]["n_train"]) == 20
+    plan = prepare(cfg).plan
+    assert plan.inputs.dim == 5
+    theta = plan.inputs.sample(20, rng=np.random.default_rng(
+        np.random.SeedSequence(7).spawn(3)[2]))
+    y = PeakUnbalanceResponse(credible_spindle(), method="direct")(
+        np.array([[237.5, 390.0, 74.0]]), theta)
+    rows = {r["variant"]: r for r in _read(run.path / "mc_comparison.csv")}
+    assert float(rows["sub"]["mean_fe_um"]) == pytest.approx(y.mean() * 1e6, abs=1e-4)
+    assert float(rows["sub"]["mean_rel_err"]) < 0.05

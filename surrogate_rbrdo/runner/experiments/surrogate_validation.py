@@ -13,7 +13,9 @@ is the same on a rerun; and the P_f accuracy; no timings), ``resonance_submodels
 ``nc_at_designs.csv`` (resonance variants), parity figures per variant. ``calls.json`` (and
 ``meta.json``) split the counts into FE calls computed and cache hits, per stage and variant.
 Variant names and design labels are labels (``core.validate.check_label``: they name files).
-``y`` is the peak amplitude.
+``y`` is the ``[response]`` (default the peak amplitude of the geometry's unbalance;
+``kind = "peak_unbalance"``: the credible problem's random-unbalance peak, θ with its
+unbalance columns from ``[uncertainty]``, the FE side the FE model's own peak search).
 """
 
 from __future__ import annotations
@@ -35,8 +37,8 @@ from surrogate_rbrdo.runner.tables import (
     LimitTable,
     SpindleTable,
     UncertaintyTable,
-    build_inputs,
     build_spindle,
+    build_theta,
 )
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
@@ -91,6 +93,7 @@ class SurrogateValidationConfig:
     spindle: SpindleTable = field(default_factory=SpindleTable)
     uncertainty: UncertaintyTable = field(default_factory=UncertaintyTable)
     limit: LimitTable = field(default_factory=LimitTable)
+    response: ResponseSpec = field(default_factory=ResponseSpec)
     surrogate: dict[str, Any] = field(default_factory=dict)
     validation: ValidationTable = field(default_factory=ValidationTable)
 
@@ -100,25 +103,33 @@ class Plan:
     spindle: Any
     inputs: Any
     limit: Any
+    response: ResponseSpec
     variants: dict[str, Any]
     test_box: JointDOEOptions
     designs: dict[str, np.ndarray]
     validation: ValidationTable
 
 
-def _variant(base: Mapping[str, Any], over: Mapping[str, Any], name: str) -> Any:
+def _variant(base: Mapping[str, Any], over: Mapping[str, Any], name: str,
+             response: ResponseSpec) -> Any:
     name_s = over.get("structure", base.get("structure", "global"))
     keep = base
     if name_s != base.get("structure", "global") and isinstance(name_s, str) \
             and name_s in set(STRUCTURES):
         fields = STRUCTURES[name_s].options.__dataclass_fields__
         keep = {k: v for k, v in base.items() if k in fields}
-    return surrogate_options({**keep, **over}, ResponseSpec(), f"validation.variants.{name}")
+    return surrogate_options({**keep, **over}, response, f"validation.variants.{name}")
 
 
 def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
     spindle = build_spindle(c.spindle, base_dir)
-    inputs = build_inputs(c.uncertainty, spindle.theta_bearings)
+    g = spindle.geometry
+    if c.response.kind == "at_speed" and not (g.speed_min_rpm <= c.response.speed_rpm
+                                              <= g.speed_max_rpm):
+        raise ValueError(f"response.speed_rpm = {c.response.speed_rpm} is not allowed: must "
+                         f"lie in the spindle's speed range [{g.speed_min_rpm}, "
+                         f"{g.speed_max_rpm}] rpm")
+    inputs, response, _ = build_theta(c.uncertainty, spindle, c.response)
     tables = {"surrogate": c.surrogate, **{f"validation.variants.{k}": {**c.surrogate, **v}
                                             for k, v in c.validation.variants.items()}}
     for where, t in tables.items():
@@ -126,9 +137,9 @@ def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
             raise ValueError(f"{where}.structure = 'fe' is not allowed here: a surrogate "
                              "validation needs a surrogate (use 'global', 'resonance' or "
                              "'substructure')")
-    variants = {"main": surrogate_options(c.surrogate, ResponseSpec(), "surrogate")}
+    variants = {"main": surrogate_options(c.surrogate, response, "surrogate")}
     for name, over in c.validation.variants.items():
-        variants[name] = _variant(c.surrogate, over, name)
+        variants[name] = _variant(c.surrogate, over, name, response)
     designs = {}
     for label, xv in c.validation.designs.items():
         try:
@@ -145,7 +156,7 @@ def build(c: SurrogateValidationConfig, base_dir: Path) -> Plan:
     for name, o in variants.items():        # structures that state their memory
         check_memory(memory_needs(o, "surrogate" if name == "main" else
                                   f"validation.variants.{name}"))
-    return Plan(spindle, inputs, c.limit.limit(), variants, box, designs, v)
+    return Plan(spindle, inputs, c.limit.limit(), response, variants, box, designs, v)
 
 
 def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
@@ -155,7 +166,7 @@ def _truth(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> FETruth:
                     rng_test=ctx.stream(1), rng_theta=ctx.stream(2),
                     n_theta_nc=p.validation.n_theta_nc if need_res else None,
                     cache=fe_cache(ctx.cache_dir), mc_cache=fe_cache(ctx.cache_dir, "fe_mc"),
-                    progress=ctx.progress, label=ctx.label)
+                    progress=ctx.progress, label=ctx.label, response=p.response)
 
 
 def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Assessment, ...]:
@@ -163,7 +174,7 @@ def _variants(p: Plan, done: Mapping[str, Any], ctx: StageContext) -> tuple[Asse
     return tuple(train_and_assess(
         name, p.spindle, p.inputs, p.limit, options, done["truth"], rng=ctx.stream(0),
         cache=fe_cache(ctx.cache_dir), rel_tol=p.validation.rel_tol, progress=ctx.progress,
-        label=ctx.label) for name, options in p.variants.items())
+        label=ctx.label, response=p.response) for name, options in p.variants.items())
 
 
 def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> dict[str, Any]:
