@@ -102,6 +102,31 @@ def forward_basis(layout: RetainedLayout) -> np.ndarray:
     return V
 
 
+def invariant_part(S: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """The part of ``S (..., r, r)`` invariant under rotation about the axis:
+    ``V (VᴴSV) Vᴴ + V̄ (VᵀSV̄) Vᵀ`` with ``V`` the forward-whirl basis
+    (:func:`forward_basis`) and ``V̄`` the backward one (the cross blocks dropped), e.g. to
+    restore the symmetry of an approximated ``S`` (a Kriging of its entries).
+
+    >>> V = forward_basis(RetainedLayout((0,), 0, (), ()))
+    >>> S = np.diag([2.0, 2.0, 3.0, 3.0]) + 0j         # isotropic: invariant already
+    >>> bool(np.allclose(invariant_part(S, V), S))
+    True
+    >>> bool(np.allclose(invariant_part(np.diag([1.0, 3.0, 0, 0]) + 0j, V)[:2, :2], 2 * np.eye(2)))
+    True
+    """
+    Vh, W = V.conj().T, V.conj()
+    return V @ (Vh @ S @ V) @ Vh + W @ (W.conj().T @ S @ W) @ W.conj().T
+
+
+def rotation_residual(S: np.ndarray, V: np.ndarray) -> float:
+    """Largest ``‖SV − V(VᴴSV)‖ / ‖SV‖`` over the matrices ``S (..., r, r)``: 0 for a rotor
+    invariant under rotation about its axis (:func:`tables_from_condensed` checks it)."""
+    SV = S @ V
+    R = SV - V @ (V.conj().T @ SV)
+    return float(np.max(np.linalg.norm(R, axis=(-2, -1)) / np.linalg.norm(SV, axis=(-2, -1))))
+
+
 def coupled_tables(model: SpindleModel, speeds_rpm: np.ndarray, theta_nodes: np.ndarray,
                    layout: RetainedLayout | None = None) -> CoupledTables:
     """:class:`CoupledTables` of ``model`` at geometric ``speeds_rpm`` and θ rows
@@ -326,10 +351,12 @@ __all__ = [
     "coupled_tables",
     "check_geometric",
     "forward_basis",
+    "invariant_part",
     "peak_by_tables",
     "peak_from_tables",
     "peak_tool_amplitude_coupled",
     "peak_tool_amplitude_unbalance",
+    "rotation_residual",
     "tables_from_condensed",
     "tool_response_per_plane",
 ]

@@ -9,9 +9,15 @@ peak in the unbalance magnitude.
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.spindle.peak_coupling import peak_tool_amplitude_unbalance
+from surrogate_rbrdo.spindle.peak_coupling import (
+    forward_basis,
+    invariant_part,
+    peak_tool_amplitude_unbalance,
+    rotation_residual,
+)
 from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceSpec
 from surrogate_rbrdo.spindle.reference import credible_spindle
+from surrogate_rbrdo.spindle.substructure import condense_chain, retained_layout
 from surrogate_rbrdo.surrogates.structured import (
     STRUCTURES,
     SubstructureOptions,
@@ -115,3 +121,19 @@ def test_every_structure_takes_the_credible_problem_or_says_which_does():
         else:
             takes.append(name)
     assert {"substructure", "global", "fe"} <= set(takes)
+
+
+def test_invariant_part_keeps_the_rotor_and_removes_an_anisotropy():
+    """An axisymmetric rotor's condensation is invariant under rotation about the axis (to
+    round-off) and its invariant part is itself; an x-only perturbation is not, and its
+    invariant part is again invariant."""
+    m = SP.model(DESIGNS[0])
+    lay = retained_layout(m)
+    S = condense_chain(m, np.array([3000.0, 24000.0]), lay).S
+    V = forward_basis(lay)
+    assert rotation_residual(S, V) < 1e-12
+    np.testing.assert_allclose(invariant_part(S, V), S, atol=1e-12 * np.abs(S).max())
+    S2 = S.copy()
+    S2[:, 0, 0] *= 1.01
+    assert rotation_residual(S2, V) > 1e-4
+    assert rotation_residual(invariant_part(S2, V), V) < 1e-12

@@ -65,7 +65,9 @@ from surrogate_rbrdo.spindle.coupling import (
 from surrogate_rbrdo.spindle.harmonic import PeakOptions, peak_search
 from surrogate_rbrdo.spindle.peak_coupling import (
     forward_basis,
+    invariant_part,
     peak_by_tables,
+    rotation_residual,
     tables_from_condensed,
 )
 from surrogate_rbrdo.spindle.peak_response import PeakUnbalanceResponse
@@ -309,32 +311,6 @@ class SubstructureSurrogate:
                          for i in range(X.shape[0])])
 
 
-def invariant_part(S: np.ndarray, V: np.ndarray) -> np.ndarray:
-    """The part of ``S (..., r, r)`` invariant under rotation about the axis:
-    ``V (VᴴSV) Vᴴ + V̄ (VᵀSV̄) Vᵀ`` with ``V`` the forward-whirl basis
-    (``peak_coupling.forward_basis``) and ``V̄`` the backward one (the cross blocks dropped).
-
-    >>> from surrogate_rbrdo.spindle.substructure import RetainedLayout
-    >>> from surrogate_rbrdo.spindle.peak_coupling import forward_basis
-    >>> V = forward_basis(RetainedLayout((0,), 0, (), ()))
-    >>> S = np.diag([2.0, 2.0, 3.0, 3.0]) + 0j         # isotropic: invariant already
-    >>> bool(np.allclose(invariant_part(S, V), S))
-    True
-    >>> bool(np.allclose(invariant_part(np.diag([1.0, 3.0, 0, 0]) + 0j, V)[:2, :2], 2 * np.eye(2)))
-    True
-    """
-    Vh, W = V.conj().T, V.conj()
-    return V @ (Vh @ S @ V) @ Vh + W @ (W.conj().T @ S @ W) @ W.conj().T
-
-
-def rotation_residual(S: np.ndarray, V: np.ndarray) -> float:
-    """Largest ``‖SV − V(VᴴSV)‖ / ‖SV‖`` over the matrices ``S (..., r, r)``: 0 for a rotor
-    invariant under rotation about its axis (``peak_coupling.coupled_tables`` checks it)."""
-    SV = S @ V
-    R = SV - V @ (V.conj().T @ SV)
-    return float(np.max(np.linalg.norm(R, axis=(-2, -1)) / np.linalg.norm(SV, axis=(-2, -1))))
-
-
 def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, kind: str,
                                speed_rpm: float | None, nodes_rpm: np.ndarray,
                                rng: np.random.Generator, n_start: int = 3,
@@ -355,7 +331,7 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
     V = np.atleast_2d(np.asarray(V, dtype=float))
     m0 = spindle.model(spindle.baseline)
     layout = retained_layout(m0)
-    _check_unbalance_response(spindle, m0, kind, unbalance_response)
+    _check_unbalance_response(spindle, m0, layout, nodes_rpm, kind, unbalance_response)
     r, ns = layout.n_dof, nodes_rpm.size
     S = condensed_from_vector(V.reshape(V.shape[0], ns, -1), r)        # (n, ns, r, r)
     dg = np.abs(np.einsum("knii->kni", S))
@@ -382,19 +358,32 @@ def fit_substructure_surrogate(spindle: Any, X: np.ndarray, V: np.ndarray, *, ki
                                  rotor_invariant=invariant)
 
 
-def _check_unbalance_response(spindle: Any, m0: Any, kind: str,
+def _check_unbalance_response(spindle: Any, m0: Any, layout: RetainedLayout,
+                              nodes_rpm: np.ndarray, kind: str,
                               resp: PeakUnbalanceResponse | None) -> None:
-    """``resp`` given exactly for ``kind = "peak_unbalance"``, for this spindle, and the
-    geometry's rotor mass (the permissible unbalance at prediction designs) the FE model's."""
+    """``resp`` given exactly for ``kind = "peak_unbalance"``, with this spindle's θ bearings
+    and unbalance planes and a speed range inside the speed nodes (no extrapolation of
+    ``S``), and the geometry's rotor mass (the permissible unbalance at prediction designs)
+    the FE model's."""
     if (kind == "peak_unbalance") != (resp is not None):
         raise ValueError(f"unbalance_response is not allowed to be "
                          f"{'None' if resp is None else 'given'} with kind = {kind!r}: "
                          "give it exactly for 'peak_unbalance'")
     if resp is None:
         return
-    if resp.spindle is not spindle and resp.spindle != spindle:
-        raise ValueError("unbalance_response.spindle is not allowed: must be the spindle the "
-                         "surrogate is trained for")
+    spec = resp.theta_spec
+    if tuple(spec.bearings) != tuple(spindle.theta_bearings):
+        raise ValueError(f"unbalance_response.theta_spec.bearings = {list(spec.bearings)} is "
+                         f"not allowed: must be the spindle's {list(spindle.theta_bearings)}")
+    if spec.n_planes != len(layout.unbalance):
+        raise ValueError(f"unbalance_response.theta_spec.n_planes = {spec.n_planes} is not "
+                         f"allowed: the geometry has {len(layout.unbalance)} unbalance planes")
+    lo, hi = resp.speed_range_rpm or (spindle.geometry.speed_min_rpm,
+                                      spindle.geometry.speed_max_rpm)
+    if lo < nodes_rpm.min() or hi > nodes_rpm.max():
+        raise ValueError(f"unbalance_response.speed_range_rpm = ({lo}, {hi}) is not allowed: "
+                         f"must lie inside the speed nodes [{nodes_rpm.min()}, "
+                         f"{nodes_rpm.max()}] rpm (S is not extrapolated)")
     mg = geometry_rotor_mass_kg(spindle.geometry_for(spindle.baseline))
     if not np.isclose(mg, m0.rotor_mass_kg, rtol=1e-9):
         raise ModelError(f"rotor mass from the geometry {mg:.6g} kg differs from the FE "
@@ -403,4 +392,4 @@ def _check_unbalance_response(spindle: Any, m0: Any, kind: str,
 
 
 __all__ = ["STRUCTURAL_ZERO", "SubstructureSurrogate", "barycentric_weights", "chebyshev_nodes",
-           "fit_substructure_surrogate", "invariant_part", "rotation_residual"]
+           "fit_substructure_surrogate"]
