@@ -42,6 +42,12 @@ from surrogate_rbrdo.identification.campaign import (
     identify_campaign,
 )
 from surrogate_rbrdo.identification.condensation import node_at
+from surrogate_rbrdo.identification.damping import (
+    DAMPING_SOURCES,
+    impact_dampings,
+    record_installations,
+    with_impact_damping,
+)
 from surrogate_rbrdo.identification.measured import (
     SensorCorrections,
     dataset_root,
@@ -78,6 +84,11 @@ class IdentificationOptions:
     systematic : SystematicUncertainty
         Tolerances of the sensors, the trial mass and the rotor model (what the experimenter
         knows of what is not corrected): their effect on the trends.
+    damping : {"response", "impact"}
+        Where the bearings' damping comes from: ``"response"`` (default) — the 1× unbalance
+        response, like the stiffness (not identifiable at a realistic noise); ``"impact"`` —
+        each installation's impact tests at standstill (``c = η̂ k̂``,
+        :mod:`~surrogate_rbrdo.identification.damping`); the source must have impact records.
     group_label : str or None
         Index label naming the run of a record; ``None``: all labels but the speed index.
     convergence_speed_rpm : float
@@ -102,12 +113,14 @@ class IdentificationOptions:
     summary_speed_rpm: float | None = None
     group_label: str | None = None
     systematic: SystematicUncertainty = SystematicUncertainty()
+    damping: str = "response"
     convergence_speed_rpm: float = 10_000.0
     n_jobs: int = 1
     figures: bool = True
 
     def __post_init__(self) -> None:
         check_choice("excitation", self.excitation, EXCITATIONS)
+        check_choice("damping", self.damping, DAMPING_SOURCES)
         check_choice("fit_on", self.fit_on, FIT_ON)
         check_choice("law", self.law, ("auto",) + TREND_LAWS)
         check_choice("study", self.study, STUDY_FORMS)
@@ -219,6 +232,10 @@ def check_source(source, options: IdentificationOptions = IdentificationOptions(
     if s is not None and not min(speeds) <= s <= max(speeds):
         raise ValueError(f"summary_speed_rpm = {s!r} is not allowed: must lie in the "
                          f"campaign's speeds [{min(speeds):g}, {max(speeds):g}] rpm")
+    if options.damping == "impact" and not any(r.get("kind") == "impact" for r in ds.index):
+        raise ValueError(f"damping = 'impact' is not allowed with source = {str(source)!r}: "
+                         "it has no impact records (measure with [rig.campaign] "
+                         "impacts_per_direction > 0, or use damping = 'response')")
     try:
         probe_channels(ds.load(rows[0]), options.targets)
     except ValueError as exc:
@@ -261,9 +278,18 @@ def identify_responses(model: SpindleModel, resp: Responses, options: Identifica
         systematic=options.systematic, probe_bandwidth_hz=options.probe_bandwidth_hz,
         summary_speed_rpm=options.summary_speed_rpm, provenance=prov)
     dt = time.perf_counter() - t1
-    return IdentificationRun(resp, camp, {"demodulation_s": demodulation_s,
-                                          "identification_s": dt,
-                                          "total_s": demodulation_s + dt}, prov)
+    timings = {"demodulation_s": demodulation_s, "identification_s": dt}
+    if options.damping == "impact":
+        if not str(source):
+            raise ValueError("source = '' is not allowed with damping = 'impact': give the "
+                             "dataset whose impact records give the damping")
+        t2 = time.perf_counter()
+        camp = with_impact_damping(model, camp, record_installations(source, resp.record_ids),
+                                   impact_dampings(model, source),
+                                   max_rel_se=options.max_rel_se)
+        timings["impact_s"] = time.perf_counter() - t2
+    timings["total_s"] = float(sum(timings.values()))
+    return IdentificationRun(resp, camp, timings, prov)
 
 
 def identify_records(model: SpindleModel, source, options: IdentificationOptions = (
