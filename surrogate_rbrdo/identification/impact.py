@@ -43,6 +43,7 @@ test is linear. Bearings with a housing stage are refused (its damping is not se
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -171,14 +172,39 @@ class _Updater:
         w2 = eigh(0.5 * (K + K.T), 0.5 * (M + M.T), eigvals_only=True)
         return np.sqrt(np.clip(w2, 0.0, None)) / (2 * np.pi)
 
-    def accelerance(self, theta, d, m, s: np.ndarray, dof: np.ndarray) -> np.ndarray:
-        """``s² [K + sC + s²M]⁻¹`` at ``(dof_i, dof_i)`` for each ``s_i``."""
+    def accelerance(self, theta, d, m, s: np.ndarray, dof: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """``H = s² [K + sC + s²M]⁻¹`` at ``(dof_i, dof_i)`` for each ``s_i``, and its
+        derivatives ``(F, 2 nb [+ 1])`` with respect to the logs of ``θ``, ``d`` (and ``m``):
+        ``∂H/∂p = −s² xᵀ (∂A/∂p) x`` with ``x = A⁻¹ e`` (``A`` symmetric at standstill; the
+        bearings' ``K_b`` and ``C_b = η K_b`` are proportional to ``θ_b``)."""
         M, C, K = self.matrices(theta, d, m)
         A = K[None] + s[:, None, None] * C[None] + (s**2)[:, None, None] * M[None]
         e = np.zeros((s.size, K.shape[0], 1), complex)
         e[np.arange(s.size), dof, 0] = 1.0
         x = np.linalg.solve(A, e)[:, :, 0]
-        return s**2 * x[np.arange(s.size), dof]
+        Kb, Cb = self.model.bearing_coefficients(np.zeros((1, 1)), theta[None])
+        cols = []
+        blocks = []
+        for j, node in enumerate(self.model.bearing_nodes):
+            xb = x[:, 4 * node:4 * node + 2]
+            blocks.append((xb, Kb[0, 0, j], d[j] * Cb[0, 0, j]))
+        cols += [np.einsum("fi,ij,fj->f", xb, kb, xb) + s * np.einsum("fi,ij,fj->f", xb, cb, xb)
+                 for xb, kb, cb in blocks]
+        cols += [s * np.einsum("fi,ij,fj->f", xb, cb, xb) for xb, _, cb in blocks]
+        if self.tool_disk is not None:
+            t = slice(4 * self.model.tool_node, 4 * self.model.tool_node + 4)
+            # M and the mass-proportional damping αM: ∂A/∂m = (s² + α s) ∂M/∂m
+            cols.append(m * (s**2 + self.model.alpha * s) * np.einsum(
+                "fi,ij,fj->f", x[:, t], self._tool_mass_block, x[:, t]))
+        return s**2 * x[np.arange(s.size), dof], -(s**2)[:, None] * np.stack(cols, axis=1)
+
+    @functools.cached_property
+    def _tool_mass_block(self) -> np.ndarray:
+        """``∂M/∂m`` at the tool node (the tool disk's mass and inertias; linear in ``m``)."""
+        t = slice(4 * self.model.tool_node, 4 * self.model.tool_node + 4)
+        M2 = _with_tool_mass(self.model, self.tool_disk, 2.0).system_matrices(0.0)[0]
+        return (M2 - self.model.system_matrices(0.0)[0])[t, t]
 
 
 def _with_tool_mass(model: SpindleModel, disk: str, m: float) -> SpindleModel:
@@ -346,13 +372,24 @@ def _update(up: _Updater, frfs, theta, m, band, opts, model) -> ImpactDamping:
         return (np.exp(p[:nb]), np.exp(p[nb:2 * nb]),
                 float(np.exp(p[2 * nb])) if n_m else 1.0, np.exp(p[2 * nb + n_m:]))
 
-    def res(p):
+    def model_frf(p):
         th, dd, mm, gain = unpack(p)
-        r = (H - gain[gi] * up.accelerance(th, dd, mm, s, dof)) / sd
+        h, dh = up.accelerance(th, dd, mm, s, dof)
+        jac = np.zeros((s.size, p.size), complex)
+        jac[:, :dh.shape[1]] = gain[gi, None] * dh
+        jac[np.arange(s.size), 2 * nb + n_m + gi] = gain[gi] * h
+        return gain[gi] * h, jac
+
+    def res(p):
+        r = (H - model_frf(p)[0]) / sd
         return np.concatenate([r.real, r.imag])
 
+    def jac(p):
+        j = -model_frf(p)[1] / sd[:, None]
+        return np.concatenate([j.real, j.imag])
+
     p0 = np.concatenate([np.log(theta), np.zeros(nb), [np.log(m)] * n_m, np.zeros(len(dirs))])
-    sol = least_squares(res, p0, x_scale=0.05, diff_step=1e-5, max_nfev=400)
+    sol = least_squares(res, p0, jac=jac, x_scale=0.05, max_nfev=400)
     if not sol.success:
         raise ModelError(f"impact_damping: the FRF fit did not converge ({sol.message})")
     dof_res = max(2 * s.size - p0.size, 1)
