@@ -158,7 +158,7 @@ class _Updater:
     tool_disk: str | None
 
     def matrices(self, theta: np.ndarray, d: np.ndarray, m: float):
-        mdl = self.model if self.tool_disk is None or m == 1.0 else _with_tool_mass(
+        mdl = self.model if self.tool_disk is None or m == 1.0 else with_tool_mass(
             self.model, self.tool_disk, m)
         M, C, K = mdl.system_matrices(0.0, theta)
         _, Cb = mdl.bearing_coefficients(np.zeros((1, 1)), theta[None])
@@ -203,11 +203,12 @@ class _Updater:
     def _tool_mass_block(self) -> np.ndarray:
         """``∂M/∂m`` at the tool node (the tool disk's mass and inertias; linear in ``m``)."""
         t = slice(4 * self.model.tool_node, 4 * self.model.tool_node + 4)
-        M2 = _with_tool_mass(self.model, self.tool_disk, 2.0).system_matrices(0.0)[0]
+        M2 = with_tool_mass(self.model, self.tool_disk, 2.0).system_matrices(0.0)[0]
         return (M2 - self.model.system_matrices(0.0)[0])[t, t]
 
 
-def _with_tool_mass(model: SpindleModel, disk: str, m: float) -> SpindleModel:
+def with_tool_mass(model: SpindleModel, disk: str, m: float) -> SpindleModel:
+    """``model`` with the disk ``disk``'s mass and inertias scaled by ``m``."""
     g = model.geometry
     disks = tuple(replace(k, mass_kg=k.mass_kg * m, polar_inertia_kgm2=k.polar_inertia_kgm2 * m,
                           diametral_inertia_kgm2=k.diametral_inertia_kgm2 * m)
@@ -405,4 +406,4 @@ def _update(up: _Updater, frfs, theta, m, band, opts, model) -> ImpactDamping:
                          eta0 * par[nb:2 * nb], int(s.size), chi2, modes)
 
 
-__all__ = ["ImpactDamping", "ImpactOptions", "impact_damping"]
+__all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping", "with_tool_mass"]
