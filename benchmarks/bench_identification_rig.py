@@ -204,16 +204,15 @@ def report_coverage(out: Path, seeds: int) -> None:
 def report_sources(out: Path) -> None:
     """Each hidden error alone (everything else ideal), 6 speeds × 6 runs: RMS relative error of
     k and c against each record's truth."""
-    ideal = dict(noise=False, daq=DAQModel(bits=31), keyphasor=SLOW_KP)
+    ideal = dict(noise=False)              # the rig's own switch: no noise, errors, rounding
     cases = {
         "none (ideal)": (SensorSet(**ideal), Variability(tool_mass_cov=0.0)),
         "probe noise 50 nm + 16 bit": (SensorSet(probe=ProbeModel(gain_error_sd=0.0,
                                                                   bandwidth_sd=0.0),
-                                                 daq=DAQModel(skew_sd_s=0.0),
-                                                 keyphasor=SLOW_KP),
+                                                 daq=DAQModel(skew_sd_s=0.0)),
                                        Variability(tool_mass_cov=0.0)),
-        "default keyphasor (10° edges, 10 mV)": (SensorSet(noise=False, daq=DAQModel(bits=31)),
-                                                 Variability(tool_mass_cov=0.0)),
+        "sampled keyphasor (10° edges), refined": (SensorSet(noise=False, keyphasor=(
+            KeyphasorModel(timing="sampled"))), Variability(tool_mass_cov=0.0)),
         "tool mass 3 % (model error)": (SensorSet(**ideal), Variability()),
     }
     model = _model()
