@@ -48,7 +48,7 @@ from surrogate_rbrdo.identification.damping import (
     record_installations,
     with_impact_damping,
 )
-from surrogate_rbrdo.identification.impact import ImpactOptions, with_tool_mass
+from surrogate_rbrdo.identification.impact import ImpactOptions
 from surrogate_rbrdo.identification.measured import (
     SensorCorrections,
     dataset_root,
@@ -59,6 +59,7 @@ from surrogate_rbrdo.identification.model import SCATTERS, STUDY_FORMS, save_unc
 from surrogate_rbrdo.identification.responses import Responses, known_unbalance, trial_pairs
 from surrogate_rbrdo.identification.systematic import SystematicUncertainty
 from surrogate_rbrdo.identification.trend import TREND_LAWS
+from surrogate_rbrdo.identification.updating import with_tool_mass
 from surrogate_rbrdo.rig.store import open_dataset
 from surrogate_rbrdo.spindle.assembly import SpindleModel
 

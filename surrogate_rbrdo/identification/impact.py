@@ -43,19 +43,18 @@ test is linear. Bearings with a housing stage are refused (its damping is not se
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
 from scipy.optimize import least_squares
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.validate import check_positive, check_range
+from surrogate_rbrdo.identification.updating import StandstillModel
 from surrogate_rbrdo.rig.frf import FRFEstimate, h1_frf
 from surrogate_rbrdo.rig.records import Record, RecordError
-from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
+from surrogate_rbrdo.spindle.assembly import SpindleModel
 
 
 @dataclass(frozen=True)
@@ -149,74 +148,6 @@ class ImpactDamping:
                 "chi2_dof": self.chi2_dof, "modes_hz": self.modes_hz.tolist()}
 
 
-@dataclass(frozen=True, eq=False)
-class _Updater:
-    """The experimenter's model with bearing stiffness factors, damping factors and a tool
-    mass factor: its matrices at standstill and the tool's accelerance."""
-
-    model: SpindleModel
-    tool_disk: str | None
-
-    def matrices(self, theta: np.ndarray, d: np.ndarray, m: float):
-        mdl = self.model if self.tool_disk is None or m == 1.0 else with_tool_mass(
-            self.model, self.tool_disk, m)
-        M, C, K = mdl.system_matrices(0.0, theta)
-        _, Cb = mdl.bearing_coefficients(np.zeros((1, 1)), theta[None])
-        for j, node in enumerate(mdl.bearing_nodes):
-            dofs = np.array([4 * node, 4 * node + 1])
-            C[np.ix_(dofs, dofs)] += (d[j] - 1.0) * Cb[0, 0, j]
-        return M, C, K
-
-    def natural_hz(self, theta: np.ndarray, m: float) -> np.ndarray:
-        M, _, K = self.matrices(theta, np.ones(theta.size), m)
-        w2 = eigh(0.5 * (K + K.T), 0.5 * (M + M.T), eigvals_only=True)
-        return np.sqrt(np.clip(w2, 0.0, None)) / (2 * np.pi)
-
-    def accelerance(self, theta, d, m, s: np.ndarray, dof: np.ndarray
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """``H = s² [K + sC + s²M]⁻¹`` at ``(dof_i, dof_i)`` for each ``s_i``, and its
-        derivatives ``(F, 2 nb [+ 1])`` with respect to the logs of ``θ``, ``d`` (and ``m``):
-        ``∂H/∂p = −s² xᵀ (∂A/∂p) x`` with ``x = A⁻¹ e`` (``A`` symmetric at standstill; the
-        bearings' ``K_b`` and ``C_b = η K_b`` are proportional to ``θ_b``)."""
-        M, C, K = self.matrices(theta, d, m)
-        A = K[None] + s[:, None, None] * C[None] + (s**2)[:, None, None] * M[None]
-        e = np.zeros((s.size, K.shape[0], 1), complex)
-        e[np.arange(s.size), dof, 0] = 1.0
-        x = np.linalg.solve(A, e)[:, :, 0]
-        Kb, Cb = self.model.bearing_coefficients(np.zeros((1, 1)), theta[None])
-        cols = []
-        blocks = []
-        for j, node in enumerate(self.model.bearing_nodes):
-            xb = x[:, 4 * node:4 * node + 2]
-            blocks.append((xb, Kb[0, 0, j], d[j] * Cb[0, 0, j]))
-        cols += [np.einsum("fi,ij,fj->f", xb, kb, xb) + s * np.einsum("fi,ij,fj->f", xb, cb, xb)
-                 for xb, kb, cb in blocks]
-        cols += [s * np.einsum("fi,ij,fj->f", xb, cb, xb) for xb, _, cb in blocks]
-        if self.tool_disk is not None:
-            t = slice(4 * self.model.tool_node, 4 * self.model.tool_node + 4)
-            # M and the mass-proportional damping αM: ∂A/∂m = (s² + α s) ∂M/∂m
-            cols.append(m * (s**2 + self.model.alpha * s) * np.einsum(
-                "fi,ij,fj->f", x[:, t], self._tool_mass_block, x[:, t]))
-        return s**2 * x[np.arange(s.size), dof], -(s**2)[:, None] * np.stack(cols, axis=1)
-
-    @functools.cached_property
-    def _tool_mass_block(self) -> np.ndarray:
-        """``∂M/∂m`` at the tool node (the tool disk's mass and inertias; linear in ``m``)."""
-        t = slice(4 * self.model.tool_node, 4 * self.model.tool_node + 4)
-        M2 = with_tool_mass(self.model, self.tool_disk, 2.0).system_matrices(0.0)[0]
-        return (M2 - self.model.system_matrices(0.0)[0])[t, t]
-
-
-def with_tool_mass(model: SpindleModel, disk: str, m: float) -> SpindleModel:
-    """``model`` with the disk ``disk``'s mass and inertias scaled by ``m``."""
-    g = model.geometry
-    disks = tuple(replace(k, mass_kg=k.mass_kg * m, polar_inertia_kgm2=k.polar_inertia_kgm2 * m,
-                          diametral_inertia_kgm2=k.diametral_inertia_kgm2 * m)
-                  if k.name == disk else k for k in g.disks)
-    return build_model(replace(g, disks=disks), model.effects,
-                       theta_bearings=model.theta_bearings)
-
-
 def _frfs(records: Sequence[Record], opts: ImpactOptions) -> dict[str, FRFEstimate]:
     """H1 per hit direction, response at the tool in that direction (accelerometer, else a
     displacement probe)."""
@@ -265,7 +196,7 @@ def impact_damping(model: SpindleModel, records: Sequence[Record],
         raise ValueError(f"tool_disk = {disk!r} is not allowed: the model's disks are "
                          f"{[k.name for k in model.geometry.disks]}")
     frfs = _frfs(records, options)
-    up = _Updater(model, disk)
+    up = StandstillModel(model, disk)
     lo, hi = options.band_hz or (100.0, force_band_top(records, options.force_drop_db))
     f0 = np.unique(np.round(up.natural_hz(np.ones(nb), 1.0), 3))
     f0 = f0[(f0 >= lo) & (f0 <= hi)]
@@ -315,7 +246,7 @@ def _peaks(frfs, f0, opts) -> np.ndarray:
     return out
 
 
-def _align(up: _Updater, frfs, f0, opts, nb):
+def _align(up: StandstillModel, frfs, f0, opts, nb):
     """Stiffness (and tool mass) factors putting the model's natural frequencies on the
     measured peaks: least squares on log frequency."""
     peaks = _peaks(frfs, f0, opts)
@@ -337,7 +268,7 @@ def _align(up: _Updater, frfs, f0, opts, nb):
     return np.exp(sol.x[:nb]), float(np.exp(sol.x[nb])) if n_m else 1.0, peaks
 
 
-def _update(up: _Updater, frfs, theta, m, band, opts, model) -> ImpactDamping:
+def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
     nb = theta.size
     modes = up.natural_hz(theta, m)
     lo, hi = band
@@ -406,4 +337,4 @@ def _update(up: _Updater, frfs, theta, m, band, opts, model) -> ImpactDamping:
                          eta0 * par[nb:2 * nb], int(s.size), chi2, modes)
 
 
-__all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping", "with_tool_mass"]
+__all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping"]

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from surrogate_rbrdo.identification.updating import StandstillModel
 
 from surrogate_rbrdo.identification import IdentificationOptions, identify_records
 from surrogate_rbrdo.identification.experiment import check_source
-from surrogate_rbrdo.identification.impact import ImpactOptions, _Updater, impact_damping
+from surrogate_rbrdo.identification.impact import ImpactOptions, impact_damping
 from surrogate_rbrdo.identification.rigtruth import record_state, truth_coefficients
 from surrogate_rbrdo.rig import CampaignOptions, open_dataset, reference_truth, run_campaign
 from surrogate_rbrdo.rig.records import RecordError
@@ -104,7 +105,7 @@ def test_impact_damping_bad_inputs(rig, model, tmp_path):
 def test_frf_derivatives_match_finite_differences(model):
     """The FRF fit's analytic Jacobian (bearing stiffness and damping factors, tool mass with
     its mass-proportional damping) against central differences of the accelerance."""
-    up = _Updater(model, "tool_holder")
+    up = StandstillModel(model, "tool_holder")
     s = 2j * np.pi * np.linspace(200.0, 2000.0, 40) + 4.6
     dof = np.full(s.size, 4 * model.tool_node + 1)
     p = np.log([1.0, 1.1, 0.9, 1.2, 1.02])
