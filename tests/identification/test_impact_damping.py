@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from surrogate_rbrdo.identification.updating import StandstillModel
 
 from surrogate_rbrdo.identification import IdentificationOptions, identify_records
 from surrogate_rbrdo.identification.experiment import check_source
 from surrogate_rbrdo.identification.impact import ImpactOptions, impact_damping
 from surrogate_rbrdo.identification.rigtruth import record_state, truth_coefficients
+from surrogate_rbrdo.identification.updating import StandstillModel
 from surrogate_rbrdo.rig import CampaignOptions, open_dataset, reference_truth, run_campaign
 from surrogate_rbrdo.rig.records import RecordError
 from surrogate_rbrdo.rig.sensors import SensorSet
@@ -119,3 +119,24 @@ def test_frf_derivatives_match_finite_differences(model):
         dp[k] = 1e-6
         fd = (frf(p + dp)[0] - frf(p - dp)[0]) / 2e-6
         assert np.max(np.abs(fd - jac[:, k])) < 1e-4 * np.max(np.abs(jac[:, k]))
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_impact_damping_at_the_rigs_default_noise_over_seeds(tmp_path, model):
+    """At the rig's default noise (5 hits per direction, gains, skews, quantisation) over 6
+    random builds: η's RMS error below 1 % (front) and 8 % (rear), against 0.36 % and 4.2 %
+    measured over 20 seeds by ``benchmarks/bench_identification_impact.py`` — the rear bearing's
+    mode is weakly seen at the tool."""
+    errs = []
+    for seed in range(6):
+        path = tmp_path / f"s{seed}"
+        run_campaign(reference_truth(), CampaignOptions(
+            speeds_rpm=(10000.0,), repeats=1, runup=None, impacts_per_direction=5), path,
+            rng=np.random.default_rng(500 + seed))
+        ds = open_dataset(path / "dataset")
+        recs = [ds.load(r) for r in ds.index if r["kind"] == "impact"]
+        eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
+        errs.append(impact_damping(model, recs).eta_s / eta - 1)
+    rms = np.sqrt(np.mean(np.square(errs), axis=0))
+    assert rms[0] < 0.01 and rms[1] < 0.08, rms
