@@ -14,6 +14,9 @@
 * from measured records (the virtual rig's or a user's): :func:`measured_phasors` (demodulation,
   known corrections, keyphasor refinement), :func:`trial_pairs` (trial-weight runs),
   :func:`identify_records` / :func:`run_identification` (the ``identification`` experiment);
+* :func:`impact_damping`: the bearings' damping (η), standstill stiffness and tool mass by
+  updating the FE model on impact-test FRFs; :func:`impact_dampings` per installation of a
+  dataset (``IdentificationOptions(damping="impact", tool_mass="impact")`` uses them);
 * :func:`study_uncertainty`: the study's θ at the response's speed(s) from a run folder or
   ``uncertainty.json`` (what ``[uncertainty] from = …`` calls).
 
@@ -29,6 +32,7 @@ from surrogate_rbrdo.identification.condensation import (
     phasor_time_regression,
     trial_weight_difference,
 )
+from surrogate_rbrdo.identification.damping import impact_dampings
 from surrogate_rbrdo.identification.experiment import (
     IdentificationOptions,
     IdentificationRun,
@@ -36,6 +40,7 @@ from surrogate_rbrdo.identification.experiment import (
     run_identification,
 )
 from surrogate_rbrdo.identification.identify import IdentificationResult, identify
+from surrogate_rbrdo.identification.impact import ImpactDamping, ImpactOptions, impact_damping
 from surrogate_rbrdo.identification.measured import (
     MeasuredPhasors,
     SensorCorrections,
@@ -88,6 +93,8 @@ __all__ = [
     "IdentificationResult",
     "IdentificationRun",
     "IdentifiedUncertainty",
+    "ImpactDamping",
+    "ImpactOptions",
     "MeasuredPhasors",
     "NormalityReport",
     "PhasorIdentification",
@@ -108,6 +115,8 @@ __all__ = [
     "identify_campaign",
     "identify_phasors",
     "identify_records",
+    "impact_damping",
+    "impact_dampings",
     "known_unbalance",
     "load_uncertainty",
     "measured_phasors",

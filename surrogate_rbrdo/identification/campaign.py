@@ -147,11 +147,12 @@ def identify_campaign(model: SpindleModel, speeds_rpm, repeats, phasors, *,
         summary_speed_rpm=summary_speed_rpm,
         provenance={**(provenance or {}), "records": int(sp.size),
                     "records_used": int(used.sum()), "fit_on": fit_on, "max_rel_se": max_rel_se})
-    return CampaignResult(res, used, unc, _table(res, sp, rep, used),
+    return CampaignResult(res, used, unc, campaign_table(res, sp, rep, used),
                           _counts(res, cols, used, sp))
 
 
-def _table(res: PhasorIdentification, sp, rep, used) -> dict:
+def campaign_table(res: PhasorIdentification, sp, rep, used) -> dict:
+    """The columns of ``identified.csv`` (:class:`CampaignResult` ``table``)."""
     se = res.std if res.std is not None else np.full(res.estimate.shape, np.nan)
     fl = res.flag_names()
     cols = {"speed_rpm": sp, "repeat": rep}
@@ -172,4 +173,4 @@ def _counts(res: PhasorIdentification, cols, used, sp) -> dict:
                                        .tolist(), strict=True))}
 
 
-__all__ = ["DEFAULT_MAX_REL_SE", "FIT_ON", "CampaignResult", "identify_campaign"]
+__all__ = ["DEFAULT_MAX_REL_SE", "FIT_ON", "CampaignResult", "campaign_table", "identify_campaign"]

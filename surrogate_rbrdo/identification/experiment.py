@@ -27,7 +27,7 @@ import csv
 import json
 import time
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +42,13 @@ from surrogate_rbrdo.identification.campaign import (
     identify_campaign,
 )
 from surrogate_rbrdo.identification.condensation import node_at
+from surrogate_rbrdo.identification.damping import (
+    DAMPING_SOURCES,
+    impact_dampings,
+    record_installations,
+    with_impact_damping,
+)
+from surrogate_rbrdo.identification.impact import ImpactOptions
 from surrogate_rbrdo.identification.measured import (
     SensorCorrections,
     dataset_root,
@@ -52,6 +59,7 @@ from surrogate_rbrdo.identification.model import SCATTERS, STUDY_FORMS, save_unc
 from surrogate_rbrdo.identification.responses import Responses, known_unbalance, trial_pairs
 from surrogate_rbrdo.identification.systematic import SystematicUncertainty
 from surrogate_rbrdo.identification.trend import TREND_LAWS
+from surrogate_rbrdo.identification.updating import with_tool_mass
 from surrogate_rbrdo.rig.store import open_dataset
 from surrogate_rbrdo.spindle.assembly import SpindleModel
 
@@ -78,6 +86,16 @@ class IdentificationOptions:
     systematic : SystematicUncertainty
         Tolerances of the sensors, the trial mass and the rotor model (what the experimenter
         knows of what is not corrected): their effect on the trends.
+    damping : {"response", "impact"}
+        Where the bearings' damping comes from: ``"response"`` (default) — the 1× unbalance
+        response, like the stiffness (not identifiable at a realistic noise); ``"impact"`` —
+        each installation's impact tests at standstill (``c = η̂ k̂``,
+        :mod:`~surrogate_rbrdo.identification.damping`); the source must have impact records.
+    tool_mass : {"model", "impact"}
+        The tool/holder mass of the rotor model the reactions are condensed with:
+        ``"model"`` (default) — as the model has it; ``"impact"`` — scaled by the factor the
+        impact tests weigh (the disk ``systematic.tool_disk``; one installation only), and
+        the systematic budget's ``tool_mass_sd`` becomes that factor's standard error.
     group_label : str or None
         Index label naming the run of a record; ``None``: all labels but the speed index.
     convergence_speed_rpm : float
@@ -102,12 +120,16 @@ class IdentificationOptions:
     summary_speed_rpm: float | None = None
     group_label: str | None = None
     systematic: SystematicUncertainty = SystematicUncertainty()
+    damping: str = "response"
+    tool_mass: str = "model"
     convergence_speed_rpm: float = 10_000.0
     n_jobs: int = 1
     figures: bool = True
 
     def __post_init__(self) -> None:
         check_choice("excitation", self.excitation, EXCITATIONS)
+        check_choice("damping", self.damping, DAMPING_SOURCES)
+        check_choice("tool_mass", self.tool_mass, ("model", "impact"))
         check_choice("fit_on", self.fit_on, FIT_ON)
         check_choice("law", self.law, ("auto",) + TREND_LAWS)
         check_choice("study", self.study, STUDY_FORMS)
@@ -219,6 +241,12 @@ def check_source(source, options: IdentificationOptions = IdentificationOptions(
     if s is not None and not min(speeds) <= s <= max(speeds):
         raise ValueError(f"summary_speed_rpm = {s!r} is not allowed: must lie in the "
                          f"campaign's speeds [{min(speeds):g}, {max(speeds):g}] rpm")
+    for name in ("damping", "tool_mass"):
+        if getattr(options, name) == "impact" and not any(r.get("kind") == "impact"
+                                                          for r in ds.index):
+            raise ValueError(f"{name} = 'impact' is not allowed with source = "
+                             f"{str(source)!r}: it has no impact records (measure with "
+                             "[rig.campaign] impacts_per_direction > 0)")
     try:
         probe_channels(ds.load(rows[0]), options.targets)
     except ValueError as exc:
@@ -252,18 +280,48 @@ def identify_responses(model: SpindleModel, resp: Responses, options: Identifica
     prov = {"source": str(source), "excitation": resp.excitation,
             "unbalance": [list(u) for u in resp.unbalance], "channels": list(resp.channels),
             "options": options.to_dict()}
+    impacts = _impacts(model, source, options)
+    rotor, systematic = model, options.systematic
+    if options.tool_mass == "impact":
+        rotor, systematic, prov["tool_mass_factor"] = _weighed_tool(model, impacts, options)
     camp = identify_campaign(
-        model, resp.speed_rpm, resp.repeat, resp.phasors, phasor_sd=resp.phasor_sd,
+        rotor, resp.speed_rpm, resp.repeat, resp.phasors, phasor_sd=resp.phasor_sd,
         groups=resp.groups, perturbations=resp.perturbations,
         probe_nodes=probe_nodes, unbalance=unb, fit_on=options.fit_on,
         max_rel_se=options.max_rel_se, law=options.law, study=options.study,
         scatter=options.scatter, truth=truth, rng=rng, n_boot=options.n_boot,
-        systematic=options.systematic, probe_bandwidth_hz=options.probe_bandwidth_hz,
+        systematic=systematic, probe_bandwidth_hz=options.probe_bandwidth_hz,
         summary_speed_rpm=options.summary_speed_rpm, provenance=prov)
+    if options.damping == "impact":
+        camp = with_impact_damping(rotor, camp, record_installations(source, resp.record_ids),
+                                   impacts, max_rel_se=options.max_rel_se)
     dt = time.perf_counter() - t1
-    return IdentificationRun(resp, camp, {"demodulation_s": demodulation_s,
-                                          "identification_s": dt,
-                                          "total_s": demodulation_s + dt}, prov)
+    timings = {"demodulation_s": demodulation_s, "identification_s": dt,
+               "total_s": demodulation_s + dt}
+    return IdentificationRun(resp, camp, timings, prov)
+
+
+def _impacts(model: SpindleModel, source, options: IdentificationOptions) -> dict | None:
+    """The impact tests' updated factors per installation, when an option asks for them."""
+    if "impact" not in (options.damping, options.tool_mass):
+        return None
+    if not str(source):
+        raise ValueError("source = '' is not allowed with damping or tool_mass = 'impact': "
+                         "give the dataset whose impact records are used")
+    return impact_dampings(model, source, ImpactOptions(tool_disk=options.systematic.tool_disk))
+
+
+def _weighed_tool(model: SpindleModel, impacts: dict, options: IdentificationOptions):
+    """The model with the tool mass the impacts weigh, the systematic budget with its SE."""
+    if len(impacts) != 1:
+        raise ValueError(f"tool_mass = 'impact' is not allowed with {len(impacts)} "
+                         f"installations {sorted(impacts)}: one rotor model per run; use "
+                         "tool_mass = 'model'")
+    imp = next(iter(impacts.values()))
+    j = imp.names.index("tool_mass")
+    m, se = float(imp.parameters[j]), float(np.sqrt(imp.covariance[j, j]))
+    rotor = with_tool_mass(model, options.systematic.tool_disk, m)
+    return rotor, replace(options.systematic, tool_mass_sd=se), {"factor": m, "rel_se": se}
 
 
 def identify_records(model: SpindleModel, source, options: IdentificationOptions = (

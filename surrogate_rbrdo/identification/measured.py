@@ -12,8 +12,13 @@ experimenter knows (:class:`SensorCorrections`):
   rig's residual gain error (2 %, *after* calibration on the shaft material) is not known;
 * the **keyphasor's angular position** relative to the angle reference of the trial mass
   (``keyphasor_angle_deg``; 0 on the rig by construction): ``X ← X e^{−i angle}``;
-* the keyphasor's **edge-interpolation error** (a whole number of samples per revolution): the
-  phase is refined on the pulse's own shape (:mod:`.keyphasor`), with its standard error.
+* the keyphasor's **edge-interpolation error** of a *sampled* keyphasor (a whole number of
+  samples per revolution): the phase is refined on the pulse's own shape (:mod:`.keyphasor`),
+  with its standard error. A record whose keyphasor edges are counter timestamps
+  (``events["keyphasor"]``, the rig's default) is not refined: its edges are already exact to
+  the timebase and the trigger jitter, and refitting them on the sampled pulse would replace
+  exact edges by the template's interpolation error (noise-free at 24 000 rpm it moved c by
+  71 %; ``docs/identification.md`` §3).
 
 What stays hidden: the channels' timing skew, the residual gain and bandwidth errors and the
 keyphasor's edge-interpolation phase error (``docs/rig.md``); what they do to the identified
@@ -161,6 +166,7 @@ class _Demodulated:
     t0: float
     period: float
     gap: float
+    counter: bool = False
 
     def angles(self) -> np.ndarray:
         return TWO_PI * (self.kp_times - self.t0) / self.period
@@ -188,7 +194,8 @@ def _demodulate_one(rec: Record, channels: tuple[str, ...]) -> _Demodulated:
                         dict(rec.provenance.get("test_setup", {})),
                         rec.values("keyphasor").astype(np.float32), rec.time_s + kp.delay_s,
                         float(t0), float(period),
-                        sample_phase_gap(60.0 / period, rec.sample_rate_hz, edges.size - 1))
+                        sample_phase_gap(60.0 / period, rec.sample_rate_hz, edges.size - 1),
+                        "keyphasor" in rec.events)
 
 
 def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | None = (
@@ -206,7 +213,8 @@ def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | N
         ``front`` and ``rear``; ``None``: every displacement probe.
     corrections : SensorCorrections
     refine_keyphasor : bool
-        Refine each record's phase on the keyphasor pulse's shape (:mod:`.keyphasor`).
+        Refine the phase of each record with a *sampled* keyphasor on the pulse's shape
+        (:mod:`.keyphasor`); records with counter timestamps are never refined.
     n_jobs : int
         Processes for the demodulation (joblib); 1 runs in this process.
 
@@ -284,23 +292,32 @@ def _work(root: Path, files: list[str], channels: tuple[str, ...]) -> list[_Demo
 
 def _refine(out: list[_Demodulated], max_template_records: int = 100
             ) -> tuple[np.ndarray, np.ndarray, str]:
-    """Keyphasor phase refinement (:mod:`.keyphasor`) of every record: shifts, standard
+    """Keyphasor phase refinement (:mod:`.keyphasor`) of every record whose edges come from
+    the sampled keyphasor channel (counter-timed records keep their edges): shifts, standard
     errors and a note for the provenance."""
-    good = [o for o in out if o.gap <= MAX_GAP]
+    shift, sd = np.zeros(len(out)), np.zeros(len(out))
+    sampled = [i for i, o in enumerate(out) if not o.counter]
+    if not sampled:
+        return shift, sd, "keyphasor edges from counter timestamps (phase not refined)"
+    good = [out[i] for i in sampled if out[i].gap <= MAX_GAP]
     if len(good) < 3:
-        return np.zeros(len(out)), np.zeros(len(out)), (
+        return shift, sd, (
             "keyphasor phase not refined: fewer than 3 records whose samples drift through "
             "the revolution to learn the pulse shape from")
     pick = good[:: max(1, len(good) // max_template_records)]
     tpl = pulse_template([o.kp.astype(float) for o in pick], [o.angles() for o in pick])
-    res = np.array([refine_phase(o.kp.astype(float), o.angles(), tpl,
-                                 search_rad=SEARCH_RAD if o.gap > SEARCH_GAP else 0.0)
-                    for o in out])
+    res = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl,
+                                 search_rad=SEARCH_RAD if out[i].gap > SEARCH_GAP else 0.0)
+                    for i in sampled])
     # anchor the template's angle frame to the edges of the records that built it (their
     # edge interpolation errors average out; the folded template's own offset does not)
-    anchor = float(np.mean([d for (d, _), o in zip(res, out, strict=True) if o.gap <= MAX_GAP]))
-    return res[:, 0] - anchor, res[:, 1], f"keyphasor phase refined on a pulse template " \
-        f"from {len(pick)} records (frame anchored by {anchor:.2e} rad)"
+    anchor = float(np.mean([d for (d, _), i in zip(res, sampled, strict=True)
+                            if out[i].gap <= MAX_GAP]))
+    shift[sampled], sd[sampled] = res[:, 0] - anchor, res[:, 1]
+    n_counter = len(out) - len(sampled)
+    return shift, sd, f"keyphasor phase of {len(sampled)} sampled-keyphasor records refined " \
+        f"on a pulse template from {len(pick)} records (frame anchored by {anchor:.2e} rad)" \
+        + (f"; {n_counter} counter-timed records not refined" if n_counter else "")
 
 
 def _run(ds: Dataset, rows, channels, n_jobs: int) -> list[_Demodulated]:

@@ -65,25 +65,29 @@ def model():
 
 
 @pytest.mark.known_answer
-def test_noise_free_records_recover_the_eight_coefficients(tmp_path, model):
-    """Done-when: the rig with noise and sensor errors off (its truth still drawn: bearing k,
-    damping, unbalance magnitude and phase, thermal preload; the tool mass fixed so that the
+@pytest.mark.parametrize("seed", [11, 20261124])
+def test_noise_free_records_recover_the_eight_coefficients(tmp_path, model, seed):
+    """Done-when: the rig with its noise switched off as a user does it (``SensorSet(noise=
+    False)``, ``[rig.sensors] noise = false``: no noise, no sensor errors, no quantisation,
+    the default counter-timed keyphasor) and its truth still drawn (bearing k, damping,
+    unbalance magnitude and phase, thermal preload; the tool mass fixed so that the
     experimenter's rotor model is exact) → all eight coefficients of every record within 1e-4
-    (k) and 1 % (c), through records, demodulation, trial-weight differences and
-    condensation, the keyphasor refined at 24 000 rpm (25 samples per revolution). Below
-    ~5 000 rpm the 31-bit converter's undithered quantization of the nm trial response, the
-    same in every revolution at a whole number of samples per revolution, limits c (1.8 % at
-    3 000 rpm) and, at 1 000 rpm, k (3e-4): docs/identification.md, bench_identification_rig."""
+    (k) and 1 % (c) across the speed range: 1 000 rpm, 24 000 rpm (25 samples per
+    revolution) and speeds drawn at random in between, through records, demodulation,
+    trial-weight differences and condensation. Double precision leaves ~1e-7 in c at 1 000
+    rpm (its conditioning 1/(Ωη) ≈ 2 400, docs/identification.md §3)."""
+    rng = np.random.default_rng(seed)
     truth = reference_truth(variability=Variability(tool_mass_cov=0.0))
-    speeds = (5500.0, 9500.0, 16500.0, 24000.0)
-    ds = _campaign(tmp_path, truth, speeds, 2, _ideal(), seed=11)
+    speeds = (1000.0, *np.sort(np.round(rng.uniform(1001.0, 23999.0, 3))), 24000.0)
+    ds = _campaign(tmp_path, truth, speeds, 2, SensorSet(noise=False), seed=seed)
     run = identify_records(model, tmp_path, IdentificationOptions(max_rel_se=1e9),
                            rng=np.random.default_rng(0))
     got = run.campaign.identification.estimate
     ref = _truth_of(ds, truth, run.responses)
     err = np.abs(got / ref - 1)
     assert np.all(err[:, [0, 1, 4, 5]] < 1e-4) and np.all(err[:, [2, 3, 6, 7]] < 0.01)
-    assert run.campaign.identification.ok.all()
+    res = run.campaign.identification
+    assert np.all(res.ok | res.near_pole)
 
 
 def test_trial_pairs_isolate_the_trial_mass(tmp_path, model):

@@ -942,6 +942,15 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("id_study", ID("study = 'anisotropic'"), {}, [],
      r"identification.study = 'anisotropic' is not allowed: must be one of \['isotropic', "
      r"'stiffness'\]"),
+    ("id_damping", ID("damping = 'modal'"), {}, [],
+     r"identification.damping = 'modal' is not allowed: must be one of \['response', "
+     r"'impact'\]"),
+    ("id_tool_mass", ID("tool_mass = 'weighed'"), {}, [],
+     r"identification.tool_mass = 'weighed' is not allowed: must be one of"),
+    ("id_damping_no_impacts", ID("excitation = 'known'\nunbalance = [[0.0, 1e-5, 0.0]]\n"
+                                 "damping = 'impact'"), DS_NO_TRIAL, [],
+     r"identification.damping = 'impact' is not allowed with source = '.*': it has no impact "
+     r"records"),
     ("id_fit_on", ID("fit_on = 'damping'"), {}, [],
      r"identification.fit_on = 'damping' is not allowed: must be one of"),
     ("id_n_boot_neg", IDENT.replace("n_boot = 20", "n_boot = -5"), {}, [],
