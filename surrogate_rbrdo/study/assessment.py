@@ -52,6 +52,9 @@ class ValidationTable:
         check_int("n_test", self.n_test, minimum=2)
         check_int("n_theta", self.n_theta, minimum=2)
         check_positive("rel_tol", self.rel_tol)
+        if self.rel_tol > 1.0:
+            raise ValueError(f"rel_tol = {self.rel_tol!r} is not allowed: must be at most 1 (a "
+                             "relative error above 100 % accepts any surrogate)")
         check_int("n_theta_nc", self.n_theta_nc, minimum=2)
         if not self.designs:
             raise ValueError("designs = {} is not allowed: give at least one design")

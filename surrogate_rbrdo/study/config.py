@@ -16,7 +16,7 @@ import numpy as np
 from pydantic import AliasChoices, Field
 
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.core.validate import check_choice, check_positive
+from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
 from surrogate_rbrdo.formulations import DeterministicOptions
 from surrogate_rbrdo.identification.study import stiffness_block_from
 from surrogate_rbrdo.spindle.assembly import RPM
@@ -40,6 +40,42 @@ DESIGN_BASES = ("unbalance_cases", "median")
 #: spaced over its identified part; θ is their moment-matched mixture,
 #: identification.stiffness_block_from)
 PEAK_THETA_SPEEDS = 25
+
+
+#: the range of a stiffness factor's mean: θ scales a bearing's nominal stiffness, and a bearing
+#: ten times softer or stiffer than its law is another bearing (change the law), not an
+#: uncertainty about it; identified factors lie within 0.5-2 (docs/identification.md)
+FACTOR_MEAN_RANGE = (0.1, 10.0)
+#: the largest coefficient of variation of a stiffness factor (100 %)
+FACTOR_MAX_COV = 1.0
+#: the largest relative thermal preload growth τ (F(1 + τ)): measured growth at top speed is
+#: at most a few hundred percent (e.g. Li & Shin 2004)
+THERMAL_MAX = 5.0
+
+
+def check_factor_moments(mean: tuple[float, ...] | None, std: tuple[float, ...] | None
+                         ) -> None:
+    """The stiffness factors' means within :data:`FACTOR_MEAN_RANGE` and their standard
+    deviations at most :data:`FACTOR_MAX_COV` times the mean (1 where not given).
+
+    >>> try:
+    ...     check_factor_moments((1.0, 1e300), None)
+    ... except ValueError as exc:
+    ...     print(str(exc)[:82])
+    mean[1] = 1e+300 is not allowed: a stiffness factor's mean must lie in [0.1, 10.0]
+    """
+    lo, hi = FACTOR_MEAN_RANGE
+    for i, m in enumerate(mean or ()):
+        if m > 0 and not lo <= m <= hi:     # m <= 0: stiffness_factors says why
+            raise ValueError(f"mean[{i}] = {m!r} is not allowed: a stiffness factor's mean must "
+                             f"lie in [{lo}, {hi}] (θ scales the bearing's nominal stiffness; a "
+                             "bearing 10 times softer or stiffer is another bearing law)")
+    for i, s in enumerate(std or ()):
+        m = mean[i] if mean is not None and i < len(mean) else 1.0
+        if s > FACTOR_MAX_COV * m:
+            raise ValueError(f"std[{i}] = {s!r} is not allowed: must be at most "
+                             f"{FACTOR_MAX_COV:g} x the mean ({FACTOR_MAX_COV * m:g}): a "
+                             "stiffness factor's coefficient of variation above 100 %")
 
 
 @dataclass(frozen=True)
@@ -66,6 +102,8 @@ class UncertaintyTable:
     unbalance: UnbalanceOptions | None = None
 
     def __post_init__(self) -> None:
+        check_factor_moments(self.mean, self.std)
+        check_range("thermal_max", self.thermal_max, 0.0, THERMAL_MAX)
         if self.from_ is None:
             return
         if not self.from_.strip():
@@ -205,6 +243,9 @@ class DeterministicTable:
     def __post_init__(self) -> None:
         if self.design_basis is not None:
             check_choice("design_basis", self.design_basis, DESIGN_BASES)
+        # f_n1 >= factor x top speed: API RP 684 asks margins of 10-26 %; 10 x is no guard
+        check_range("factor", self.factor, 0.0, 10.0, inclusive=False)
+        check_range("search_factor", self.search_factor, 1.0, 10.0)
 
     def design_theta(self, inputs: Any, response: ResponseSpec) -> np.ndarray | None:
         """The deterministic strategy's design-basis θ rows (``None``: the image of u = 0)."""
@@ -246,6 +287,6 @@ class DeterministicTable:
                              ) from None
 
 
-__all__ = ["DESIGN_BASES", "DeterministicTable", "LimitTable", "PEAK_THETA_SPEEDS",
-           "UncertaintyTable", "build_inputs", "build_theta", "identified_inputs",
-           "response_speeds"]
+__all__ = ["DESIGN_BASES", "FACTOR_MAX_COV", "FACTOR_MEAN_RANGE", "PEAK_THETA_SPEEDS",
+           "THERMAL_MAX", "DeterministicTable", "LimitTable", "UncertaintyTable", "build_inputs",
+           "build_theta", "check_factor_moments", "identified_inputs", "response_speeds"]
