@@ -24,7 +24,7 @@ import numpy as np
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.experiment import analyse, data_from_folder, options_from_dict
 from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 
 
 def main() -> None:

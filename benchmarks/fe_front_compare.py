@@ -42,14 +42,9 @@ from pymoo.indicators.hv import HV  # noqa: E402
 
 from surrogate_rbrdo.core.schema import parse  # noqa: E402
 from surrogate_rbrdo.optimization.pareto import nondominated  # noqa: E402
-from surrogate_rbrdo.runner.tables import (  # noqa: E402
-    LimitTable,
-    SpindleTable,
-    UncertaintyTable,
-    build_inputs,
-    build_spindle,
-)
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle  # noqa: E402
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec  # noqa: E402
+from surrogate_rbrdo.study.config import LimitTable, UncertaintyTable, build_inputs  # noqa: E402
 
 
 def fronts(run: Path, max_points: int) -> dict[str, tuple[float, np.ndarray]]:

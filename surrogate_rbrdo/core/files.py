@@ -209,6 +209,14 @@ def source_digest() -> str:
     return h.hexdigest()[:16]
 
 
+def read_meta(path: str | Path) -> dict[str, Any] | None:
+    """``meta.json`` of a run folder (``None``: none or unreadable)."""
+    try:
+        return json.loads((Path(path) / "meta.json").read_text())
+    except (OSError, ValueError):
+        return None
+
+
 def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str | Path) -> None:
     """Refuse ``field = value`` if what it writes (``nbytes``, described by ``detail``)
     exceeds the free space of the file system holding ``root`` (or its nearest existing
@@ -226,5 +234,6 @@ def require_disk(field: str, value: Any, nbytes: float, detail: str, root: str |
 
 
 __all__ = ["FILE_MODE", "atomic_write_bytes", "atomic_write_text", "csv_text", "input_changes",
-           "json_default", "json_text", "make_dirs", "read_input", "require_disk", "rows_text",
+           "json_default", "json_text", "make_dirs", "read_input", "read_meta", "require_disk",
+           "rows_text",
            "sha256", "share_tree", "source_digest", "tracked_inputs"]

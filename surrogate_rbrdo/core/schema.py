@@ -45,6 +45,7 @@ from typing import Any
 from pydantic import ConfigDict, TypeAdapter, ValidationError, create_model
 
 from surrogate_rbrdo.core.files import read_input
+from surrogate_rbrdo.core.magnitudes import check_magnitudes
 
 WHAT = {
     "int_type": "an integer", "int_from_float": "an integer", "int_parsing": "an integer",
@@ -286,18 +287,22 @@ def _json_ready(value: Any) -> Any:
 def parse(cls: type, data: Any, where: str = "") -> Any:
     """Validate ``data`` (TOML-like: tables, arrays, scalars) into the dataclass ``cls``.
 
-    ``where`` is the dotted path of ``data`` in the config (prefixes every message).
+    ``where`` is the dotted path of ``data`` in the config (prefixes every message). Every
+    number is also checked against the unit its field's name carries
+    (:func:`~surrogate_rbrdo.core.magnitudes.check_magnitudes`).
     """
     if not isinstance(data, Mapping):
         raise ValueError(f"{where or 'config'} = {_short(data)} is not allowed: must be a "
                          "table")
     text = json.dumps({"value": _json_ready(data)})
     try:
-        return _adapter(cls).validate_json(text).value
+        value = _adapter(cls).validate_json(text).value
     except ValidationError as exc:
         errors = exc.errors()
         fits = [e for e in errors if not _mismatch(cls, e)]
         raise ValueError(_message(cls, (fits or errors)[0], where, union=not fits)) from None
+    check_magnitudes(value, where)     # a finite but absurd value for its field's unit
+    return value
 
 
 def table_defaults(schema: type, tables: tuple[str, ...]) -> str:

@@ -4,8 +4,12 @@ ranking, and the gap before and after, one figure per observable."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+
+from surrogate_rbrdo.discrepancy.plan import DiscrepancyPlan
+from surrogate_rbrdo.discrepancy.report import write_run
 
 
 def _plt():
@@ -121,3 +125,35 @@ def plot_all(result, out_dir: str | Path) -> dict[str, Path]:
         for j, ch in enumerate(c.channels):
             paths[f"gap_{c.name}_{ch}"] = plot_gap(result, c, j, out / f"gap_{c.name}_{ch}.png")
     return paths
+
+
+def verdict_line(res: Any) -> str:
+    """One line: the verdict, what is named, the test and the held-out gap."""
+    t, b, a = res.test, res.gap_before, res.gap_after
+    what = {"named": ", ".join(e.name for e in res.effects),
+            "confounded": " | ".join(res.confounded_with)}.get(res.verdict, "")
+    return (f"{res.verdict}{': ' + what if what else ''} (statistic {t['statistic']:.4g}, "
+            f"p {t['p_value']:.3g}, threshold {t['threshold']:g}); held-out RMSE "
+            f"{b.rmse:.4g} -> {a.rmse:.4g} um, chi2/dof {b.chi2_dof:.3g} -> {a.chi2_dof:.3g}")
+
+
+def write_discrepancy_run(out_dir: str | Path, p: DiscrepancyPlan, res: Any, data: Any
+                          ) -> dict[str, Any]:
+    """A discrepancy run's files (``discrepancy.report.write_run``: findings, updated
+    ``[spindle]``, candidates, curves) and figures (:func:`plot_all`) into ``out_dir``;
+    returns the summary (``meta``: verdict, named effects, data folder, figures; ``summary``:
+    :func:`verdict_line` and the named effects' parameters). ``data``: the campaign result or
+    the data folder."""
+    out = Path(out_dir)
+    write_run(res, out, spindle_section=p.spindle_section, model_effects=p.spindle.effects)
+    (out / "figures").mkdir(exist_ok=True)
+    figs = plot_all(res, out / "figures")
+    src = data
+    named = [{"effect": e.name, **{k: float(f"{v:.6g}") for k, v in e.fit.parameters.items()
+                                   if isinstance(v, float) and np.isfinite(v)}}
+             for e in res.effects]
+    return {"meta": {"verdict": res.verdict, "named": [e.name for e in res.effects],
+                     "confounded_with": list(res.confounded_with),
+                     "data": str(src if isinstance(src, Path) else src.root),
+                     "analyse_s": res.seconds, "figures": sorted(f.name for f in figs.values())},
+            "summary": [{"verdict": verdict_line(res)}, *named]}

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from scipy import stats
@@ -15,7 +16,9 @@ from surrogate_rbrdo.identification.condensation import (
     node_at,
     phasor_time_regression,
 )
+from surrogate_rbrdo.identification.experiment import table_rows
 from surrogate_rbrdo.identification.identify import identify
+from surrogate_rbrdo.identification.plan import IdentificationPlan
 from surrogate_rbrdo.identification.recursions import MISG, RLS, SG
 from surrogate_rbrdo.identification.scatter import run_factors
 from surrogate_rbrdo.reporting.figures import pyplot as _pyplot
@@ -175,5 +178,35 @@ def _rel_cov(camp, cols, u, sp):
     return C[camp.used][:, cols][:, :, cols] / (t[:, :, None] * t[:, None, :])
 
 
+
+def write_identification_run(out: Any, p: IdentificationPlan, res: Any) -> dict[str, Any]:
+    """``identified.csv``, ``uncertainty.json`` (what ``[uncertainty] from`` of a study
+    reads), ``identification_summary.json`` and the figures (``p.options.figures``) of an
+    ``IdentificationRun`` into ``out`` (a run folder); returns the summary (``meta``, rows of
+    θ's mean and std, records used, trend laws)."""
+    camp, u = res.campaign, res.uncertainty
+    out.write_csv("identified.csv", *table_rows(camp.table))
+    out.write_json("uncertainty.json", u.to_dict())
+    figures = (write_identification_figures(p.model, res, out.path,
+                                            convergence_speed_rpm=p.options.convergence_speed_rpm)
+               if p.options.figures else {})
+    info = {"flag_counts": camp.flag_counts, "timings_s": res.timings,
+            "provenance": res.provenance, "rig_run": p.rig_run,
+            "figures": {k: Path(v).name for k, v in figures.items()}}
+    out.write_json("identification_summary.json", info)
+    d = u.to_dict()
+    sd = np.sqrt(np.diag(np.asarray(d["cov"])))
+    rows = [{"theta": n, "speed_rpm": d["speed_rpm"], "mean": round(float(m), 5),
+             "std": round(float(s), 5)} for n, m, s in zip(d["names"], d["mean"], sd,
+                                                            strict=True)]
+    used = int(np.sum(camp.used))
+    return {"meta": {"n_records": int(res.responses.n), "n_used": used,
+                     "source": str(p.source), "rig_run": p.rig_run,
+                     "identification_s": res.timings, "flag_counts": camp.flag_counts},
+            "summary": rows + [{"records": int(res.responses.n), "used": used,
+                                "trend_laws": {c: t.law for c, t in zip(
+                                    u.coefficients, u.trends, strict=True)}}]}
+
+
 __all__ = ["campaign_convergence", "plot_convergence", "plot_qq", "plot_trend",
-           "write_identification_figures"]
+           "write_identification_figures", "write_identification_run"]

@@ -17,6 +17,7 @@ from scipy.signal import spectrogram
 from surrogate_rbrdo.reporting.figures import pyplot as _plt
 from surrogate_rbrdo.reporting.figures import save_figure
 from surrogate_rbrdo.rig.campaign import CampaignResult
+from surrogate_rbrdo.rig.config import RigConfig
 from surrogate_rbrdo.rig.demod import critical_speeds_from_ramp, track_1x
 from surrogate_rbrdo.rig.frf import h1_frf, modal_fit
 from surrogate_rbrdo.rig.store import open_dataset
@@ -233,3 +234,14 @@ def write_rig_report(result: CampaignResult, truth: Truth, out_dir: str | Path
     summary["figures"] = [str(p.relative_to(out)) for p in figs]
     (out / "rig_summary.json").write_text(json.dumps(summary, indent=2))
     return summary
+
+
+def rig_summary(result: CampaignResult, rig: RigConfig, out_dir: str | Path) -> dict[str, Any]:
+    """A campaign's report (:func:`write_rig_report` when ``rig.figures``) and its summary:
+    ``meta`` (records, dataset, campaign seconds) and ``summary`` rows."""
+    summary = write_rig_report(result, rig.truth, out_dir) if rig.figures else {}
+    rows = [{"quantity": k, "value": v} for k, v in summary.items()
+            if k not in ("figures", "seconds", "n_records")]
+    return {"meta": {"n_records": result.n_records, "dataset": "campaign/dataset",
+                     "campaign_s_last_session": result.seconds},
+            "summary": [{"quantity": "records", "value": result.n_records}, *rows]}

@@ -9,9 +9,13 @@
 from __future__ import annotations
 
 import textwrap
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+
+from surrogate_rbrdo.reporting import tables_surrogate as tab
+from surrogate_rbrdo.study.assessment import AssessmentPlan
 
 
 def parity_plot(y_true: np.ndarray, y_pred: np.ndarray, *, y_std: np.ndarray | None = None,
@@ -58,4 +62,33 @@ def parity_figures(name: str, y_true: np.ndarray, y_pred: np.ndarray) -> dict[st
                                                   label="peak amplitude [µm]", log=True)}
 
 
-__all__ = ["parity_figures", "parity_plot"]
+
+
+#: the ``mc_comparison.csv`` columns printed in the terminal summary
+SUMMARY_COLUMNS = ("variant", "design", "mean_rel_err", "std_rel_err", "pf_fe", "pf_sur",
+                   "ok_mean", "ok_std", "ok_pf")
+
+
+def write_assessment_run(out: Any, p: AssessmentPlan, truth: Any, variants: Any
+                         ) -> dict[str, Any]:
+    """A surrogate validation's tables (``tables_surrogate.validation_tables``), parity
+    figures per variant, ``surrogate_info.json`` and ``calls.json`` into ``out`` (a run
+    folder); returns the summary (variants, ``meta``: counted calls, MC comparison rows)."""
+    tables = tab.validation_tables(list(p.designs), truth, variants, p.limit.threshold,
+                                   p.validation.n_theta_nc)
+    for name, (header, rows) in tables.items():
+        out.write_csv(name, header, rows)
+    for a in variants:
+        for name, fig in parity_figures(a.name, truth.y, a.y_pred).items():
+            out.save_figure(name, fig)
+    out.write_json("surrogate_info.json", {a.name: {k: v for k, v in a.trained.to_dict().items()
+                                                    if k != "options"} for a in variants})
+    meta = {**tab.validation_calls(truth, variants), "n_theta": p.validation.n_theta,
+            "n_test": int(truth.y.size)}
+    out.write_json("calls.json", meta)
+    return {"variants": [a.name for a in variants], "meta": meta,
+            "summary": [{k: x for k, x in zip(tab.MC_HEADER, r, strict=True)
+                         if k in SUMMARY_COLUMNS} for r in tables["mc_comparison.csv"][1]]}
+
+
+__all__ = ["SUMMARY_COLUMNS", "parity_figures", "parity_plot", "write_assessment_run"]

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -161,3 +162,18 @@ def write_validation_report(result: ValidationResult, out_dir: str | Path, *,
     paths["markdown"] = out / "validation.md"
     paths["markdown"].write_text(markdown_section(result, rel))
     return paths
+
+
+def validation_summary(result: ValidationResult) -> dict[str, Any]:
+    """The run's summary: per design μ, σ (µm) and P_f of the measured peak, the
+    model-vs-measurement count; ``meta``: timings, disagreements, records."""
+    rows = [{"design": d.name, "x": list(d.x),
+             "mu_peak_um": round(d.moments["peak"].mean * 1e6, 4),
+             "sigma_peak_um": round(d.moments["peak"].std * 1e6, 4),
+             "pf_peak": d.moments["peak"].pf} for d in result.designs]
+    bad = [f"{v.design} {v.quantity} {v.metric}" for v in result.disagreements]
+    verdicts = ([{"model_vs_measured": f"{len(bad)} of {len(result.verdicts)} disagree beyond "
+                  "uncertainty"}] if result.verdicts else [])
+    return {"meta": {"timings": dict(result.timings), "disagreements": bad,
+                     "n_records": sum(d.n_records for d in result.designs)},
+            "summary": rows + verdicts}

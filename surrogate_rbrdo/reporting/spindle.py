@@ -1,21 +1,25 @@
 """Designs of a spindle at nominal θ: design quantities, tool-tip unbalance responses and
 Campbell diagrams, as one frozen :class:`SpindleOverview`, and its tables and figures.
 
-Used by the ``spindle_report`` kind (all of it) and by the study's report (the baseline and a
-compromise design).
+Used by the ``spindle_report`` kind (all of it: its tables :class:`SpindleReportConfig`,
+checked by :func:`build_spindle_report`; :func:`write_spindle_report`) and by the study's
+report (the baseline and a compromise design).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from surrogate_rbrdo.core.memory import check_memory
+from surrogate_rbrdo.core.validate import check_int, check_label
 from surrogate_rbrdo.reporting.plots_spindle import plot_campbell, plot_unbalance_response
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 from surrogate_rbrdo.spindle.evaluate import design_quantities
 from surrogate_rbrdo.spindle.harmonic import tool_amplitude
 from surrogate_rbrdo.spindle.modal import campbell, check_modes_of
@@ -139,5 +143,75 @@ def write_overview(out: Any, ov: SpindleOverview, *, n_modes: int, speed_max_rpm
         {k: (ov.speeds_rpm, v) for k, v in ov.amplitude_um.items()}, limit_um=limit_um))
 
 
-__all__ = ["QUANTITY_HEADER", "SpindleOverview", "check_overview", "overview_memory",
-           "quantity_rows", "spindle_overview", "write_overview"]
+@dataclass(frozen=True)
+class ReportTable:
+    """``[report]`` of a spindle report."""
+
+    designs: dict[str, tuple[float, float, float]] | None = None
+    include_box: bool = False
+    n_speeds: int = 400
+    campbell_speeds: int = 25
+    n_modes: int = 8
+    n_campbell: int = 4
+
+    def __post_init__(self) -> None:
+        if self.designs is not None and not self.designs:
+            raise ValueError("designs = {} is not allowed: give label = [F, L, D] entries")
+        for label in self.designs or ():
+            check_label("designs", label)
+        check_int("n_speeds", self.n_speeds, minimum=2)
+        check_int("campbell_speeds", self.campbell_speeds, minimum=2)
+        check_int("n_modes", self.n_modes, minimum=1)
+        check_int("n_campbell", self.n_campbell, minimum=1)
+
+
+@dataclass(frozen=True)
+class SpindleReportConfig:
+    """The tables of a ``spindle_report`` config."""
+
+    spindle: SpindleTable = field(default_factory=SpindleTable)
+    report: ReportTable = field(default_factory=ReportTable)
+
+
+@dataclass(frozen=True, eq=False)
+class SpindleReportPlan:
+    """The spindle, its designs (label → x, checked) and the ``[report]`` table."""
+
+    spindle: Any
+    designs: dict[str, np.ndarray]
+    report: ReportTable
+
+
+def build_spindle_report(c: SpindleReportConfig, base_dir: str | Path = "."
+                         ) -> SpindleReportPlan:
+    """The checked plan of a ``spindle_report`` config: the designs in the design box, the
+    modes and the memory of the figures (errors name the dotted path)."""
+    sp = build_spindle(c.spindle, base_dir)
+    designs: dict[str, np.ndarray] = {}
+    for label, x in (c.report.designs or {"baseline": tuple(sp.baseline.tolist())}).items():
+        try:
+            designs[label] = sp.design_map.check(np.asarray(x, dtype=float))
+        except ValueError as exc:
+            raise ValueError(f"report.designs.{label}: {exc}") from None
+    if c.report.include_box:
+        designs.update(sp.design_map.corners())
+    r = c.report
+    check_overview(sp, designs, n_speeds=r.n_speeds, campbell_speeds=r.campbell_speeds,
+                   n_modes=r.n_modes, where="report")
+    return SpindleReportPlan(sp, designs, r)
+
+
+def write_spindle_report(out: Any, p: SpindleReportPlan, ov: SpindleOverview) -> dict[str, Any]:
+    """``summary.csv`` (the design quantities) and :func:`write_overview`'s tables and figures
+    into ``out`` (a run folder); returns the summary."""
+    rows = quantity_rows(ov)
+    out.write_csv("summary.csv", QUANTITY_HEADER, rows)
+    write_overview(out, ov, n_modes=p.report.n_modes,
+                   speed_max_rpm=p.spindle.geometry.speed_max_rpm, campbell_csv=True)
+    return {"designs": len(ov.labels),
+            "summary": [dict(zip(QUANTITY_HEADER, r, strict=True)) for r in rows]}
+
+
+__all__ = ["QUANTITY_HEADER", "ReportTable", "SpindleOverview", "SpindleReportConfig",
+           "SpindleReportPlan", "build_spindle_report", "check_overview", "overview_memory",
+           "quantity_rows", "spindle_overview", "write_overview", "write_spindle_report"]

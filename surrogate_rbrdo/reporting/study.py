@@ -8,7 +8,7 @@ a timing column, so reruns with one seed give byte-identical tables).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -25,6 +25,7 @@ from surrogate_rbrdo.reporting.plots_optimization import (
     plot_pareto_fronts,
 )
 from surrogate_rbrdo.reporting.spindle import spindle_overview, write_overview
+from surrogate_rbrdo.study.plan import StudyPlan, final_models
 from surrogate_rbrdo.study.problem import DESIGN_NAMES
 from surrogate_rbrdo.study.stages import (
     Optimisation,
@@ -93,26 +94,6 @@ def verification_rows(ver: Verification, speed_range_rpm: tuple[float, float] = 
                                                           strict=True)})
         rows.append(row)
     return rows
-
-
-def verification_fe(rows: Iterable[Mapping[str, str]]) -> dict[str, dict[str, Any]]:
-    """``verification.csv`` read back (rows as ``csv.DictReader`` gives them): per design,
-    ``x`` and the FE model's ``n``, ``mean``, ``std`` (m), ``pf``, ``pf_ci`` (fractions).
-
-    >>> row = {"design": "baseline", "preload_N": "2000", "span_mm": "465.8",
-    ...        "diameter_mm": "65", "mean_um_fe": "21", "std_um_fe": "9.5", "pf_pct_fe": "50",
-    ...        "pf_ci_low_pct_fe": "40", "pf_ci_high_pct_fe": "60", "n_theta_fe": "100"}
-    >>> verification_fe([row])["baseline"]["pf_ci"]
-    (0.4, 0.6)
-    """
-    out = {}
-    for r in rows:
-        out[r["design"]] = {
-            "x": tuple(float(r[k]) for k in DESIGN_NAMES), "n": int(r["n_theta_fe"]),
-            "mean": float(r["mean_um_fe"]) * 1e-6, "std": float(r["std_um_fe"]) * 1e-6,
-            "pf": float(r["pf_pct_fe"]) / 100,
-            "pf_ci": (float(r["pf_ci_low_pct_fe"]) / 100, float(r["pf_ci_high_pct_fe"]) / 100)}
-    return out
 
 
 def strategy_rows(opt: Optimisation, ver: Verification) -> list[dict[str, Any]]:
@@ -294,7 +275,53 @@ def study_meta(problem: Any, options: Any, trained: Any, design_model: Any, opt:
             else {}}
 
 
+#: the verification columns printed in the terminal summary
+SUMMARY_COLUMNS = ("design", "preload_N", "span_mm", "diameter_mm", "mean_um_fe", "std_um_fe",
+                   "pf_pct_fe", "mean_um_surrogate", "std_um_surrogate", "pf_pct_surrogate")
+
+
+def write_study_report(out: Any, p: StudyPlan, results: Mapping[str, Any]) -> dict[str, Any]:
+    """Every table, figure and JSON file of a study into ``out`` (the module docstring), from
+    the stage results by name (``surrogate``, ``design_model``, ``optimise``, ``refine``,
+    ``verify``); returns the summary (``summary`` rows, ``mbr``, ``compromises``, ``meta``)."""
+    sur, opt = final_models(results)
+    ver, w = results["verify"], p.optimization.weights
+    out.write_json("surrogate_info.json", {**sur.to_dict(), **dict(sur.model.info)})
+    if results["design_model"] is not None:
+        out.write_json("design_model_validation.json", results["design_model"].validation)
+    if results["refine"].rounds:
+        out.write_rows("refine.csv", refine_rows(results["refine"].rounds))
+    fronts = front_rows(opt)
+    if fronts:
+        out.write_rows("pareto_fronts.csv", fronts)
+    front_figures(out, opt, w, quantity=p.problem.response.label, model_in_loop=sur.in_loop,
+                  baseline=p.problem.baseline)
+    g = p.problem.spindle.geometry
+    ver_rows = verification_rows(ver, (g.speed_min_rpm, g.speed_max_rpm))
+    out.write_rows("verification.csv", ver_rows)
+    if ver.fronts is not None:
+        out.write_rows("front_verification.csv", ver.fronts.rows(DESIGN_NAMES))
+    out.write_rows("strategy_comparison.csv", strategy_rows(opt, ver))
+    mbr = mbr_rows(opt, ver, w, sur.in_loop)
+    if mbr:
+        out.write_rows("mbr.csv", mbr)
+    comp = compromise_rows(opt, w)
+    out.write_rows("compromises.csv", comp)
+    rep = p.report
+    spindle_figures(out, p.problem.spindle, spotlight(opt, ver), n_speeds=rep.n_speeds,
+                    campbell_speeds=rep.campbell_speeds, n_modes=rep.n_modes,
+                    limit_um=p.problem.limit.threshold * 1e6)
+    meta = study_meta(p.problem, p.optimization, *(results[k] for k in (
+        "surrogate", "design_model", "optimise", "refine", "verify")))
+    if p.theta_source is not None:       # [uncertainty] from: the identified model's origin
+        meta["uncertainty_from"] = p.theta_source
+    out.write_json("study_meta.json", meta)
+    summary = [{k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.items()
+                if k in SUMMARY_COLUMNS} for r in ver_rows]
+    return {"summary": summary, "mbr": mbr, "compromises": comp, "meta": meta}
+
+
 __all__ = ["compromise_rows", "critical_columns", "front_figures", "front_rows", "mbr_rows",
            "refine_rows", "spindle_figures", "spotlight", "strategy_rows", "study_meta",
-           "verification_fe",
+           "write_study_report",
            "verification_rows"]

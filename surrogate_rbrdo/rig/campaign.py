@@ -122,15 +122,17 @@ class CampaignOptions:
             object.__setattr__(self, "runup", None)
         if self.runup is not None:
             a, b, d = self.runup
-            if not (0 < a < b and d > 0):
+            if not (0 < a < b <= 1e6 and 0 < d <= 1e5):
                 raise ValueError(f"runup = {self.runup} is not allowed: need 0 < start_rpm < "
-                                 "end_rpm and duration_s > 0")
+                                 "end_rpm <= 1e6 and 0 < duration_s <= 1e5")
             object.__setattr__(self, "runup", (float(a), float(b), float(d)))
         if self.trial_unbalance is not None:
             pos, U, ph = (float(v) for v in self.trial_unbalance)
-            if not (np.isfinite(pos) and np.isfinite(ph) and U > 0 and np.isfinite(U)):
-                raise ValueError(f"trial_unbalance = {self.trial_unbalance} is not allowed: "
-                                 "need (position_mm, magnitude_kgm > 0, phase_deg), finite")
+            # a trial mass is a few grams at the rotor's radius: 1e-2 kg m is 100 g at 100 mm
+            if not (abs(pos) <= 1e4 and abs(ph) <= 360.0 and 0 < U <= 1e-2):
+                raise ValueError(f"trial_unbalance = {list(self.trial_unbalance)} is not "
+                                 "allowed: need (position_mm in [-1e4, 1e4], magnitude_kgm in "
+                                 "(0, 1e-2], phase_deg in [-360, 360])")
             object.__setattr__(self, "trial_unbalance", (pos, U, ph))
 
     def to_dict(self) -> dict[str, Any]:

@@ -33,8 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.rig.campaign import CampaignOptions
+from surrogate_rbrdo.core.errors import ModelError
+from surrogate_rbrdo.core.memory import require_memory
+from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, stability_speeds
 from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.simulate import check_nominal_stable
 from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth
 from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict
 from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -100,4 +103,30 @@ class RigTable(RigTruthTable):
                          self.figures)
 
 
-__all__ = ["RigConfig", "RigTable", "RigTruthTable"]
+@dataclass(frozen=True, eq=False)
+class RigPlan:
+    """A checked campaign: the truth and options (``rig``) and the disk it needs
+    (``disk_need = (field, value, bytes, what)``, checked against the results root)."""
+
+    rig: RigConfig
+    disk_need: tuple[str, Any, float, str]
+
+
+def rig_plan(cfg: RigConfig, effects: Any = ()) -> RigPlan:
+    """The checks before work (the nominal truth stable at the campaign's speeds, memory) and
+    the disk the campaign needs, for a truth and campaign made into objects (``[rig]``'s
+    ``effects`` named in the error)."""
+    sp = stability_speeds(cfg.options)       # the campaign checks them all for each tool
+    try:
+        check_nominal_stable(cfg.truth, np.linspace(sp[0], sp[-1], 12))
+    except ModelError as exc:
+        raise ValueError(f"rig.effects = {list(effects)} is not allowed: {exc}") from None
+    o, fp = cfg.options, footprint(cfg.options)
+    require_memory(f"rig.campaign.{fp.memory_by}", getattr(o, fp.memory_by), fp.memory_bytes,
+                   "its records (a run's steady records, a ramp or an impact held at once)")
+    return RigPlan(cfg, ("rig.campaign.repeats", o.repeats, fp.disk_bytes,
+                         f"{fp.n_records} records ({len(o.speeds_rpm)} speeds x repeats x "
+                         f"{o.duration_s:g} s, ramps, impacts)"))
+
+
+__all__ = ["RigConfig", "RigPlan", "RigTable", "RigTruthTable", "rig_plan"]

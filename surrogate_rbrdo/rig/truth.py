@@ -105,9 +105,10 @@ class Variability:
             check_range(f"variability.{name}", getattr(self, name), 0.0, 1.0)
         check_positive("variability.balance_grade_mm_s", self.balance_grade_mm_s, allow_zero=True)
         lo, hi = self.unbalance_fraction
-        if not (0.0 <= lo <= hi):
-            raise ValueError(f"variability.unbalance_fraction = {self.unbalance_fraction} is "
-                             "not allowed: need 0 <= lo <= hi")
+        if not (0.0 <= lo <= hi <= 10.0):    # 10 x the ISO limit: not a balanced rotor
+            raise ValueError(f"variability.unbalance_fraction = {self.unbalance_fraction}"
+                             " is not allowed: need 0 <= lo <= hi <= 10 (fractions of the ISO "
+                             "21940-11 permissible unbalance)")
         object.__setattr__(self, "unbalance_fraction", (float(lo), float(hi)))
 
     @classmethod

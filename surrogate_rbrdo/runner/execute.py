@@ -22,14 +22,13 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from surrogate_rbrdo.core.files import json_default, share_tree, tracked_inputs
+from surrogate_rbrdo.core.files import json_default, require_disk, share_tree, tracked_inputs
 from surrogate_rbrdo.core.memory import check_memory, table_needs
 from surrogate_rbrdo.core.provenance import changes_since, first_difference
 from surrogate_rbrdo.core.schema import load_toml, parse
 from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.runner.kinds import Kind, StageContext, discover
-from surrogate_rbrdo.runner.runfolder import RunFolder, check_root
-from surrogate_rbrdo.runner.tables import ExperimentTable, require_disk
+from surrogate_rbrdo.runner.runfolder import RunFolder, check_name, check_root
 
 
 class Terminated(BaseException):  # noqa: N818 - a signal, like KeyboardInterrupt
@@ -43,6 +42,25 @@ class RunFailed(Exception):
     def __init__(self, run: RunFolder, stage: str, error: BaseException) -> None:
         self.run, self.stage, self.error = run, stage, error
         super().__init__(f"{type(error).__name__}: {error}")
+
+
+@dataclass(frozen=True)
+class ExperimentTable:
+    """``[experiment]``: ``name`` (the results sub-folder), ``kind``, ``seed``,
+    ``results_dir`` (the results root, relative to the config file; default ``results`` in
+    the working directory), ``description``."""
+
+    name: str
+    kind: str
+    seed: int = 0
+    results_dir: str | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        check_name("name", self.name)
+        check_int("seed", self.seed, minimum=0)
+        if self.results_dir is not None and not self.results_dir.strip():
+            raise ValueError(f"results_dir = {self.results_dir!r} is not allowed: give a folder")
 
 
 @dataclass(frozen=True)
@@ -194,4 +212,4 @@ def run_experiment(config_path: str | Path, *, results_dir: str | Path | None = 
     return run
 
 
-__all__ = ["Prepared", "RunFailed", "Terminated", "prepare", "run_experiment"]
+__all__ = ["ExperimentTable", "Prepared", "RunFailed", "Terminated", "prepare", "run_experiment"]

@@ -23,7 +23,6 @@ Rules (tested in ``tests/runner/test_runfolder.py``):
 from __future__ import annotations
 
 import io
-import json
 import os
 import pickle
 import platform
@@ -44,6 +43,7 @@ from surrogate_rbrdo.core.files import (
     csv_text,
     json_text,
     make_dirs,
+    read_meta,
     rows_text,
 )
 from surrogate_rbrdo.core.provenance import environment
@@ -60,14 +60,6 @@ def check_name(where: str, value: Any) -> str:
                          "'.', '_' or '-', starting with a letter or digit (it names a folder "
                          "under the results root)")
     return value
-
-
-def read_meta(path: Path) -> dict[str, Any] | None:
-    """``meta.json`` of a run folder (``None``: none or unreadable)."""
-    try:
-        return json.loads((path / "meta.json").read_text())
-    except (OSError, ValueError):
-        return None
 
 
 def _alive(meta: Mapping[str, Any]) -> bool:

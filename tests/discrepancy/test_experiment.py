@@ -21,7 +21,7 @@ from surrogate_rbrdo.discrepancy.experiment import (
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
 from surrogate_rbrdo.rig.config import RigTable
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 
 from .conftest import campaign_data
 

@@ -16,7 +16,7 @@ from surrogate_rbrdo.discrepancy.report import findings, write_run
 from surrogate_rbrdo.discrepancy.search import slot_estimate
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 from surrogate_rbrdo.spindle.effects import HousingFlexibility
 
 from .conftest import campaign_data

@@ -1074,6 +1074,67 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
                                                      '"complete"}'}, [],
      r"data.path = '.*m' is not allowed: a run folder that is not a finished rig campaign "
      r"\(meta.json: kind 'study'"),
+    # ------------------------------------------------------------------ finite but absurd
+    # (the unit a field's name carries bounds it, core.magnitudes; unitless factors by range)
+    ("absurd_stiffness_mean", S("uncertainty", "mean = [1e300, 1.0]"), {}, [],
+     r"uncertainty.mean\[0\] = 1e\+300 is not allowed: a stiffness factor's mean must lie in "
+     r"\[0.1, 10.0\]"),
+    ("absurd_stiffness_mean_20", S("uncertainty", "mean = [1.0, 20.0]"), {}, [],
+     r"uncertainty.mean\[1\] = 20.0 is not allowed: .*must lie in \[0.1, 10.0\]"),
+    ("absurd_stiffness_std", S("uncertainty", "distribution = 'lognormal'\nstd = [1e300, 0.05]"),
+     {}, [], r"uncertainty.std\[0\] = 1e\+300 is not allowed: must be at most 1 x the mean"),
+    ("absurd_thermal_max", PU("uncertainty", "thermal_max = 1e300"), {}, [],
+     r"uncertainty.thermal_max = 1e\+300 is not allowed: must lie in \[0.0, 5.0\]"),
+    ("absurd_delta_lim", S("limit", "delta_lim_um = 1e300"), {}, [],
+     r"limit.delta_lim_um = 1e\+300 is not allowed: must be at most 10000 µm in magnitude"),
+    ("absurd_yield", S("deterministic", "yield_strength_pa = 1e300"), {}, [],
+     r"deterministic.yield_strength_pa = 1e\+300 is not allowed: must be at most 1e\+12 Pa"),
+    ("absurd_resonance_factor", S("deterministic", "factor = 1e300"), {}, [],
+     r"deterministic.factor = 1e\+300 is not allowed: must lie in \(0.0, 10.0\)"),
+    ("absurd_search_factor", S("deterministic", "search_factor = 1e300"), {}, [],
+     r"deterministic.search_factor = 1e\+300 is not allowed: must lie in \[1.0, 10.0\]"),
+    ("absurd_omega_max", S("deterministic", "omega_max_rpm = 1e300"), {}, [],
+     r"deterministic.omega_max_rpm = 1e\+300 is not allowed: must be at most 1e\+06 rpm"),
+    ("absurd_unbalance_speed", PU("uncertainty.unbalance", "speed_rpm = 1e300"), {}, [],
+     r"uncertainty.unbalance.speed_rpm = 1e\+300 is not allowed: must be at most 1e\+06 rpm"),
+    ("absurd_rel_tol", V("validation", "rel_tol = 1e300"), {}, [],
+     r"validation.rel_tol = 1e\+300 is not allowed: must be at most 1"),
+    ("absurd_campaign_speed", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [6000.0, 1e300]"),
+     {}, [], r"rig.campaign.speeds_rpm\[1\] = 1e\+300 is not allowed: must be at most 1e\+06 "
+     r"rpm in magnitude"),
+    ("absurd_duration", _sub(RIG, "duration_s = 0.1", "duration_s = 1e300"), {}, [],
+     r"rig.campaign.duration_s = 1e\+300 is not allowed: must be at most 1e\+06 s"),
+    ("absurd_runup", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]", "runup = [1000.0, 1e300, 0.5]"),
+     {}, [], r"rig.campaign.runup = .* is not allowed: need 0 < start_rpm < end_rpm <= 1e6"),
+    ("absurd_trial_unbalance", G("rig.campaign", "trial_unbalance = [0.0, 1e300, 0.0]"), {},
+     [], r"rig.campaign.trial_unbalance = \[0.0, 1e\+300, 0.0\] is not allowed: need "
+     r"\(position_mm in \[-1e4, 1e4\], magnitude_kgm in \(0, 1e-2\]"),
+    ("absurd_probe_gap", G("rig.sensors.probe", "gap_m = 1e300"), {}, [],
+     r"rig.sensors.probe.gap_m = 1e\+300 is not allowed: must be at most 10 m in magnitude"),
+    ("absurd_probe_sensitivity", G("rig.sensors.probe", "sensitivity_V_per_m = 1e300"), {}, [],
+     r"rig.sensors.probe.sensitivity_V_per_m = 1e\+300 is not allowed: must be at most 1e\+06 "
+     r"V/m"),
+    ("absurd_gain_sd", G("rig.sensors.probe", "gain_error_sd = 1e300"), {}, [],
+     r"rig.sensors.probe.gain_error_sd = 1e\+300 is not allowed: must be at most 1 in "
+     r"magnitude \(a relative standard deviation above 100 %\)"),
+    ("absurd_balance_grade_rig", G("rig.variability", "balance_grade_mm_s = 1e300"), {}, [],
+     r"rig.variability.balance_grade_mm_s = 1e\+300 is not allowed: must be at most 4000 mm/s"),
+    ("absurd_unbalance_fraction", G("rig.variability", "unbalance_fraction = [0.5, 1e300]"),
+     {}, [], r"rig.variability.unbalance_fraction = \(0.5, 1e\+300\) is not allowed: need 0 <= "
+     r"lo <= hi <= 10"),
+    ("absurd_counter_clock", G("rig.sensors.keyphasor", "counter_clock_hz = 1e300"), {}, [],
+     r"rig.sensors.keyphasor.counter_clock_hz = 1e\+300 is not allowed: must be at most 1e\+09 "
+     r"Hz"),
+    ("absurd_validation_rated", W("validation", "rated_speed_rpm = 1e300"), {}, [],
+     r"validation.rated_speed_rpm = 1e\+300 is not allowed: must be at most 1e\+06 rpm"),
+    ("absurd_validation_duration", W("validation", "duration_s = 1e300"), {}, [],
+     r"validation.duration_s = 1e\+300 is not allowed: must be at most 1e\+06 s"),
+    ("absurd_ident_speed", ID("convergence_speed_rpm = 1e300"), {}, [],
+     r"identification.convergence_speed_rpm = 1e\+300 is not allowed: must be at most 1e\+06 "
+     r"rpm"),
+    ("absurd_geometry_length", _sub(S("spindle", "geometry = 'g.toml'"), "", ""),
+     {"g.toml": GEOMETRY_OK.replace("length_mm = 300.0", "length_mm = 1e300")}, [],
+     r"geometry.sections\[1\].length_mm = 1e\+300 is not allowed: must be at most 10000 mm"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.runner.tables import DeterministicTable
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.study import credible_problem
+from surrogate_rbrdo.study.config import DeterministicTable
 
 CRED = credible_problem()
 

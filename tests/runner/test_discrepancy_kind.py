@@ -13,11 +13,12 @@ from pathlib import Path
 import pytest
 
 from surrogate_rbrdo.core.schema import parse
+from surrogate_rbrdo.reporting import plots_discrepancy
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import RunFailed, prepare
 from surrogate_rbrdo.runner.experiments import discrepancy as kind
 from surrogate_rbrdo.runner.runfolder import read_meta
-from surrogate_rbrdo.runner.tables import SpindleTable, build_spindle
+from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -111,7 +112,7 @@ def test_resume_does_not_redo_finished_stages(tmp_path, monkeypatch, housing_run
     def broken(*a, **k):
         raise RuntimeError("figures failed")
 
-    monkeypatch.setattr(kind, "plot_all", broken)
+    monkeypatch.setattr(plots_discrepancy, "plot_all", broken)
     with pytest.raises(RunFailed):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False)
     monkeypatch.undo()

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.loop import steps as loop_steps
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.experiments import end_to_end as kind
@@ -124,7 +125,7 @@ def _stop(*args, **kwargs):
 
 def test_resume_continues_at_the_first_unfinished_stage(tmp_path, monkeypatch):
     cfg = _write(tmp_path)
-    monkeypatch.setattr(kind, "build_theta", _stop)
+    monkeypatch.setattr(loop_steps, "build_theta", _stop)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False)
     path = tmp_path / "res" / "e2e_tiny" / "r"

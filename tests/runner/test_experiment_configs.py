@@ -9,7 +9,7 @@ import pytest
 
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.kinds import discover
-from surrogate_rbrdo.runner.tables import UncertaintyTable, build_inputs
+from surrogate_rbrdo.study.config import UncertaintyTable, build_inputs
 
 EXPERIMENTS_DIR = Path(__file__).resolve().parents[2] / "experiments"
 CONFIGS = sorted(EXPERIMENTS_DIR.glob("*.toml"))

@@ -16,6 +16,7 @@ from surrogate_rbrdo.identification import (
     identify_records,
     stiffness_block_from,
 )
+from surrogate_rbrdo.reporting import plots_identification
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import prepare
 from surrogate_rbrdo.runner.experiments import identification as kind
@@ -115,7 +116,7 @@ def test_resume_does_not_redo_the_identification(tmp_path, rig_results, monkeypa
     def stop(*args, **kwargs):
         raise _Stop()
 
-    monkeypatch.setattr(kind, "table_rows", stop)        # interrupted in the report
+    monkeypatch.setattr(plots_identification, "table_rows", stop)   # interrupted in the report
     with pytest.raises(KeyboardInterrupt):
         run_experiment(cfg, results_dir=tmp_path / "res", run_id="i1", progress=False)
     path = tmp_path / "res" / "ident" / "i1"

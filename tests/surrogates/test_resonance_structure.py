@@ -11,7 +11,6 @@ import pytest
 
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.runner.experiments.study import surrogate_options
 from surrogate_rbrdo.sampling.fe import fe_cache
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
 from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -21,6 +20,7 @@ from surrogate_rbrdo.surrogates.structured import (
     ResonanceSurrogate,
     band_points,
     fit_resonance_surrogate,
+    surrogate_options,
     train_surrogate,
 )
 from surrogate_rbrdo.surrogates.structured.sdof import (

@@ -23,6 +23,7 @@ from surrogate_rbrdo.surrogates.structured.base import (
     TrainedSurrogate,
     register_structure,
     structure_of,
+    surrogate_options,
     train_surrogate,
 )
 from surrogate_rbrdo.surrogates.structured.full import FEOptions, FullModel
@@ -49,5 +50,6 @@ __all__ = [
     "JointDOEOptions", "ResonanceOptions", "ResonanceSurrogate", "SamplingOptions",
     "Structure", "SubstructureOptions", "SubstructureSurrogate", "SurrogateModel",
     "TrainedSurrogate", "band_points", "fit_resonance_surrogate", "fit_substructure_surrogate",
-    "register_structure", "sample_resonance", "structure_of", "train_surrogate",
+    "register_structure", "sample_resonance", "structure_of", "surrogate_options",
+    "train_surrogate",
 ]

@@ -23,6 +23,7 @@ import numpy as np
 from surrogate_rbrdo.core.counting import CallCounter
 from surrogate_rbrdo.core.protocols import LimitState, Prediction
 from surrogate_rbrdo.core.registry import Registry
+from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.core.validate import check_choice, check_int
 from surrogate_rbrdo.sampling.evaluate import BACKENDS
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
@@ -213,5 +214,26 @@ def train_surrogate(spindle: Any, inputs: Any, limit: LimitState, options: Any, 
                        counter=counter, progress=progress, label=label)
 
 
+def surrogate_options(table: Mapping[str, Any], response: ResponseSpec, where: str) -> Any:
+    """The options of the structure a ``[surrogate]`` table selects (``structure``, default
+    ``"global"``), checked against ``response``; errors name ``<where>.<field>``.
+
+    >>> surrogate_options({"structure": "fe"}, ResponseSpec(), "surrogate").structure
+    'fe'
+    """
+    table = dict(table)
+    name = table.pop("structure", "global")
+    if not isinstance(name, str) or name not in set(STRUCTURES):
+        raise ValueError(f"{where}.structure = {name!r} is not allowed: must be one of "
+                         f"{sorted(STRUCTURES)}")
+    options = parse(STRUCTURES[name].options, table, where)
+    try:
+        options.check_response(response)
+    except ValueError as exc:
+        raise ValueError(f"{where}.{exc}") from None
+    return options
+
+
 __all__ = ["STRUCTURES", "SamplingOptions", "Structure", "SurrogateModel", "TrainedSurrogate",
-           "kriging_bytes", "register_structure", "structure_of", "train_surrogate"]
+           "kriging_bytes", "register_structure", "structure_of", "surrogate_options",
+           "train_surrogate"]

@@ -1,36 +1,28 @@
-"""Config tables every kind may use, and the objects they describe.
+"""The problem tables of a study config and the objects they describe: ``[uncertainty]``
+(θ, :func:`build_theta`), ``[limit]`` and ``[deterministic]``.
 
-``[experiment]`` (:class:`ExperimentTable`), ``[spindle]`` (:class:`SpindleTable` →
-:func:`build_spindle`), ``[uncertainty]`` (→ :func:`build_inputs`), ``[limit]``,
-``[response]`` and ``[deterministic]`` (``require_memory``/``require_disk``, re-exported from
-``core``, refuse sizes whose arrays or files would not fit before any work starts). Each
-table is a frozen dataclass checked by :func:`~surrogate_rbrdo.core.schema.parse`; the
+Each table is a frozen dataclass checked by :func:`~surrogate_rbrdo.core.schema.parse`; the
 builders raise ``ValueError`` naming the dotted path of the field.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
 from pydantic import AliasChoices, Field
 
-from surrogate_rbrdo.core.files import require_disk
-from surrogate_rbrdo.core.memory import available_memory, require_memory
 from surrogate_rbrdo.core.protocols import LimitState
-from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
+from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
 from surrogate_rbrdo.formulations import DeterministicOptions
 from surrogate_rbrdo.identification.study import stiffness_block_from
-from surrogate_rbrdo.runner.runfolder import check_name
 from surrogate_rbrdo.spindle.assembly import RPM
-from surrogate_rbrdo.spindle.effects import effects_from_data
 from surrogate_rbrdo.spindle.evaluate import ResponseSpec
-from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry, check_balance_grade
 from surrogate_rbrdo.spindle.practice import PracticeSpec
-from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
+from surrogate_rbrdo.spindle.reference import ReferenceSpindle
 from surrogate_rbrdo.study.constraints import spindle_constraints
 from surrogate_rbrdo.study.problem import (
     RESIDUAL_STD,
@@ -44,108 +36,46 @@ from surrogate_rbrdo.uncertainty import stiffness_factors
 #: what the deterministic strategy designs against (``[deterministic] design_basis``)
 DESIGN_BASES = ("unbalance_cases", "median")
 
-
-@dataclass(frozen=True)
-class ExperimentTable:
-    """``[experiment]``: ``name`` (the results sub-folder), ``kind``, ``seed``,
-    ``results_dir`` (the results root, relative to the config file; default ``results`` in
-    the working directory), ``description``."""
-
-    name: str
-    kind: str
-    seed: int = 0
-    results_dir: str | None = None
-    description: str = ""
-
-    def __post_init__(self) -> None:
-        check_name("name", self.name)
-        check_int("seed", self.seed, minimum=0)
-        if self.results_dir is not None and not self.results_dir.strip():
-            raise ValueError(f"results_dir = {self.results_dir!r} is not allowed: give a folder")
-
-
-@dataclass(frozen=True)
-class DesignMapTable:
-    """``[spindle.design_map]``: which bearing the preload sets, which sections the span and
-    diameter set, and the design box."""
-
-    preload_bearing: str = "front"
-    span_tag: str = "span"
-    lower: tuple[float, float, float] = (1000.0, 300.0, 50.0)
-    upper: tuple[float, float, float] = (3000.0, 750.0, 80.0)
-
-
-@dataclass(frozen=True)
-class SpindleTable:
-    """``[spindle]``: ``geometry`` (``"credible"``: the reference problem's spindle,
-    ``"reference"``: the paper-box spindle of the synthetic benchmarks, or a TOML/JSON file,
-    relative to the config), ``balance_grade_mm_s`` (the fixed in-phase unbalance of the
-    built-in geometries), ``effects`` (replace the
-    default physical effects: ``[{name = ..., <params>}]``), ``design_map``, ``baseline``
-    (``[F N, L mm, D mm]``), ``theta_bearings`` (the bearings θ scales)."""
-
-    geometry: str = "reference"
-    balance_grade_mm_s: float | None = None
-    effects: tuple[dict[str, Any], ...] | None = None
-    design_map: DesignMapTable | None = None
-    baseline: tuple[float, float, float] | None = None
-    theta_bearings: tuple[str, ...] | None = None
-
-    def __post_init__(self) -> None:
-        if not self.geometry or self.geometry != self.geometry.strip():
-            raise ValueError(f"geometry = {self.geometry!r} is not allowed: give a built-in "
-                             "spindle (e.g. 'reference') or a .toml/.json file")
-        if self.balance_grade_mm_s is not None:
-            check_balance_grade("balance_grade_mm_s", self.balance_grade_mm_s)
-
-
-def _geometry_file(path: Path) -> SpindleGeometry:
-    where = f"spindle.geometry file {str(path)!r}"
-    geo = SpindleGeometry.load(path, "spindle.geometry file")
-    if not any(u.magnitude_kgm > 0 for u in geo.unbalances):
-        raise ValueError(f"{where}: every unbalance is zero (or there is none): the unbalance "
-                         "response would be 0 everywhere; give unbalances[].magnitude_kgm > 0")
-    return geo
-
-
-def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpindle:
-    """The spindle of a ``[spindle]`` table (every field checked, errors name it)."""
-    if t.geometry in ("reference", "credible"):
-        grade = 2.5 if t.balance_grade_mm_s is None else t.balance_grade_mm_s
-        factory = reference_spindle if t.geometry == "reference" else credible_spindle
-        sp = factory(balance_grade_mm_s=check_positive("spindle.balance_grade_mm_s", grade))
-    else:
-        if t.balance_grade_mm_s is not None:
-            raise ValueError("spindle.balance_grade_mm_s applies only to geometry = 'reference' "
-                             "or 'credible'; give the unbalances in the geometry file")
-        p = Path(t.geometry)
-        geometry = _geometry_file(p if p.is_absolute() else Path(base_dir) / p)
-        sp = ReferenceSpindle(geometry, (), DesignMap(), np.array(DesignMap().lower))
-        sp = replace(sp, baseline=np.mean(sp.design_map.bounds, axis=1))
-    if t.effects is not None:
-        sp = replace(sp, effects=effects_from_data(t.effects, "spindle.effects"))
-    if t.design_map is not None:
-        try:
-            sp = replace(sp, design_map=DesignMap(**vars(t.design_map)))
-        except ValueError as exc:
-            raise ValueError(f"spindle.design_map: {exc}") from None
-    if t.baseline is not None:
-        try:
-            sp = replace(sp, baseline=sp.design_map.check(np.asarray(t.baseline, float)))
-        except ValueError as exc:
-            raise ValueError(f"spindle.baseline: {exc}") from None
-    if t.theta_bearings is not None:
-        sp = replace(sp, theta_bearings=tuple(t.theta_bearings))
-    try:
-        return sp.check()   # design map, effects and θ bearings against the geometry
-    except ValueError as exc:
-        raise ValueError(f"spindle.{exc}") from None
-
-
 #: speeds at which an identified θ is evaluated for a peak over the speed range (evenly
 #: spaced over its identified part; θ is their moment-matched mixture,
 #: identification.stiffness_block_from)
 PEAK_THETA_SPEEDS = 25
+
+
+#: the range of a stiffness factor's mean: θ scales a bearing's nominal stiffness, and a bearing
+#: ten times softer or stiffer than its law is another bearing (change the law), not an
+#: uncertainty about it; identified factors lie within 0.5-2 (docs/identification.md)
+FACTOR_MEAN_RANGE = (0.1, 10.0)
+#: the largest coefficient of variation of a stiffness factor (100 %)
+FACTOR_MAX_COV = 1.0
+#: the largest relative thermal preload growth τ (F(1 + τ)): measured growth at top speed is
+#: at most a few hundred percent (e.g. Li & Shin 2004)
+THERMAL_MAX = 5.0
+
+
+def check_factor_moments(mean: tuple[float, ...] | None, std: tuple[float, ...] | None
+                         ) -> None:
+    """The stiffness factors' means within :data:`FACTOR_MEAN_RANGE` and their standard
+    deviations at most :data:`FACTOR_MAX_COV` times the mean (1 where not given).
+
+    >>> try:
+    ...     check_factor_moments((1.0, 1e300), None)
+    ... except ValueError as exc:
+    ...     print(str(exc)[:82])
+    mean[1] = 1e+300 is not allowed: a stiffness factor's mean must lie in [0.1, 10.0]
+    """
+    lo, hi = FACTOR_MEAN_RANGE
+    for i, m in enumerate(mean or ()):
+        if m > 0 and not lo <= m <= hi:     # m <= 0: stiffness_factors says why
+            raise ValueError(f"mean[{i}] = {m!r} is not allowed: a stiffness factor's mean must "
+                             f"lie in [{lo}, {hi}] (θ scales the bearing's nominal stiffness; a "
+                             "bearing 10 times softer or stiffer is another bearing law)")
+    for i, s in enumerate(std or ()):
+        m = mean[i] if mean is not None and i < len(mean) else 1.0
+        if s > FACTOR_MAX_COV * m:
+            raise ValueError(f"std[{i}] = {s!r} is not allowed: must be at most "
+                             f"{FACTOR_MAX_COV:g} x the mean ({FACTOR_MAX_COV * m:g}): a "
+                             "stiffness factor's coefficient of variation above 100 %")
 
 
 @dataclass(frozen=True)
@@ -172,6 +102,8 @@ class UncertaintyTable:
     unbalance: UnbalanceOptions | None = None
 
     def __post_init__(self) -> None:
+        check_factor_moments(self.mean, self.std)
+        check_range("thermal_max", self.thermal_max, 0.0, THERMAL_MAX)
         if self.from_ is None:
             return
         if not self.from_.strip():
@@ -311,6 +243,9 @@ class DeterministicTable:
     def __post_init__(self) -> None:
         if self.design_basis is not None:
             check_choice("design_basis", self.design_basis, DESIGN_BASES)
+        # f_n1 >= factor x top speed: API RP 684 asks margins of 10-26 %; 10 x is no guard
+        check_range("factor", self.factor, 0.0, 10.0, inclusive=False)
+        check_range("search_factor", self.search_factor, 1.0, 10.0)
 
     def design_theta(self, inputs: Any, response: ResponseSpec) -> np.ndarray | None:
         """The deterministic strategy's design-basis θ rows (``None``: the image of u = 0)."""
@@ -352,7 +287,6 @@ class DeterministicTable:
                              ) from None
 
 
-__all__ = ["DesignMapTable", "DeterministicTable", "ExperimentTable", "LimitTable",
-           "PEAK_THETA_SPEEDS", "SpindleTable", "UncertaintyTable", "available_memory",
-           "build_inputs", "build_spindle", "build_theta", "identified_inputs", "require_disk",
-           "require_memory", "response_speeds"]
+__all__ = ["DESIGN_BASES", "FACTOR_MAX_COV", "FACTOR_MEAN_RANGE", "PEAK_THETA_SPEEDS",
+           "THERMAL_MAX", "DeterministicTable", "LimitTable", "UncertaintyTable", "build_inputs",
+           "build_theta", "check_factor_moments", "identified_inputs", "response_speeds"]
