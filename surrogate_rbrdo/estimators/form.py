@@ -15,7 +15,7 @@ in *Reliability and Optimization of Structural Systems*, Springer.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -25,6 +25,7 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate
+from surrogate_rbrdo.estimators._constrained import refine
 from surrogate_rbrdo.estimators._periodic import (
     conditional_search,
     dominant_theta,
@@ -38,6 +39,9 @@ STATUSES = ("converged", "not_reached", "failed")
 FLAT = 1e-10
 #: relative error of β accepted where the iteration can make no further progress
 SETTLED_BETA = 1e-3
+#: iHL-RF iterations before the fallback takes over (iHL-RF converges in fewer where it
+#: converges at all; beyond, it creeps: review 3 of issue 13)
+IHLRF_ITER = 20
 
 
 @dataclass(frozen=True)
@@ -168,7 +172,8 @@ def _start(G: Any, m: int, start: tuple[np.ndarray, float] | None
 def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
           fd_step: float, fd_scheme: str, beta_max: float = np.inf,
           start: tuple[np.ndarray, float] | None = None,
-          stop: Callable[[np.ndarray], bool] | None = None) -> DesignPoint:
+          stop: Callable[[np.ndarray], bool] | None = None,
+          max_stalls: int | None = None) -> DesignPoint:
     """Run iHL-RF on ``G`` from the origin; never raises on non-convergence (see ``status``).
 
     Convergence: ``|G(u)| <= tol_g · max(|G(0)|, |threshold|, ‖∇G(u)‖)`` — relative to
@@ -191,7 +196,8 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
 
     ``start = (u0, G(0))`` starts the search at ``u0`` instead of the origin (the sign and scale
     of ``G(0)``, known from an earlier search, are then not recomputed); ``stop(u)`` ends the
-    search (``status = "failed"``) when it returns True for an iterate.
+    search (``status = "failed"``) when it returns True for an iterate; ``max_stalls`` ends it
+    (``"failed"``) after that many line-search stalls in a row (for a fallback to take over).
     """
     u, g, g_origin = _start(G, m, start)
     if not np.isfinite(g):
@@ -204,6 +210,7 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
     sign0 = 1.0 if g_origin >= 0 else -1.0
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)
     msg, status, it, blocked = "maximum number of iterations reached", "failed", 0, 0
+    stalls = 0
     while it < max_iter:
         it += 1
         if sign0 * g > 0 and float(np.linalg.norm(u)) >= beta_max:
@@ -248,12 +255,16 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
             blocked, un, gn = 0, ub, gb
         u, g = un, gn  # the last trial inside is taken even if Armijo failed (as FERUM does)
         grad = fd_gradient(G, u, g, fd_step, fd_scheme)
+        stalls = 0 if accepted else stalls + 1
         if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
             if _settled(u, g, grad, scale, tol_g, tol_u):
                 status = "converged"
                 msg = ("converged (the line search cannot improve further: the accuracy is "
                        "limited by the finite-difference gradient)")
+                break
+            if max_stalls is not None and stalls >= max_stalls:
+                msg = f"line search stalled {stalls} times in a row"
                 break
     else:
         if _settled(u, g, grad, scale, tol_g, tol_u):
@@ -315,6 +326,11 @@ class FORM:
     phase_rtol : float
         The nodes double until the rule on ``K`` and on ``K/2`` nodes agree within this
         relative tolerance; their difference is ``diagnostics["pf_quadrature_error"]``.
+    fallback : {"sqp", "none"}
+        Where iHL-RF does not converge (three line-search stalls in a row, or ``max_iter``):
+        ``"sqp"`` continues from its last point with SLSQP on ``min ½‖u‖² s.t. G(u) = 0`` and,
+        where that point is not settled (a kink of ``G``), a ray search for the shortest
+        distance to the limit state (:mod:`._constrained`); ``"none"`` reports the failure.
 
     **Periodic inputs.** With a phase the result is ``P_f = mean_j Φ(−β(φ_j))`` over the
     nodes: ``beta`` is the generalised index ``−Φ⁻¹(P_f)``, ``u_star``/``alpha`` those of the
@@ -352,6 +368,7 @@ class FORM:
     phase_nodes: int = 8
     phase_max_nodes: int = 32
     phase_rtol: float = 0.05
+    fallback: str = "sqp"
 
     def __post_init__(self) -> None:
         check_int("max_iter", self.max_iter, minimum=1)
@@ -366,6 +383,7 @@ class FORM:
             raise ValueError(f"phase_max_nodes = {self.phase_max_nodes} is not allowed: must "
                              f"be >= phase_nodes = {self.phase_nodes}")
         check_positive("phase_rtol", self.phase_rtol)
+        check_choice("fallback", self.fallback, ("sqp", "none"))
 
     def search(self, response: Any, inputs: Any, limit: LimitState,
                x_row: np.ndarray) -> DesignPoint:
@@ -377,10 +395,36 @@ class FORM:
             max_iter: int | None = None, stop: Callable[[np.ndarray], bool] | None = None
             ) -> DesignPoint:
         """iHL-RF with these options on a limit-state function ``G(u (n, m)) -> (n,)`` that
-        counts its calls in ``G.calls`` (``start``, ``stop``: see :func:`ihlrf`)."""
-        return ihlrf(G, m, max_iter=self.max_iter if max_iter is None else max_iter,
-                     tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
-                     fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop)
+        counts its calls in ``G.calls`` (``start``, ``stop``: see :func:`ihlrf`), then the
+        ``fallback`` where it failed (not for searches with a ``stop`` rule)."""
+        fall = self.fallback == "sqp" and stop is None
+        n_iter = self.max_iter if max_iter is None else max_iter
+        dp = ihlrf(G, m, max_iter=min(n_iter, IHLRF_ITER) if fall else n_iter,
+                   tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
+                   fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop,
+                   max_stalls=3 if fall else None)
+        if not fall or dp.status != "failed" or not np.all(np.isfinite(dp.u_star)):
+            return dp
+        return self._fallback(G, m, dp)
+
+    def _fallback(self, G: Any, m: int, dp: DesignPoint) -> DesignPoint:
+        """SLSQP and the ray search from the last point of a failed iHL-RF search."""
+        scale = max(abs(dp.g_origin), float(getattr(G, "scale", 0.0)))
+        nu = float(np.linalg.norm(dp.u_star))
+        u, g, grad, ok, msg = refine(
+            G, dp.u_star, dp.grad,
+            gradient=lambda v, gv: fd_gradient(G, v, gv, self.fd_step, self.fd_scheme),
+            settled=lambda v, gv, gr: _settled(v, gv, gr, scale, self.tol_g, self.tol_u),
+            on_surface=lambda gv, gr: abs(gv) <= np.sqrt(self.tol_g) * max(
+                scale, float(np.linalg.norm(gr))),
+            tol_beta=SETTLED_BETA * max(1.0, nu), max_iter=self.max_iter)
+        if not ok:
+            return replace(dp, calls=G.calls, message=f"{dp.message}; fallback: {msg}")
+        ng = float(np.linalg.norm(grad))
+        alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
+        sign0 = 1.0 if dp.g_origin >= 0 else -1.0
+        return DesignPoint(sign0 * float(np.linalg.norm(u)), u, alpha, grad, g, True,
+                           dp.n_iter, G.calls, msg, "converged", dp.g_origin)
 
     def check(self, dp: DesignPoint, p: int) -> None:
         """Raise ``ModelError`` for a failed search when ``on_failure == "raise"``."""

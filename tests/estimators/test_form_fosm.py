@@ -4,7 +4,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from scipy import special
+from scipy import optimize, special
 
 from surrogate_rbrdo.core import LimitState, ModelError
 from surrogate_rbrdo.estimators import FORM, FOSM
@@ -112,8 +112,8 @@ def _curved():
 
 def test_form_non_convergence_raises_or_returns_nan():
     prob = _curved()
-    est = FORM(max_iter=1, on_failure="nan").estimate(prob.response, prob.inputs, prob.limit,
-                                                      prob.x, rng=RNG)
+    est = FORM(max_iter=1, on_failure="nan", fallback="none").estimate(
+        prob.response, prob.inputs, prob.limit, prob.x, rng=RNG)
     assert np.isnan(est.pf[0]) and not est.diagnostics["converged"][0]
     assert est.diagnostics["status"][0] == "failed"
     assert est.diagnostics["message"][0] != "converged"
@@ -122,7 +122,36 @@ def test_form_non_convergence_raises_or_returns_nan():
 def test_form_iteration_limit_reported():
     prob = _curved()
     with pytest.raises(ModelError, match="maximum number of iterations"):
-        form(prob, max_iter=1)
+        form(prob, max_iter=1, fallback="none")
+
+
+def test_form_fallback_finishes_a_search_iHLRF_left():
+    """One iHL-RF iteration, then SLSQP and the ray search: the design point of the curved
+    limit state, β = min over u₂ of ‖(3 − u₂/2 − u₂²/5, u₂)‖ by a 1-D bounded minimisation."""
+    prob = _curved()
+    beta = optimize.minimize_scalar(lambda v: np.hypot(3 - v / 2 - v**2 / 5, v), bounds=(-5, 5),
+                                    method="bounded", options={"xatol": 1e-12}).fun
+    est = form(prob, max_iter=1)
+    assert est.diagnostics["status"][0] == "converged"
+    assert est.diagnostics["beta"][0] == pytest.approx(beta, rel=1e-4)
+
+
+@pytest.mark.parametrize("m, half_angle, beta", [(2, 0.5, 3.0), (4, 0.3, 2.5), (5, 0.05, 3.0)])
+def test_form_converges_at_a_kink(m, half_angle, beta):
+    """Failure where both a₁·u > β and a₂·u > β (a₁, a₂ at ±θ from u₁): the design point is on
+    the kink of ``G = β − min(a₁·u, a₂·u)``, at distance β / cos θ (the two hyperplanes meet
+    there and each alone is nearer than its foot on the other). iHL-RF zigzags across the kink
+    and stalls; the fallback (SLSQP, then the ray search) finds it."""
+    a = np.zeros((2, m))
+    a[:, 0], a[:, 1] = np.cos(half_angle), [np.sin(half_angle), -np.sin(half_angle)]
+    inputs = MultivariateNormal(np.zeros(m), cov=np.eye(m))
+    resp = lambda x, t: (t @ a.T).min(1)[None, :]   # noqa: E731
+    est = FORM().estimate(resp, inputs, LimitState(beta), np.zeros((1, 0)), rng=RNG)
+    assert est.diagnostics["status"][0] == "converged"
+    assert est.diagnostics["beta"][0] == pytest.approx(beta / np.cos(half_angle), rel=1e-6)
+    bare = FORM(fallback="none", on_failure="nan").estimate(resp, inputs, LimitState(beta),
+                                                             np.zeros((1, 0)), rng=RNG)
+    assert bare.diagnostics["status"][0] == "failed"
 
 
 def test_fosm_exact_on_linear_normal():
