@@ -93,10 +93,16 @@ def ray_roots(G: Any, D: np.ndarray, rho0: np.ndarray, tol: float, n_iter: int =
             step = g[idx] * (rho[idx] - prev_r[idx]) / (g[idx] - prev_g[idx])
         new = rho[idx] - step
         br = np.isfinite(lo[idx])      # bracketed: stay inside [lo, rho]
-        inside = (new - lo[idx]) * (new - rho[idx]) < 0
+        inside = (new - lo[idx]) * (new - rho[idx]) <= 0
         fix = br & ~inside | ~np.isfinite(new)
         new[fix] = np.where(br[fix], 0.5 * (lo[idx][fix] + rho[idx][fix]), rho[idx][fix] * 1.1)
         new = np.maximum(new, 1e-3 * rho[idx])
+        done = np.abs(new - rho[idx]) <= tol       # the step is below tol: converged
+        out[idx[done]] = new[done]
+        live[idx[done]] = False
+        idx, new = idx[~done], new[~done]
+        if idx.size == 0:
+            break
         gn = G(new[:, None] * D[idx])
         ok = np.isfinite(gn)
         live[idx[~ok]] = False
@@ -104,9 +110,9 @@ def ray_roots(G: Any, D: np.ndarray, rho0: np.ndarray, tol: float, n_iter: int =
         lo[idx[flip]], glo[idx[flip]] = rho[idx[flip]], g[idx[flip]]
         prev_r[idx], prev_g[idx] = rho[idx], g[idx]
         rho[idx], g[idx] = new, gn
-        done = ok & (np.abs(new - prev_r[idx]) <= tol)
-        out[idx[done]] = new[done]
-        live[idx[done]] = False
+        hit = ok & (gn == 0.0)                      # on the limit state exactly
+        out[idx[hit]] = new[hit]
+        live[idx[hit]] = False
     return out
 
 
@@ -133,6 +139,9 @@ def ray_search(G: Any, u: np.ndarray, grad: np.ndarray, tol_beta: float
         if r[j] < rho - 0.1 * tol_beta:
             e, rho = D[j], float(r[j])
             continue
+        if not np.all(np.isfinite(r)):   # a ray without a root is no evidence of a minimum
+            return rho * e, False, (f"ray search: no root of G along {np.sum(~np.isfinite(r))}"
+                                    f" of the {r.size} rays tilted by {h:.2g} rad")
         if h <= H_MIN:
             return rho * e, True, (f"ray search: no shorter ray within {h:.2g} rad after "
                                    f"{polls} polls")
