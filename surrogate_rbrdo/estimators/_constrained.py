@@ -194,7 +194,7 @@ def refine(G: Any, u0: np.ndarray, grad0: np.ndarray, *, gradient: Any, settled:
         if np.isfinite(g) and on_surface(g, grad) and settled(best, g, grad):
             return best, g, grad, True, "converged (SLSQP after iHL-RF did not converge)"
     else:
-        best, how = u0, "SLSQP left the domain or failed;"
+        best, how = u0, "SLSQP left the domain or failed"
     nb = float(np.linalg.norm(best))
     if not (np.isfinite(nb) and nb > 0):
         return best, np.nan, grad0, False, f"{how} no ray to search from"
@@ -203,7 +203,7 @@ def refine(G: Any, u0: np.ndarray, grad0: np.ndarray, *, gradient: Any, settled:
     grad = gradient(u, g) if np.isfinite(g) else np.full(u.size, np.nan)
     ok = ok and np.isfinite(g)
     return u, g, grad, ok, (f"converged ({how}, then {msg}: a local minimum of the distance "
-                            "to the limit state, e.g. at a kink)" if ok else f"{how} {msg}")
+                            "to the limit state, e.g. at a kink)" if ok else f"{how}, then {msg}")
 
 
 __all__ = ["H_MIN", "H_START", "orthonormal_complement", "ray_roots", "ray_search", "refine",

@@ -18,7 +18,7 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.estimators._common import LimitStateU
 
 #: outcome of a design-point search
-STATUSES = ("converged", "not_reached", "failed")
+STATUSES = ("converged", "not_reached", "unconverged", "failed")
 #: relative change of G over a finite-difference step below which G is flat (round-off level)
 FLAT = 1e-10
 #: relative error of β accepted where the iteration can make no further progress
@@ -34,7 +34,9 @@ class DesignPoint:
 
     ``status`` is ``"converged"``, ``"not_reached"`` (the limit state ``G = 0`` was not met
     before the model's physical domain ended or before ``‖u‖ = beta_max``: ``beta`` is the
-    distance reached, a first-order bound) or ``"failed"`` (no convergence, see ``message``).
+    distance reached, a first-order bound), ``"unconverged"`` (the fallback ended on a point of
+    the limit state not shown to be the nearest: ``|beta|`` bounds the distance from above) or
+    ``"failed"`` (no convergence, see ``message``).
     """
 
     beta: float

@@ -186,7 +186,18 @@ class FORM:
                 scale, float(np.linalg.norm(gr))),
             tol_beta=SETTLED_BETA * max(1.0, nu), max_iter=self.max_iter)
         if not ok:
-            return replace(dp, calls=G.calls, message=f"{dp.message}; fallback: {msg}")
+            if not (np.isfinite(g) and abs(g) <= np.sqrt(self.tol_g) * max(
+                    scale, float(np.linalg.norm(grad)))):
+                return replace(dp, calls=G.calls, message=f"{dp.message}; fallback: {msg}")
+            # a point of the limit state, not shown to be the nearest: ‖u‖ bounds β*
+            ng = float(np.linalg.norm(grad))
+            return DesignPoint(
+                (1.0 if dp.g_origin >= 0 else -1.0) * float(np.linalg.norm(u)), u,
+                -grad / ng if ng > 0 else np.full(m, np.nan), grad, g, False, dp.n_iter, G.calls,
+                f"design point not found to tolerance ({dp.message}; fallback: {msg}): the "
+                f"point reached lies on the limit state at |beta| = {np.linalg.norm(u):.4g}, "
+                "an upper bound of the distance to the design point (pf_bound)", "unconverged",
+                dp.g_origin)
         ng = float(np.linalg.norm(grad))
         alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
         sign0 = 1.0 if dp.g_origin >= 0 else -1.0
@@ -244,14 +255,18 @@ class FORM:
 def bound_labels(beta: np.ndarray, status: np.ndarray) -> np.ndarray:
     """``pf_bound`` of a design-point result: ``"upper"`` where the limit state was not reached
     from a safe mean (``pf`` is that of a superset of the failure domain), ``"lower"`` where it
-    was not reached from a failing mean, ``""`` elsewhere.
+    was not reached from a failing mean; where the search ended ``"unconverged"`` on a point
+    ``u_b`` of the limit state, ``‖u_b‖ ≥ β*`` so FORM's ``pf`` is at least the one reported
+    from a safe mean (``"lower"``) and at most from a failing mean (``"upper"``); ``""``
+    elsewhere.
 
-    >>> bound_labels(np.array([3.0, 10.0, -10.0]), np.array(["converged", "not_reached",
-    ...                                                       "not_reached"])).tolist()
-    ['', 'upper', 'lower']
+    >>> bound_labels(np.array([3.0, 10.0, -10.0, 3.0]), np.array(
+    ...     ["converged", "not_reached", "not_reached", "unconverged"])).tolist()
+    ['', 'upper', 'lower', 'lower']
     """
-    nr = np.asarray(status) == "not_reached"
-    return np.where(nr, np.where(np.asarray(beta) >= 0, "upper", "lower"), "")
+    status, safe = np.asarray(status), np.asarray(beta) >= 0
+    out = np.where(status == "not_reached", np.where(safe, "upper", "lower"), "")
+    return np.where(status == "unconverged", np.where(safe, "lower", "upper"), out)
 
 
 __all__ = ["FLAT", "FORM", "SETTLED_BETA", "STATUSES", "DesignPoint", "bound_labels",

@@ -171,3 +171,23 @@ def test_fosm_quadratic_misses_second_order_mean():
                           np.zeros((1, 0)), rng=RNG)
     assert est.mean[0] == pytest.approx(1.0, abs=1e-12)
     assert est.std[0] == pytest.approx(0.2, rel=1e-6)
+
+
+def test_form_reports_a_bound_where_no_search_settles():
+    """y = a·u plus a rough term of amplitude 0.02 varying on a scale far below the
+    finite-difference step (a stand-in for a noisy solver): no search can settle. Failure needs
+    a·u ≥ 3 − 0.02, so the design point is at β* ≥ 2.98; FORM reports a point of the limit state
+    (|G| small) whose distance bounds β* from above: P_f (FORM) ≥ the reported value, labelled
+    "lower" — not a crash, not a silent number. Without the fallback it raises."""
+    a = np.array([0.6, 0.8, 0.0])
+    resp = lambda x, t: (t @ a + 0.02 * np.sin(1e4 * t @ [1.0, 1.7, 2.3]))[None, :]  # noqa: E731
+    inputs = MultivariateNormal(np.zeros(3), cov=np.eye(3))
+    est = FORM().estimate(resp, inputs, LimitState(3.0), np.zeros((1, 0)), rng=RNG)
+    d = est.diagnostics
+    assert d["status"][0] == "unconverged" and d["pf_bound"][0] == "lower"
+    assert not d["converged"][0] and d["beta"][0] >= 2.98
+    y = resp(None, d["theta_star"][0][None, :])[0, 0]
+    assert y == pytest.approx(3.0, abs=0.01)      # on the limit state, to the rough scale
+    assert est.pf[0] == pytest.approx(special.ndtr(-d["beta"][0]))
+    with pytest.raises(ModelError, match="did not converge"):
+        FORM(fallback="none").estimate(resp, inputs, LimitState(3.0), np.zeros((1, 0)), rng=RNG)
