@@ -54,7 +54,9 @@ class FORM:
     Gives ``pf = Φ(−β)``; ``mean``, ``std`` and all standard errors are NaN (use ``"fosm"`` or
     ``"mc"`` for moments). Diagnostics: ``beta``, ``u_star`` and ``theta_star`` ``(P, m)``,
     ``alpha`` (unit vector towards failure), ``importance_factors`` ``α²``, ``converged``,
-    ``status`` (``"converged"``, ``"not_reached"``, ``"failed"``), ``pf_bound``
+    ``status`` (``"converged"``, ``"not_reached"``, ``"unconverged"``: the search ended on a
+    point of the limit state not shown to be the nearest, ``|β|`` an upper bound of the distance,
+    ``"failed"``), ``pf_bound``
     (``"upper"``/``"lower"`` where the limit state was not reached, else ``""``), ``n_iter``,
     ``calls``
     (model calls per design), ``message``.
