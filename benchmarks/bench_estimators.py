@@ -10,6 +10,7 @@ empirical CoV (std of the runs / exact P_f), mean reported CoV (``pf_se / pf``),
 runs whose exact value lies within 4 reported standard errors, model calls per run and wall time
 per run. Deterministic methods (form, sorm, fosm) run once; their CoV columns are "-".
 It also times ``mc_from_values`` on a (100, 1000) array (the optimisation hot path).
+``--estimators`` selects registry names (e.g. ``--estimators subset form``).
 """
 
 from __future__ import annotations
@@ -78,6 +79,7 @@ def fmt(v, f):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reps", type=int, default=20)
+    ap.add_argument("--estimators", nargs="*", default=None, help="registry names to run")
     args = ap.parse_args()
     # the methods' own warnings (heavy tails, several design points) are counted by
     # benchmarks/bench_coverage.py; here they would only clutter the table
@@ -88,6 +90,8 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|---|---|---|")
         for prob in problems():
             for name, opts in CONFIGS:
+                if args.estimators and name not in args.estimators:
+                    continue
                 row = run_pair(prob, name, opts, args.reps)
                 label = name + ("" if not opts else " " + ",".join(
                     f"{k}={v}" for k, v in opts.items()))

@@ -234,7 +234,9 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
     design point of the node contributing most, in full dimension (NaN in the periodic
     columns, which are conditioned on), with ``beta = −Φ⁻¹(P_f)`` the generalised reliability
     index of the integral, ``status`` ``"failed"`` if a node failed, ``"converged"`` if every
-    node converged, ``"not_reached"`` otherwise (nodes never failing contribute FORM's bound
+    node converged, ``"unconverged"`` where some node's search ended on a point of the limit
+    state not shown to be nearest (:func:`_bounded_status`), ``"not_reached"`` otherwise (nodes
+    never failing contribute FORM's bound
     ``Φ(−β_max)``), and ``calls`` of every node; and the :class:`Quadrature`.
     """
     calls, prev = [0], []
@@ -255,7 +257,8 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
             dp = form.run(G, cond.dim)
         prev.append((phases, dp))
         pf = np.nan
-        if dp.status == "not_reached" or (dp.status == "converged" and correct is None):
+        if dp.status in ("not_reached", "unconverged") or (dp.status == "converged"
+                                                           and correct is None):
             pf = float(special.ndtr(-dp.beta))
         elif dp.status == "converged":
             pf = float(correct(G, dp))
@@ -272,6 +275,8 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
     statuses = {d.status for d in dps}
     if not np.isfinite(q.pf):
         status = "failed"
+    elif "unconverged" in statuses:
+        status = _bounded_status(dps, q.pf)
     else:
         status = "converged" if statuses == {"converged"} else "not_reached"
     d = dps[int(np.argmax(q.pfs))] if q.pfs.size else dps[0]
@@ -288,6 +293,17 @@ def conditional_search(form: Any, response: Any, inputs: Any, limit: Any, x_row:
                  converged=status == "converged", calls=calls[0], message=msg, status=status,
                  n_iter=int(sum(x.n_iter for x in dps)))
     return dp, q
+
+
+def _bounded_status(dps: list, pf: float) -> str:
+    """Status of an integral over nodes of which some ended ``"unconverged"`` (a lower bound of
+    their P_f from a safe mean, an upper one from a failing mean) and some perhaps
+    ``"not_reached"`` (the reverse): ``"unconverged"`` when every bounded node bounds from the
+    side the integral's own label will say (lower for ``pf < 1/2``, upper above), else
+    ``"failed"`` (bounds from both sides bound nothing)."""
+    sides = {("lower" if (d.beta >= 0) == (d.status == "unconverged") else "upper")
+             for d in dps if d.status in ("not_reached", "unconverged")}
+    return "unconverged" if sides == {"lower" if pf < 0.5 else "upper"} else "failed"
 
 
 def dominant_theta(inputs: Any, cols: tuple, q: Quadrature) -> np.ndarray:

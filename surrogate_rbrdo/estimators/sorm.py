@@ -151,7 +151,7 @@ class SORM:
             self.form.check(dp, i)
             calls += dp.calls
             status[i] = dp.status
-            if dp.status == "not_reached":   # FORM's bound; no curvature to correct
+            if dp.status in ("not_reached", "unconverged"):   # FORM's bound; nothing to correct
                 beta[i] = dp.beta
                 pf[i] = pf_form[i] = special.ndtr(-dp.beta)
                 continue

@@ -23,6 +23,18 @@ there — have the spread ``δ_k`` predicts and small negative correlations betw
 skewed to the right (``docs/estimators.md`` gives its measured coverage). The fully
 correlated bound ``Σ_k δ_k`` is ``diagnostics["pf_cov_upper"]``.
 
+**Precision at small P_f: independent runs.** At ``P_f ≈ 1e-7`` one run (7 levels of 1 000)
+has ``δ ≈ 0.5`` and the estimate is skewed to the right (``ln P̂`` roughly normal): even with an
+exact standard error the symmetric ``P̂ ± 3·SE`` then misses the runs that land low in about
+7 % of cases (measured over 200 seeds: 0.93–0.955 covered). Rather than a dimension- or
+level-dependent sample size, runs are repeated independently until the CoV of their mean,
+``√(Σ SE_r²) / Σ P̂_r``, is at most ``target_cov`` (0.3; at most ``max_runs`` = 4 runs): one run
+where ``δ ≤ 0.3`` already (``P_f ≳ 1e-4`` in the benchmarks), 2–4 at ``1e-7``, where the mean's
+skew shrinks as ``1/√R`` too. ``pf`` is the mean, ``pf_se = √(Σ SE_r²)/R`` (the runs are
+independent), ``diagnostics["runs"]`` the count. The stopping rule depends on the first runs'
+own CoV, which is larger in runs that land low: measured +3.7 ± 1.5 % bias at 3.4e-6 in 10-D
+(300 seeds), a tenth of the SE.
+
 **Designs that never fail.** When the thresholds stop decreasing or ``max_levels`` is spent,
 the product so far estimates ``P(G ≤ γ_last)`` with ``γ_last > 0``, which contains the failure
 domain: with ``on_failure="bound"`` (default) it is reported as an upper bound
@@ -39,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
-from surrogate_rbrdo.core.validate import check_choice, check_int, check_range
+from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 from surrogate_rbrdo.estimators._common import LimitStateU, make_estimate, z_of
 from surrogate_rbrdo.estimators._levels import (
     ON_FAILURE,
@@ -82,15 +94,19 @@ class SubsetSimulation:
     on_failure : {"bound", "raise", "nan"}
         Failure domain not reached: report the upper bound ``P(G ≤ γ_last)``, raise, or NaN.
     ci_level : float
+    target_cov, max_runs : float, int
+        Independent runs are added until the CoV of their mean is at most ``target_cov`` or
+        ``max_runs`` runs are spent (``max_runs = 1``: one run, the textbook estimator). With
+        ``u`` given (common random numbers) one run.
 
     Examples
     --------
     >>> from surrogate_rbrdo.estimators.problems import linear_standard
     >>> prob = linear_standard(beta=4.5, dim=10)
     >>> est = SubsetSimulation().estimate(prob.response, prob.inputs, prob.limit, prob.x,
-    ...                                   rng=np.random.default_rng(3))
-    >>> bool(abs(est.pf[0] - prob.pf_exact[0]) < 3 * est.pf_se[0])
-    True
+    ...                                   rng=np.random.default_rng(0))
+    >>> bool(abs(est.pf[0] - prob.pf_exact[0]) < 3 * est.pf_se[0]), int(est.diagnostics["runs"][0])
+    (True, 3)
     """
 
     n_per_level: int = 1000
@@ -99,6 +115,8 @@ class SubsetSimulation:
     max_levels: int = 20
     on_failure: str = "bound"
     ci_level: float = 0.95
+    target_cov: float = 0.3
+    max_runs: int = 4
 
     def __post_init__(self) -> None:
         check_int("n_per_level", self.n_per_level, minimum=10)
@@ -109,9 +127,34 @@ class SubsetSimulation:
         check_int("max_levels", self.max_levels, minimum=1)
         check_choice("on_failure", self.on_failure, ON_FAILURE)
         check_range("ci_level", self.ci_level, 0.0, 1.0, inclusive=False)
+        check_positive("target_cov", self.target_cov)
+        check_int("max_runs", self.max_runs, minimum=1)
 
     def _one(self, G: LimitStateU, m: int, u0: np.ndarray | None, rng: np.random.Generator
              ) -> LevelResult:
+        """Independent runs until their pooled CoV is at most ``target_cov`` (or ``max_runs``;
+        one run where ``u0`` fixes the level-0 sample): the mean of the runs, its standard error
+        ``√(Σ SE_r²)/R``."""
+        runs = [self._run(G, m, u0, rng)]
+        while u0 is None and len(runs) < self.max_runs and runs[-1].reached:
+            pf = np.array([r.pf for r in runs])
+            se = np.array([r.se for r in runs])
+            if not pf.sum() > 0 or np.sqrt(se @ se) / pf.sum() <= self.target_cov:
+                break
+            runs.append(self._run(G, m, None, rng))
+        if len(runs) == 1:
+            return runs[0]
+        n = len(runs)
+        pf = float(np.mean([r.pf for r in runs]))
+        se = float(np.sqrt(sum(r.se**2 for r in runs))) / n
+        # the diagnostics' CoVs pooled as the standard error: √(Σ (P̂_r δ_r)²) / (n P̄)
+        extra = np.sqrt(sum((r.pf * np.asarray(r.extra)[:2]) ** 2 for r in runs)) / (n * pf)
+        return LevelResult(pf, se, np.append(extra, n), max(r.level for r in runs),
+                           all(r.reached for r in runs), runs[0].y0)
+
+    def _run(self, G: LimitStateU, m: int, u0: np.ndarray | None, rng: np.random.Generator
+             ) -> LevelResult:
+        """One subset-simulation run."""
         v = u0 if u0 is not None else rng.standard_normal((self.n_per_level, m))
         n = v.shape[0]
         ns = int(round(1.0 / self.p0))
@@ -178,6 +221,7 @@ class SubsetSimulation:
                          "levels": r.levels, "converged": r.status == "converged",
                          "status": r.status, "pf_cov": cov,
                          "pf_cov_au_beck": r.extra[:, 0], "pf_cov_upper": r.extra[:, 1],
+                         "runs": np.nan_to_num(r.extra[:, 2], nan=1.0).astype(int),
                          "n_outside_domain": r.n_outside},
         )
 
@@ -206,7 +250,7 @@ class _Variance:
         self.d_sum += np.sqrt(d2_ab)
 
     def result(self, pf: float, level: int, reached: bool, y0: np.ndarray) -> LevelResult:
-        extra = np.array([np.sqrt(self.d2_ab), self.d_sum])
+        extra = np.array([np.sqrt(self.d2_ab), self.d_sum, 1.0])
         return LevelResult(pf, pf * np.sqrt(self.d2), extra, level, reached, y0)
 
 

@@ -4,7 +4,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from scipy import special
+from scipy import optimize, special
 
 from surrogate_rbrdo.core import LimitState, ModelError
 from surrogate_rbrdo.estimators import FORM, FOSM
@@ -112,8 +112,8 @@ def _curved():
 
 def test_form_non_convergence_raises_or_returns_nan():
     prob = _curved()
-    est = FORM(max_iter=1, on_failure="nan").estimate(prob.response, prob.inputs, prob.limit,
-                                                      prob.x, rng=RNG)
+    est = FORM(max_iter=1, on_failure="nan", fallback="none").estimate(
+        prob.response, prob.inputs, prob.limit, prob.x, rng=RNG)
     assert np.isnan(est.pf[0]) and not est.diagnostics["converged"][0]
     assert est.diagnostics["status"][0] == "failed"
     assert est.diagnostics["message"][0] != "converged"
@@ -122,7 +122,36 @@ def test_form_non_convergence_raises_or_returns_nan():
 def test_form_iteration_limit_reported():
     prob = _curved()
     with pytest.raises(ModelError, match="maximum number of iterations"):
-        form(prob, max_iter=1)
+        form(prob, max_iter=1, fallback="none")
+
+
+def test_form_fallback_finishes_a_search_iHLRF_left():
+    """One iHL-RF iteration, then SLSQP and the ray search: the design point of the curved
+    limit state, β = min over u₂ of ‖(3 − u₂/2 − u₂²/5, u₂)‖ by a 1-D bounded minimisation."""
+    prob = _curved()
+    beta = optimize.minimize_scalar(lambda v: np.hypot(3 - v / 2 - v**2 / 5, v), bounds=(-5, 5),
+                                    method="bounded", options={"xatol": 1e-12}).fun
+    est = form(prob, max_iter=1)
+    assert est.diagnostics["status"][0] == "converged"
+    assert est.diagnostics["beta"][0] == pytest.approx(beta, rel=1e-4)
+
+
+@pytest.mark.parametrize("m, half_angle, beta", [(2, 0.5, 3.0), (4, 0.3, 2.5), (5, 0.05, 3.0)])
+def test_form_converges_at_a_kink(m, half_angle, beta):
+    """Failure where both a₁·u > β and a₂·u > β (a₁, a₂ at ±θ from u₁): the design point is on
+    the kink of ``G = β − min(a₁·u, a₂·u)``, at distance β / cos θ (the two hyperplanes meet
+    there and each alone is nearer than its foot on the other). iHL-RF zigzags across the kink
+    and stalls; the fallback (SLSQP, then the ray search) finds it."""
+    a = np.zeros((2, m))
+    a[:, 0], a[:, 1] = np.cos(half_angle), [np.sin(half_angle), -np.sin(half_angle)]
+    inputs = MultivariateNormal(np.zeros(m), cov=np.eye(m))
+    resp = lambda x, t: (t @ a.T).min(1)[None, :]   # noqa: E731
+    est = FORM().estimate(resp, inputs, LimitState(beta), np.zeros((1, 0)), rng=RNG)
+    assert est.diagnostics["status"][0] == "converged"
+    assert est.diagnostics["beta"][0] == pytest.approx(beta / np.cos(half_angle), rel=1e-6)
+    bare = FORM(fallback="none", on_failure="nan").estimate(resp, inputs, LimitState(beta),
+                                                             np.zeros((1, 0)), rng=RNG)
+    assert bare.diagnostics["status"][0] == "failed"
 
 
 def test_fosm_exact_on_linear_normal():
@@ -142,3 +171,23 @@ def test_fosm_quadratic_misses_second_order_mean():
                           np.zeros((1, 0)), rng=RNG)
     assert est.mean[0] == pytest.approx(1.0, abs=1e-12)
     assert est.std[0] == pytest.approx(0.2, rel=1e-6)
+
+
+def test_form_reports_a_bound_where_no_search_settles():
+    """y = a·u plus a rough term of amplitude 0.02 varying on a scale far below the
+    finite-difference step (a stand-in for a noisy solver): no search can settle. Failure needs
+    a·u ≥ 3 − 0.02, so the design point is at β* ≥ 2.98; FORM reports a point of the limit state
+    (|G| small) whose distance bounds β* from above: P_f (FORM) ≥ the reported value, labelled
+    "lower" — not a crash, not a silent number. Without the fallback it raises."""
+    a = np.array([0.6, 0.8, 0.0])
+    resp = lambda x, t: (t @ a + 0.02 * np.sin(1e4 * t @ [1.0, 1.7, 2.3]))[None, :]  # noqa: E731
+    inputs = MultivariateNormal(np.zeros(3), cov=np.eye(3))
+    est = FORM().estimate(resp, inputs, LimitState(3.0), np.zeros((1, 0)), rng=RNG)
+    d = est.diagnostics
+    assert d["status"][0] == "unconverged" and d["pf_bound"][0] == "lower"
+    assert not d["converged"][0] and d["beta"][0] >= 2.98
+    y = resp(None, d["theta_star"][0][None, :])[0, 0]
+    assert y == pytest.approx(3.0, abs=0.01)      # on the limit state, to the rough scale
+    assert est.pf[0] == pytest.approx(special.ndtr(-d["beta"][0]))
+    with pytest.raises(ModelError, match="did not converge"):
+        FORM(fallback="none").estimate(resp, inputs, LimitState(3.0), np.zeros((1, 0)), rng=RNG)

@@ -147,6 +147,25 @@ def test_subset_unbiased_at_1e6():
     assert all(r.pf_ci[0, 0] < r.pf[0] < r.pf_ci[0, 1] for r in res)
 
 
+def test_subset_pools_independent_runs_at_small_pf():
+    """At 2.9e-7 in 10-D one run has δ ≈ 0.5: runs are added until the CoV of their mean is at
+    most target_cov; the result is the mean of the same runs made one by one (same generator)
+    with the standard error √(Σ SE_r²)/R."""
+    prob = linear_standard(beta=5.0, dim=10)
+    est = run("subset", prob, seed=2)
+    n = int(est.diagnostics["runs"][0])
+    assert 2 <= n <= 4 and (est.pf_cov[0] <= 0.3 or n == 4)
+    rng = np.random.default_rng(2)
+    single = [get_estimator("subset", max_runs=1).estimate(prob.response, prob.inputs,
+                                                           prob.limit, prob.x, rng=rng)
+              for _ in range(n)]
+    assert est.pf[0] == pytest.approx(np.mean([r.pf[0] for r in single]), rel=1e-12)
+    se = np.sqrt(sum(r.pf_se[0] ** 2 for r in single)) / n
+    assert est.pf_se[0] == pytest.approx(se, rel=1e-12)
+    assert est.n_calls == sum(r.n_calls for r in single)
+    assert run("subset", prob, seed=2, max_runs=1).diagnostics["runs"][0] == 1
+
+
 def test_ais_and_subset_moments_from_first_level():
     prob = correlated_normal()
     for name in ("ais", "subset"):
