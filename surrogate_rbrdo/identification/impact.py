@@ -299,12 +299,12 @@ def _align(up: StandstillModel, frfs, f0, opts, nb):
             float(np.exp(sol.x[nd * nb])) if n_m else 1.0)
 
 
-def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
-    nd, nb = theta.shape
+def _fit_data(up: StandstillModel, frfs, theta, m, band, opts, model):
+    """The FRF points fitted: within ``half_width`` of each direction's (aligned) modes where
+    the coherence is high enough, with H1's random error as SD; and the modes (Hz)."""
     lo, hi = band
-    dirs = sorted(frfs)
     data, all_modes = [], []
-    for di, d in enumerate(dirs):
+    for di, d in enumerate(sorted(frfs)):
         modes = up.natural_hz(theta[di], m)
         modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
         all_modes.append(modes)
@@ -318,15 +318,19 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
         H = est.H[0][g] if est.form == "accelerance" else est.receptance()[0][g] * (
             2j * np.pi * f[g] + est.exp_decay_per_s) ** 2
         dof = 4 * model.tool_node + (1 if d == "y" else 0)
-        data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H, eps * np.abs(H), dof, di))
-    s = np.concatenate([x[0] for x in data])
-    H = np.concatenate([x[1] for x in data])
-    sd = np.concatenate([x[2] for x in data])
-    dof = np.concatenate([np.full(x[0].size, x[3]) for x in data])
-    gi = np.concatenate([np.full(x[0].size, x[4]) for x in data])
+        data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H, eps * np.abs(H),
+                     np.full(g.sum(), dof), np.full(g.sum(), di)))
+    s, H, sd, dof, gi = (np.concatenate([x[k] for x in data]) for k in range(5))
+    return s, H, sd, dof, gi, np.unique(np.concatenate(all_modes))
+
+
+def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
+    nd, nb = theta.shape
+    dirs = sorted(frfs)
+    s, H, sd, dof, gi, modes = _fit_data(up, frfs, theta, m, band, opts, model)
     if s.size < (nd + 1) * nb + 2:
         raise ModelError(f"impact_damping: {s.size} coherent FRF points near the modes "
-                         f"{np.round(np.concatenate(all_modes), 1).tolist()} Hz; too few to fit")
+                         f"{np.round(modes, 1).tolist()} Hz; too few to fit")
     n_m = 1 if up.tool_disk is not None else 0
     names = ([f"{b}_stiffness_{d}" for d in dirs for b in model.theta_bearings]
              + [f"{b}_damping" for b in model.theta_bearings]
@@ -376,8 +380,7 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
     eta0 = np.array([b.law.damping_eta_s for b in model.geometry.bearings])
     par = np.exp(sol.x)
     return ImpactDamping(tuple(model.theta_bearings), tuple(names), par, cov,
-                         eta0 * par[k0:k0 + nb], int(s.size), chi2,
-                         np.unique(np.concatenate(all_modes)))
+                         eta0 * par[k0:k0 + nb], int(s.size), chi2, modes)
 
 
 __all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping"]
