@@ -180,7 +180,19 @@ def _report(p: Plan, done: Mapping[str, Any], run: Any, ctx: StageContext) -> di
             "summary": rows + [{"records": int(res.responses.n),
                                 "used": int(np.sum(camp.used)),
                                 "trend_laws": {c: t.law for c, t in zip(
-                                    u.coefficients, u.trends, strict=True)}}]}
+                                    u.coefficients, u.trends, strict=True)}}]
+            + _impact_rows(d.get("provenance", {}).get("damping"))}
+
+
+def _impact_rows(damping: Mapping[str, Any] | None) -> list[dict[str, Any]]:
+    """One summary line per installation's impact fit: η̂, the tool mass factor and the fit's
+    χ²/ν — far above a few, the model cannot represent the FRFs (docs/identification.md §5b)."""
+    if not damping or damping.get("source") != "impact":
+        return []
+    return [{"impacts": key, "eta_s": [float(f"{e:.4g}") for e in inst["eta_s"]],
+             "tool_mass": round(float(inst["parameters"].get("tool_mass", 1.0)), 4),
+             "chi2_dof": round(float(inst["chi2_dof"]), 2)}
+            for key, inst in damping["installations"].items()]
 
 
 register_kind(Kind(
