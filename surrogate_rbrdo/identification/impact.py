@@ -24,9 +24,9 @@ Kluwer 1995, ch. 6; Lin & Ewins, *Mech. Syst. Signal Process.* 8(4):437–458, 1
    bearings' stiffness factors ``θ`` at standstill *per direction* (``<bearing>_stiffness_x``,
    ``_y``: at standstill the model's two planes are uncoupled, each direction's FRF sees its
    own bearing stiffness; real bearings and the rig's ``anisotropy`` differ by direction,
-   and one factor for both made the split peaks one broad peak — η 20–100 % off), their
-   damping factors ``d`` (``C_b ← d_b
-   C_b``, i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
+   and one factor for both made the split peaks one broad peak — η 44 % / 100 % off on
+   ``experiments/rig_campaign_trial.toml``), their damping factors ``d`` (``C_b ← d_b C_b``,
+   i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
    weighed by the FRF) and one calibration gain per direction (hammer × accelerometer). The
    weights are H1's random error, ``ε = √(1 − γ²) / (|γ| √(2 n_d))`` of ``|H|`` (Bendat &
    Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), floored at ``rel_floor``; the
