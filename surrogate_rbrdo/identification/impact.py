@@ -14,14 +14,19 @@ Kluwer 1995, ch. 6; Lin & Ewins, *Mech. Syst. Signal Process.* 8(4):437–458, 1
 1. H1 accelerance at the tool from the hammer at the tool, per direction, with its coherence
    (:func:`surrogate_rbrdo.rig.frf.h1_frf`: sdypy-FRF, exponential window ``σ_w``, so the
    model is evaluated at ``s = iω + σ_w``);
-2. the model's modes at standstill in ``band_hz`` and the measured peak nearest each (within
-   ``search``) → the bearings' stiffness factors (and the tool mass factor) that put the
-   model's undamped natural frequencies on the peaks (least squares on log frequency);
+2. the model's modes at standstill in ``band_hz`` and, per direction, the measured peak
+   nearest each (within ``search``) → the bearings' stiffness factors of that direction (and
+   one tool mass factor) that put the model's undamped natural frequencies on the peaks
+   (least squares on log frequency);
 3. weighted nonlinear least squares of the measured H1 within ``half_width`` of every mode
    whose coherence is at least ``min_coherence``, against
    ``H(s) = s² [K(θ) + s C(θ, d) + s² M(m)]⁻¹`` at the tool's DOF, over the log of: the
-   bearings' stiffness factors ``θ`` at standstill, their damping factors ``d`` (``C_b ← d_b
-   C_b``, i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
+   bearings' stiffness factors ``θ`` at standstill *per direction* (``<bearing>_stiffness_x``,
+   ``_y``: at standstill the model's two planes are uncoupled, each direction's FRF sees its
+   own bearing stiffness; real bearings and the rig's ``anisotropy`` differ by direction,
+   and one factor for both made the split peaks one broad peak — η 44 % / 100 % off on
+   ``experiments/rig_campaign_trial.toml``), their damping factors ``d`` (``C_b ← d_b C_b``,
+   i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
    weighed by the FRF) and one calibration gain per direction (hammer × accelerometer). The
    weights are H1's random error, ``ε = √(1 − γ²) / (|γ| √(2 n_d))`` of ``|H|`` (Bendat &
    Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), floored at ``rel_floor``; the
@@ -197,14 +202,30 @@ def impact_damping(model: SpindleModel, records: Sequence[Record],
                          f"{[k.name for k in model.geometry.disks]}")
     frfs = _frfs(records, options)
     up = StandstillModel(model, disk)
+    _check_planes(up, model)
     lo, hi = options.band_hz or (100.0, force_band_top(records, options.force_drop_db))
     f0 = np.unique(np.round(up.natural_hz(np.ones(nb), 1.0), 3))
     f0 = f0[(f0 >= lo) & (f0 <= hi)]
     if f0.size == 0:
         raise ValueError(f"band_hz = {options.band_hz} is not allowed: the model has no mode "
                          "there")
-    theta, m, peaks = _align(up, frfs, f0, options, nb)
+    theta, m = _align(up, frfs, f0, options, nb)
     return _update(up, frfs, theta, m, (lo, hi), options, model)
+
+
+def _check_planes(up: StandstillModel, model: SpindleModel) -> None:
+    """Each direction's stiffness factors are fitted on that direction's FRF: the model's two
+    planes must be uncoupled at standstill (no cross-coupled bearing in the model)."""
+    M, C, K = up.matrices(np.ones(len(model.bearing_nodes)), np.ones(len(model.bearing_nodes)),
+                          1.0)
+    s = 2j * np.pi * 500.0
+    e = np.zeros(K.shape[0], complex)
+    e[4 * model.tool_node + 1] = 1.0
+    x = np.linalg.solve(K + s * C + s**2 * M, e)
+    if abs(x[4 * model.tool_node]) > 1e-9 * abs(x[4 * model.tool_node + 1]):
+        raise ValueError("model bearings: the two planes are coupled at standstill (a "
+                         "cross-coupled bearing); per-direction impact updating needs them "
+                         "uncoupled")
 
 
 def force_band_top(records: Sequence[Record], drop_db: float = 6.0) -> float:
@@ -229,53 +250,64 @@ def force_band_top(records: Sequence[Record], drop_db: float = 6.0) -> float:
     return float(f[below[0]]) if below.size else float(f[-1])
 
 
-def _peaks(frfs, f0, opts) -> np.ndarray:
-    """The measured peak (Hz) nearest each model mode (NaN where none is coherent)."""
+def _peaks(est: FRFEstimate, f0, opts) -> np.ndarray:
+    """The measured peak (Hz) of one direction's FRF nearest each model mode (NaN where none
+    is coherent)."""
     out = np.full(f0.size, np.nan)
     for i, f in enumerate(f0):
-        best = 0.0
-        for est in frfs.values():
-            g = ((est.freq_hz >= f * (1 - opts.search)) & (est.freq_hz <= f * (1 + opts.search))
-                 & (est.coherence[0] >= opts.min_coherence))
-            if g.sum() < 3:
-                continue
-            a = np.abs(est.receptance()[0][g])
-            j = int(np.argmax(a))
-            if 0 < j < a.size - 1 and a[j] > best:     # an interior maximum: a peak
-                best, out[i] = a[j], est.freq_hz[g][j]
+        g = ((est.freq_hz >= f * (1 - opts.search)) & (est.freq_hz <= f * (1 + opts.search))
+             & (est.coherence[0] >= opts.min_coherence))
+        if g.sum() < 3:
+            continue
+        a = np.abs(est.receptance()[0][g])
+        j = int(np.argmax(a))
+        if 0 < j < a.size - 1:                   # an interior maximum: a peak
+            out[i] = est.freq_hz[g][j]
     return out
 
 
 def _align(up: StandstillModel, frfs, f0, opts, nb):
-    """Stiffness (and tool mass) factors putting the model's natural frequencies on the
-    measured peaks: least squares on log frequency."""
-    peaks = _peaks(frfs, f0, opts)
-    ok = np.isfinite(peaks)
-    if ok.sum() == 0:
+    """Stiffness factors per direction (and one tool mass factor) putting the model's natural
+    frequencies on each direction's measured peaks: least squares on log frequency."""
+    dirs = sorted(frfs)
+    peaks = [_peaks(frfs[d], f0, opts) for d in dirs]
+    ok = [np.isfinite(pk) for pk in peaks]
+    n_ok = int(sum(o.sum() for o in ok))
+    if n_ok == 0:
         raise ModelError(f"impact_damping: no coherent FRF peak near the model's modes "
                          f"{np.round(f0, 1).tolist()} Hz")
-    n_m = 1 if up.tool_disk is not None and ok.sum() > nb else 0
+    nd = len(dirs)
+    n_m = 1 if up.tool_disk is not None and n_ok > nb * nd else 0
 
     def res(p):
-        fn = up.natural_hz(np.exp(p[:nb]), float(np.exp(p[nb])) if n_m else 1.0)
-        idx = np.searchsorted(fn, f0[ok])       # the model mode that moved from f0
-        cand = fn[np.clip(idx[:, None] + np.array([-1, 0]), 0, fn.size - 1)]
-        near = cand[np.arange(cand.shape[0]), np.argmin(np.abs(np.log(cand / peaks[ok, None])),
-                                                        axis=1)]
-        return np.log(near / peaks[ok])
+        out = []
+        for di in range(nd):
+            if not ok[di].any():
+                continue
+            fn = up.natural_hz(np.exp(p[di * nb:(di + 1) * nb]),
+                               float(np.exp(p[nd * nb])) if n_m else 1.0)
+            pk = peaks[di][ok[di]]
+            idx = np.searchsorted(fn, f0[ok[di]])       # the model mode that moved from f0
+            cand = fn[np.clip(idx[:, None] + np.array([-1, 0]), 0, fn.size - 1)]
+            near = cand[np.arange(cand.shape[0]),
+                        np.argmin(np.abs(np.log(cand / pk[:, None])), axis=1)]
+            out.append(np.log(near / pk))
+        return np.concatenate(out)
 
-    sol = least_squares(res, np.zeros(nb + n_m), x_scale=0.05, diff_step=1e-4)
-    return np.exp(sol.x[:nb]), float(np.exp(sol.x[nb])) if n_m else 1.0, peaks
+    sol = least_squares(res, np.zeros(nd * nb + n_m), x_scale=0.05, diff_step=1e-4)
+    return (np.exp(sol.x[:nd * nb]).reshape(nd, nb),
+            float(np.exp(sol.x[nd * nb])) if n_m else 1.0)
 
 
-def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
-    nb = theta.size
-    modes = up.natural_hz(theta, m)
+def _fit_data(up: StandstillModel, frfs, theta, m, band, opts, model):
+    """The FRF points fitted: within ``half_width`` of each direction's (aligned) modes where
+    the coherence is high enough, with H1's random error as SD; and the modes (Hz)."""
     lo, hi = band
-    modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
-    dirs = sorted(frfs)
-    data = []
-    for di, d in enumerate(dirs):
+    data, all_modes = [], []
+    for di, d in enumerate(sorted(frfs)):
+        modes = up.natural_hz(theta[di], m)
+        modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
+        all_modes.append(modes)
         est = frfs[d]
         f = est.freq_hz
         near = np.any(np.abs(f[:, None] / modes[None, :] - 1) <= opts.half_width, axis=1)
@@ -286,31 +318,44 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
         H = est.H[0][g] if est.form == "accelerance" else est.receptance()[0][g] * (
             2j * np.pi * f[g] + est.exp_decay_per_s) ** 2
         dof = 4 * model.tool_node + (1 if d == "y" else 0)
-        data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H, eps * np.abs(H), dof, di))
-    s = np.concatenate([x[0] for x in data])
-    H = np.concatenate([x[1] for x in data])
-    sd = np.concatenate([x[2] for x in data])
-    dof = np.concatenate([np.full(x[0].size, x[3]) for x in data])
-    gi = np.concatenate([np.full(x[0].size, x[4]) for x in data])
-    if s.size < 2 * nb + 2:
+        data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H, eps * np.abs(H),
+                     np.full(g.sum(), dof), np.full(g.sum(), di)))
+    s, H, sd, dof, gi = (np.concatenate([x[k] for x in data]) for k in range(5))
+    return s, H, sd, dof, gi, np.unique(np.concatenate(all_modes))
+
+
+def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
+    nd, nb = theta.shape
+    dirs = sorted(frfs)
+    s, H, sd, dof, gi, modes = _fit_data(up, frfs, theta, m, band, opts, model)
+    if s.size < (nd + 1) * nb + 2:
         raise ModelError(f"impact_damping: {s.size} coherent FRF points near the modes "
                          f"{np.round(modes, 1).tolist()} Hz; too few to fit")
     n_m = 1 if up.tool_disk is not None else 0
-    names = ([f"{b}_stiffness" for b in model.theta_bearings]
+    names = ([f"{b}_stiffness_{d}" for d in dirs for b in model.theta_bearings]
              + [f"{b}_damping" for b in model.theta_bearings]
              + (["tool_mass"] if n_m else []) + [f"gain_{d}" for d in dirs])
+    k0 = nd * nb                                 # first damping factor
 
     def unpack(p):
-        return (np.exp(p[:nb]), np.exp(p[nb:2 * nb]),
-                float(np.exp(p[2 * nb])) if n_m else 1.0, np.exp(p[2 * nb + n_m:]))
+        return (np.exp(p[:k0]).reshape(nd, nb), np.exp(p[k0:k0 + nb]),
+                float(np.exp(p[k0 + nb])) if n_m else 1.0, np.exp(p[k0 + nb + n_m:]))
 
     def model_frf(p):
+        # at standstill the experimenter's model has no coupling between the two planes:
+        # each direction's FRF sees that direction's bearing stiffness only
         th, dd, mm, gain = unpack(p)
-        h, dh = up.accelerance(th, dd, mm, s, dof)
+        h = np.zeros(s.size, complex)
         jac = np.zeros((s.size, p.size), complex)
-        jac[:, :dh.shape[1]] = gain[gi, None] * dh
-        jac[np.arange(s.size), 2 * nb + n_m + gi] = gain[gi] * h
-        return gain[gi] * h, jac
+        for di in range(nd):
+            g = gi == di
+            hd, dh = up.accelerance(th[di], dd, mm, s[g], dof[g])
+            h[g] = gain[di] * hd
+            rows = np.nonzero(g)[0][:, None]
+            jac[rows, np.arange(di * nb, (di + 1) * nb)] = gain[di] * dh[:, :nb]
+            jac[rows, np.arange(k0, k0 + nb + n_m)] = gain[di] * dh[:, nb:]
+            jac[g, k0 + nb + n_m + di] = h[g]
+        return h, jac
 
     def res(p):
         r = (H - model_frf(p)[0]) / sd
@@ -320,7 +365,8 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
         j = -model_frf(p)[1] / sd[:, None]
         return np.concatenate([j.real, j.imag])
 
-    p0 = np.concatenate([np.log(theta), np.zeros(nb), [np.log(m)] * n_m, np.zeros(len(dirs))])
+    p0 = np.concatenate([np.log(theta).ravel(), np.zeros(nb), [np.log(m)] * n_m,
+                         np.zeros(nd)])
     sol = least_squares(res, p0, jac=jac, x_scale=0.05, max_nfev=400)
     if not sol.success:
         raise ModelError(f"impact_damping: the FRF fit did not converge ({sol.message})")
@@ -334,7 +380,7 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
     eta0 = np.array([b.law.damping_eta_s for b in model.geometry.bearings])
     par = np.exp(sol.x)
     return ImpactDamping(tuple(model.theta_bearings), tuple(names), par, cov,
-                         eta0 * par[nb:2 * nb], int(s.size), chi2, modes)
+                         eta0 * par[k0:k0 + nb], int(s.size), chi2, modes)
 
 
 __all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping"]

@@ -205,8 +205,24 @@ def write_identification_run(out: Any, p: IdentificationPlan, res: Any) -> dict[
                      "identification_s": res.timings, "flag_counts": camp.flag_counts},
             "summary": rows + [{"records": int(res.responses.n), "used": used,
                                 "trend_laws": {c: t.law for c, t in zip(
-                                    u.coefficients, u.trends, strict=True)}}]}
+                                    u.coefficients, u.trends, strict=True)}}]
+            + impact_rows(d.get("provenance", {}).get("damping"))}
 
 
-__all__ = ["campaign_convergence", "plot_convergence", "plot_qq", "plot_trend",
+def impact_rows(damping: Mapping[str, Any] | None) -> list[dict[str, Any]]:
+    """One summary line per installation's impact fit: η̂, the tool mass factor and the fit's
+    χ²/ν — far above a few, the model cannot represent the FRFs (docs/identification.md §5b).
+
+    >>> impact_rows({"source": "response"})
+    []
+    """
+    if not damping or damping.get("source") != "impact":
+        return []
+    return [{"impacts": key, "eta_s": [float(f"{e:.4g}") for e in inst["eta_s"]],
+             "tool_mass": round(float(inst["parameters"].get("tool_mass", 1.0)), 4),
+             "chi2_dof": round(float(inst["chi2_dof"]), 2)}
+            for key, inst in damping["installations"].items()]
+
+
+__all__ = ["campaign_convergence", "impact_rows", "plot_convergence", "plot_qq", "plot_trend",
            "write_identification_figures", "write_identification_run"]

@@ -254,3 +254,16 @@ def test_stiffness_block_from_python(ident_run):
                                    [24000.0], distribution="lognormal")
     x = logn.sample(20000, rng=np.random.default_rng(0))
     np.testing.assert_allclose(x.mean(axis=0), u["mean"], rtol=3e-3)
+
+
+def test_impact_fit_lines_in_the_run_summary():
+    """With ``damping = "impact"`` the summary prints each installation's η̂, tool mass and
+    the fit's χ²/ν (the model-error diagnostic); with ``"response"`` nothing."""
+    dmp = {"source": "impact", "installations": {"build=0|tool=0": {
+        "eta_s": [4.47603e-06, 4.04102e-06], "chi2_dof": 311.7456,
+        "parameters": {"tool_mass": 1.06843, "front_damping": 1.1}}}}
+    assert plots_identification.impact_rows(dmp) == [{
+        "impacts": "build=0|tool=0", "eta_s": [4.476e-06, 4.041e-06], "tool_mass": 1.0684,
+        "chi2_dof": 311.75}]
+    rows = plots_identification.impact_rows
+    assert rows({"source": "response"}) == [] and rows(None) == []

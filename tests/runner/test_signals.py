@@ -49,6 +49,12 @@ def _session(sid: int) -> list[tuple[int, str]]:
     return out
 
 
+def _default_sigint() -> None:
+    """A terminal's Ctrl-C reaches a process that has SIGINT at its default; a test suite run
+    in the background (``cmd &``, ``nohup``) has it ignored, and children inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_and_signal(tmp_path: Path, sig: int, group: bool) -> tuple[subprocess.Popen, str]:
     cfg = tmp_path / "slow.toml"
     cfg.write_text(SLOW)
@@ -56,7 +62,7 @@ def _start_and_signal(tmp_path: Path, sig: int, group: bool) -> tuple[subprocess
         [sys.executable, "-m", "surrogate_rbrdo", "run", str(cfg), "--results",
          str(tmp_path / "res"), "--run-id", "s", "--no-progress"],
         env=dict(os.environ), start_new_session=True, stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, text=True)
+        stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
     t0 = time.monotonic()
     while time.monotonic() - t0 < 120:          # until two loky workers compute
         if sum("loky" in c for _, c in _session(p.pid)) >= 2:
