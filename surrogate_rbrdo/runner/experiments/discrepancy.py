@@ -10,7 +10,9 @@ geometry at ``baseline``, its effects), ``[discrepancy]``
   (resumed record by record, as the ``rig`` kind);
 * ``[data] path``: a finished ``rig`` run folder (or ``discrepancy`` run on the rig), a
   folder with ``phasors.csv`` (and ``channels.json``) or a dataset folder of
-  ``docs/measured-data.md`` (relative to the config).
+  ``docs/measured-data.md`` (relative to the config). The files the analysis reads
+  (``discrepancy.experiment.data_files``) are hashed into ``meta.json`` ``inputs``, so
+  ``--resume`` refuses data that changed since the run started.
 
 Stages: ``campaign`` (the rig's, or the data folder resolved) → ``analyse``
 (``discrepancy.find_discrepancy``, stream 1 of the seed); the report writes ``findings.json``,
@@ -28,7 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.experiment import DiscrepancyTable, data_from_folder
+from surrogate_rbrdo.core.files import read_input
+from surrogate_rbrdo.discrepancy.experiment import DiscrepancyTable, data_files, data_from_folder
 from surrogate_rbrdo.discrepancy.report import write_run
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
 from surrogate_rbrdo.reporting.plots_discrepancy import plot_all
@@ -95,8 +98,9 @@ def _rig_run(folder: Path, sp: ReferenceSpindle, geometry: str) -> Path:
                          f"a finished rig campaign (meta.json: kind {meta.get('kind')!r}, status "
                          f"{meta.get('status')!r}; needs campaign/phasors.csv)")
     try:
-        rig = json.loads((folder / "config.json").read_text()).get("rig", {})
-    except (OSError, ValueError) as exc:
+        rig = json.loads(read_input(folder / "config.json", "data.path's config.json")
+                         ).get("rig", {})
+    except ValueError as exc:
         raise ValueError(f"data.path = {str(folder)!r}: its config.json: {exc}") from None
     _same_design(f"data.path = {str(folder)!r}: its rig.design", rig.get("design"), sp,
                  geometry)
@@ -111,6 +115,8 @@ def _data_folder(c: DiscrepancyConfig, sp: ReferenceSpindle, base_dir: Path) -> 
     if not ((p / "phasors.csv").is_file() or (p / "index.jsonl").is_file()):
         raise ValueError(f"data.path = {c.data.path!r} is not allowed: {str(p)!r} holds no "
                          "phasors.csv, no dataset (index.jsonl) and is no rig run folder")
+    for f in data_files(p):                  # hashed into meta.json inputs: --resume checks
+        read_input(f, "data file")
     return p
 
 
