@@ -64,6 +64,18 @@ def _perturbations(model, sweep) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def generic_labels(model) -> tuple[str, ...]:
+    """Names of the generic local parameters, in the column order of :func:`generic_columns`
+    (the order :func:`_perturbations` builds them in)."""
+    out = []
+    for e in range(model.element_mats.shape[0]):
+        out += [f"stiffness of shaft element {e}", f"mass of shaft element {e}"]
+    for disk in model.geometry.disks:
+        out += [f"mass of disk {disk.name}", f"diametral inertia of disk {disk.name}"]
+    out += [f"grounded spring at node {n}" for n in range(model.n_nodes)]
+    return tuple(out)
+
+
 def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
     """Unwhitened derivatives of the observables (residual order) with respect to every
     generic local parameter, at ``fit`` (unbalance held at its fitted value)."""
