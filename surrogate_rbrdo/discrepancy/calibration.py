@@ -66,6 +66,7 @@ class Linearisation:
     generic: np.ndarray                         # (n_obs, r) leading generic directions
     n_theta: int = 0                            # nuisance columns of the stiffness factors
     generic_labels: tuple[str, ...] = ()        # what each generic column changes
+    generic_bounds: np.ndarray | None = None    # (r, 2) plausible range, in column units
 
 
 def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
@@ -121,13 +122,15 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     for c in candidates:
         vs = _distinct(out[c.name], W, Q)
         (kept.append((c, tuple(vs))) if vs else absorbed.append(c.name))
-    G, labels = _generic_basis(problem, base, W, Q)
-    return Linearisation(nuis, tuple(kept), tuple(absorbed), G, par.sizes[0], labels)
+    G, labels, bounds = _generic_basis(problem, base, W, Q)
+    return Linearisation(nuis, tuple(kept), tuple(absorbed), G, par.sizes[0], labels, bounds)
 
 
-def _generic_basis(problem: Problem, base: Fit, W, Q) -> tuple[np.ndarray, tuple[str, ...]]:
+def _generic_basis(problem: Problem, base: Fit, W, Q
+                   ) -> tuple[np.ndarray, tuple[str, ...], np.ndarray]:
     """The generic sensitivities that the nuisance does not absorb (relative residual norm
-    above 1e-6 once it is projected out), as unwhitened columns, and their labels."""
+    above 1e-6 once it is projected out), as unwhitened columns scaled to unit whitened,
+    nuisance-orthogonal norm; their labels and plausible ranges in those units."""
     G = generic_columns(problem, base)
     labels = generic_labels(problem.forward.model(
         tuple(e for e in base.par.rows(base.x[None]).extras[0] if acts_on_rotor(e))))
@@ -135,7 +138,9 @@ def _generic_basis(problem: Problem, base: Fit, W, Q) -> tuple[np.ndarray, tuple
     n0 = np.linalg.norm(Gw, axis=0)
     n1 = np.linalg.norm(Gw - Q @ (Q.T @ Gw), axis=0)
     keep = n1 > 1e-6 * np.maximum(n0, 1e-300)
-    return G[:, keep] / n1[keep], tuple(lb for lb, k in zip(labels, keep, strict=True) if k)
+    bounds = np.array([[lo, hi] for _, lo, hi in labels]).reshape(-1, 2)[keep] * n1[keep, None]
+    return (G[:, keep] / n1[keep], tuple(lb for (lb, _, _), k in zip(labels, keep, strict=True)
+                                         if k), bounds)
 
 
 def _distinct(variants: list[Variant], W, Q) -> list[Variant]:

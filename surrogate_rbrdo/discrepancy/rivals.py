@@ -5,7 +5,11 @@ that the something is that effect. The generic local parameters of sensitivity-b
 (:mod:`.generic`: the stiffness and mass of each shaft element, each disk's mass and inertia,
 a grounded spring at each node — Friswell & Mottershead 1995, ch. 7) are the rival
 explanations: a heavier motor rotor, a magnetic pull, a local loss of shaft stiffness are each
-one of them to first order, and a library effect can mimic part of any. The candidate is
+one of them to first order, and a library effect can mimic part of any — but only changes of
+a plausible size count as rivals (:data:`~.generic.PLAUSIBLE`: at 1× a bearing stiffness that
+falls as ``Ω²`` *is* a mass at the bearing, ``−Ω² Δm``, yet the mass that mimics a few percent
+of softening is more than the shaft element weighs; the rival's coefficient is confined to its
+range, where its χ² is a clipped quadratic). The candidate is
 *separable* only if it explains the data significantly better than every one-parameter generic
 change, in the sense of the encompassing (J-) test of non-nested models (Davidson & MacKinnon
 1981, *Econometrica* 49:781; Mizon & Richard 1986, *Econometrica* 54:657): adding the library
@@ -92,10 +96,15 @@ def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return Y - Q @ (Q.T @ Y)
 
 
+#: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
+DAMPING_EXPONENT = (-1.0, 1.0)
+
+
 def damping_law_columns(problem: Problem, lin: Linearisation, names: tuple[str, ...]
-                        ) -> tuple[np.ndarray, tuple[str, ...]]:
+                        ) -> tuple[np.ndarray, tuple[str, ...], np.ndarray]:
     """Unwhitened columns of a speed exponent of each bearing's damping (module doc), from the
-    damping factors' columns of ``lin.nuisance`` (outer parameter ``names`` in its order)."""
+    damping factors' columns of ``lin.nuisance`` (outer parameter ``names`` in its order),
+    their labels and plausible ranges (:data:`DAMPING_EXPONENT`)."""
     idx = [i for i, n in enumerate(names) if n.startswith("log_damping")]
     scale = np.zeros(problem.n_obs)
     off = 0
@@ -109,12 +118,24 @@ def damping_law_columns(problem: Problem, lin: Linearisation, names: tuple[str, 
     cols = lin.nuisance[:, idx] * scale[:, None]
     labels = tuple(f"speed law of damping ({names[i].removeprefix('log_damping_')})"
                    for i in idx)
-    return cols, labels
+    return cols, labels, np.tile(DAMPING_EXPONENT, (len(idx), 1))
+
+
+def _bounded_gain(U: np.ndarray, r: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Per column ``u`` the χ² reduction of the best multiple ``c u`` of it with ``c`` inside
+    its ``bounds``: ``2 c uᵀr − c² uᵀu`` (a quadratic in ``c``: its bounded minimiser is the
+    clipped free one). A column the projection left empty gains nothing."""
+    uu = np.einsum("nk,nk->k", U, U)
+    ur = U.T @ r
+    live = uu > 0
+    c = np.clip(np.where(live, ur / np.where(live, uu, 1.0), 0.0), bounds[:, 0], bounds[:, 1])
+    return np.where(live, 2 * c * ur - c * c * uu, 0.0)
 
 
 def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: np.ndarray,
                fit_chi2: float, fit_r: np.ndarray, fit_jac: np.ndarray, n_free: int,
-               confound_delta: float, extra: tuple[np.ndarray, tuple[str, ...]] | None = None
+               confound_delta: float,
+               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
                ) -> RivalTest:
     """The encompassing test of a fitted candidate against every generic rival (module doc).
 
@@ -123,7 +144,8 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     problem : Problem
         The stage's training problem.
     lin : Linearisation
-        The stage's linearisation (nuisance and generic columns at its base).
+        The stage's linearisation (nuisance and generic columns at its base, with the generic
+        changes' plausible ranges).
     base_chi2, base_r : float, ndarray
         χ² and whitened residuals of the stage's base fit.
     fit_chi2, fit_r, fit_jac : float, ndarray, ndarray
@@ -132,30 +154,30 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
         The candidate's free parameters.
     confound_delta : float
         χ²₁ quantile of the confound level.
-    extra : (ndarray, tuple of str), optional
-        Further rival columns (unwhitened) and their labels (:func:`damping_law_columns`).
+    extra : (ndarray, tuple of str, ndarray), optional
+        Further rival columns (unwhitened), labels and ranges (:func:`damping_law_columns`).
     """
     level = float(chi2.sf(confound_delta, 1))
     k = max(n_free, 1)
     threshold = float(chi2.isf(level, k))
     cols, labels = lin.generic, lin.generic_labels
+    bounds = (lin.generic_bounds if lin.generic_bounds is not None
+              else np.tile([-np.inf, np.inf], (cols.shape[1], 1)))
     if extra is not None and extra[0].shape[1]:
         cols, labels = np.hstack([cols, extra[0]]), labels + extra[1]
+        bounds = np.vstack([bounds, extra[2]])
     if cols.shape[1] == 0:
         return RivalTest(np.inf, threshold, "", 0.0, level, k)
     W = _data_whitening(problem)
     N = _apply(W, lin.nuisance)
     G = _apply(W, cols)
+    gg = np.einsum("nk,nk->k", G, G)
     U = _orth(N, G)
-    rr = _orth(N, base_r[:, None])[:, 0]
-    nu = np.einsum("nk,nk->k", U, U)
-    live = nu > 1e-12 * np.einsum("nk,nk->k", G, G)            # not absorbed by the nuisance
-    gain = np.where(live, (U.T @ rr) ** 2 / np.where(live, nu, 1.0), 0.0)   # rival alone
+    live = np.einsum("nk,nk->k", U, U) > 1e-12 * gg          # not absorbed by the nuisance
+    gain = _bounded_gain(U, _orth(N, base_r[:, None])[:, 0], bounds)       # rival alone
     V = _orth(np.hstack([N, fit_jac]), G)
-    norm = np.einsum("nk,nk->k", V, V)
-    ok = norm > 1e-12 * np.einsum("nk,nk->k", G, G)
-    add = np.where(ok, (V.T @ fit_r) ** 2 / np.where(ok, norm, 1.0), 0.0)  # rival on top
-    both = fit_chi2 - add
+    V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
+    both = fit_chi2 - _bounded_gain(V, fit_r, bounds)                     # rival + candidate
     stat = np.where(live, (base_chi2 - gain) - both, np.inf)
     j = int(np.argmin(stat))
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),

@@ -60,3 +60,25 @@ def test_a_candidate_no_rival_can_mimic_adds_its_whole_fit():
     assert t.statistic == pytest.approx(25.0, rel=1e-9)
     assert t.rival_delta_chi2 == pytest.approx(0.0, abs=1e-9)
     assert t.passed and t.threshold == pytest.approx(6.63)
+
+
+@pytest.mark.known_answer
+def test_a_rival_needing_an_implausible_size_is_held_to_its_range():
+    """The same mimic as above, but the rival may change by at most 1 (column units) while the
+    data need 3: the rival's χ² is that of its bounded best, ``|r0 − u|²`` (u its
+    nuisance-orthogonal part), and the candidate, which fits all of it, adds that minus its
+    own χ²."""
+    rng = np.random.default_rng(1)
+    lin, nuis, gen = _setup(rng)
+    lin = Linearisation(nuis, (), (), gen, 0, ("g0", "g1", "g2"), np.tile([-1.0, 1.0], (3, 1)))
+    y = 3.0 * gen[:, 1] + 0.1 * rng.standard_normal(nuis.shape[0])
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([nuis, gen[:, 1:2]])
+    r1 = _ls_residual(A, y)
+    u = _ls_residual(nuis, gen[:, 1])
+    c = float(u @ r0) / float(u @ u)
+    assert c > 1.0
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    expected = float((r0 - u) @ (r0 - u)) - float(r1 @ r1)
+    assert t.rival == "g1" and t.statistic == pytest.approx(expected, rel=1e-9)
+    assert t.passed
