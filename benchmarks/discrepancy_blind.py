@@ -181,14 +181,26 @@ def main() -> None:
     print("confounded pairs:", pairs)
     grid = build_grid(ctx, cal, noises, args.seeds, pairs, base_seed=args.base_seed)
     print(f"{len(grid)} scenarios")
+    # replicate k of every cell before replicate k + 1: a run stopped early is a balanced
+    # sample; each row is written as it arrives
+    grid = [sc for k in range(args.seeds) for sc in grid[k::args.seeds]]
     t1 = time.perf_counter()
-    rows = Parallel(n_jobs=args.jobs, verbose=0)(delayed(run_scenario)(ctx, sc) for sc in grid)
+    rows = []
+    fh = open(args.out, "w", newline="") if args.out else None
+    try:
+        for row in Parallel(n_jobs=args.jobs, verbose=0, return_as="generator")(
+                delayed(run_scenario)(ctx, sc) for sc in grid):
+            if fh is not None:
+                if not rows:
+                    w = csv.DictWriter(fh, fieldnames=list(row))
+                    w.writeheader()
+                w.writerow(row)
+                fh.flush()
+            rows.append(row)
+    finally:
+        if fh is not None:
+            fh.close()
     t_grid = time.perf_counter() - t1
-    if args.out:
-        with open(args.out, "w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
     _report(rows)
     cpu = sum(float(r["cpu_seconds"]) for r in rows)
     print(f"grid: {t_grid:.0f} s for {len(rows)} scenarios on {args.jobs} jobs "
