@@ -96,6 +96,13 @@ def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return Y - Q @ (Q.T @ Y)
 
 
+#: the experiment that separates a library effect from its generic rivals (1x data: ω = Ω)
+RIVAL_SEPARATION = (
+    "excitation off the synchronous line (impact tests or a shaker at speed, ω ≠ Ω): under 1× "
+    "unbalance alone a bearing stiffness varying as Ω² equals a mass at the bearing, a polar "
+    "inertia equals minus a diametral inertia, a cross-coupled stiffness equals a damping ∝ "
+    "1/Ω; off the synchronous line they part")
+
 #: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
 DAMPING_EXPONENT = (-1.0, 1.0)
 

@@ -48,6 +48,7 @@ from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jac
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.rivals import RIVAL_SEPARATION
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
@@ -339,5 +340,6 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
                 "candidate": lead.name if lead else None}
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
-        np.asarray(speeds), partial, separating_test(list(conf)) if conf else "", seconds,
+        np.asarray(speeds), partial, separating_test(list(conf)) if conf
+        else (RIVAL_SEPARATION if withheld else ""), seconds,
         options)
