@@ -14,7 +14,8 @@ any data are seen):
 
 Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
 a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
-confounded set. When the base model's residual
+confounded set — provided some member beats every generic rival (:mod:`.rivals`, each fitted
+candidate's :attr:`Assessment.rival`; the workflow applies it). When the base model's residual
 looks like noise, candidates whose first-order statistic is far below the threshold are not
 refitted (their nonlinear ``Δχ²`` equals the first-order one for small effects; this saves the
 fits when nothing is missing).

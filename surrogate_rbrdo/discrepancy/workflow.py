@@ -6,7 +6,9 @@ much the gap shrinks once it is added.
    show where the data leave the model.
 2. **Which effect.** Every candidate of the library is fitted on top of the recalibrated model
    (nuisance refitted with it) and tested (:mod:`.naming`); the best passing one is added and the
-   search repeats for a second effect (forward selection, at most ``max_effects``).
+   search repeats for a second effect (forward selection, at most ``max_effects``). A name
+   must also beat every plausible generic local change (:mod:`.rivals`); a first-stage
+   detection that none beats is an unnamed residual.
 3. **Nothing missing / unnamed residual.** Whatever is named, the final model's residual must
    pass three lack-of-fit tests (each at ``alpha_residual / 3``): the χ² goodness of fit, a GP
    structure test along speed and frequency, and the projection on generic local
