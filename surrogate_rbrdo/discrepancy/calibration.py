@@ -36,7 +36,8 @@ from scipy.stats import chi2
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import FD_STEP, Fit
-from surrogate_rbrdo.discrepancy.generic import generic_columns
+from surrogate_rbrdo.discrepancy.generic import generic_columns, generic_labels
+from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
 from surrogate_rbrdo.discrepancy.noise import NoiseModel
 from surrogate_rbrdo.discrepancy.nuisance import Rows
 from surrogate_rbrdo.discrepancy.problem import Problem
@@ -64,6 +65,8 @@ class Linearisation:
     absorbed: tuple[str, ...]                   # candidates the nuisance absorbs entirely
     generic: np.ndarray                         # (n_obs, r) leading generic directions
     n_theta: int = 0                            # nuisance columns of the stiffness factors
+    generic_labels: tuple[str, ...] = ()        # what each generic column changes
+    generic_bounds: np.ndarray | None = None    # (r, 2) plausible range, in column units
 
 
 def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
@@ -119,19 +122,25 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     for c in candidates:
         vs = _distinct(out[c.name], W, Q)
         (kept.append((c, tuple(vs))) if vs else absorbed.append(c.name))
-    return Linearisation(nuis, tuple(kept), tuple(absorbed), _generic_basis(problem, base, W, Q),
-                         par.sizes[0])
+    G, labels, bounds = _generic_basis(problem, base, W, Q)
+    return Linearisation(nuis, tuple(kept), tuple(absorbed), G, par.sizes[0], labels, bounds)
 
 
-def _generic_basis(problem: Problem, base: Fit, W, Q) -> np.ndarray:
+def _generic_basis(problem: Problem, base: Fit, W, Q
+                   ) -> tuple[np.ndarray, tuple[str, ...], np.ndarray]:
     """The generic sensitivities that the nuisance does not absorb (relative residual norm
-    above 1e-6 once it is projected out), as unwhitened columns."""
+    above 1e-6 once it is projected out), as unwhitened columns scaled to unit whitened,
+    nuisance-orthogonal norm; their labels and plausible ranges in those units."""
     G = generic_columns(problem, base)
+    labels = generic_labels(problem.forward.model(
+        tuple(e for e in base.par.rows(base.x[None]).extras[0] if acts_on_rotor(e))))
     Gw = _apply(W, G)
     n0 = np.linalg.norm(Gw, axis=0)
     n1 = np.linalg.norm(Gw - Q @ (Q.T @ Gw), axis=0)
     keep = n1 > 1e-6 * np.maximum(n0, 1e-300)
-    return G[:, keep] / n1[keep]
+    bounds = np.array([[lo, hi] for _, lo, hi in labels]).reshape(-1, 2)[keep] * n1[keep, None]
+    return (G[:, keep] / n1[keep], tuple(lb for (lb, _, _), k in zip(labels, keep, strict=True)
+                                         if k), bounds)
 
 
 def _distinct(variants: list[Variant], W, Q) -> list[Variant]:

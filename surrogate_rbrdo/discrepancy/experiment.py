@@ -125,6 +125,27 @@ def options_from_dict(table: Mapping[str, Any]) -> DiscrepancyOptions:
     return parse(DiscrepancyTable, table, "discrepancy").options()
 
 
+def data_files(path: str | Path) -> tuple[Path, ...]:
+    """The files :func:`data_from_folder` reads from ``path`` (for provenance: their hashes
+    let a resumed run refuse changed data): ``phasors.csv`` and ``channels.json`` or the
+    first native record; for a dataset folder every file under it.
+
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> _ = (d / "phasors.csv").write_text("x"); _ = (d / "channels.json").write_text("{}")
+    >>> [p.name for p in data_files(d)]
+    ['phasors.csv', 'channels.json']
+    """
+    root = Path(path)
+    table = root / "phasors.csv"
+    if not table.is_file():
+        return tuple(sorted(p for p in root.rglob("*") if p.is_file()))
+    sidecar = root / "channels.json"
+    if sidecar.is_file():
+        return table, sidecar
+    return (table,) + tuple(sorted((root / "dataset" / "records").glob("*.npz"))[:1])
+
+
 def data_from_folder(path: str | Path) -> MeasuredData:
     """Observables from a measured-data folder: ``phasors.csv`` (the rig campaign's 1x table,
     or a user's in the same columns) and the channels' positions from ``channels.json``

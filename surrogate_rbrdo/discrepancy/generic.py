@@ -64,6 +64,34 @@ def _perturbations(model, sweep) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+#: plausible range of each kind of generic change (relative, or N/m / NODE_SPRING_SCALE for a
+#: node spring): what a rival explanation may use (:mod:`.rivals`). A shaft element can lose
+#: nearly all of its bending stiffness (a crack or a fretted fit: Dimarogonas 1996) and gain
+#: some where a shrink-fitted part stiffens it; its mass follows drawn geometry and density,
+#: with unmodelled nuts, spacers and balancing rings adding some; a disk's mass and inertia may
+#: be off by half (a motor rotor's laminations and windings, a holder drawn without its tool);
+#: a grounded spring (seal, coupling, magnetic pull) is a fraction of a bearing's stiffness,
+#: which is of the order of NODE_SPRING_SCALE.
+PLAUSIBLE = {"element_stiffness": (-0.9, 0.3), "element_mass": (-0.2, 0.3),
+             "disk_mass": (-0.5, 0.5), "disk_inertia": (-0.5, 0.5), "node_spring": (-0.5, 0.5)}
+
+
+def generic_labels(model) -> tuple[tuple[str, float, float], ...]:
+    """Per generic local parameter, in the column order of :func:`generic_columns` (the order
+    :func:`_perturbations` builds them in): its name and plausible range (:data:`PLAUSIBLE`,
+    in the column's units)."""
+    out = []
+    for e in range(model.element_mats.shape[0]):
+        out += [(f"stiffness of shaft element {e}", *PLAUSIBLE["element_stiffness"]),
+                (f"mass of shaft element {e}", *PLAUSIBLE["element_mass"])]
+    for disk in model.geometry.disks:
+        out += [(f"mass of disk {disk.name}", *PLAUSIBLE["disk_mass"]),
+                (f"diametral inertia of disk {disk.name}", *PLAUSIBLE["disk_inertia"])]
+    out += [(f"grounded spring at node {n}", *PLAUSIBLE["node_spring"])
+            for n in range(model.n_nodes)]
+    return tuple(out)
+
+
 def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
     """Unwhitened derivatives of the observables (residual order) with respect to every
     generic local parameter, at ``fit`` (unbalance held at its fitted value)."""

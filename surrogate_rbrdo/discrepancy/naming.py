@@ -14,7 +14,8 @@ any data are seen):
 
 Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
 a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
-confounded set. When the base model's residual
+confounded set — provided some member beats every generic rival (:mod:`.rivals`, each fitted
+candidate's :attr:`Assessment.rival`; the workflow applies it). When the base model's residual
 looks like noise, candidates whose first-order statistic is far below the threshold are not
 refitted (their nonlinear ``Δχ²`` equals the first-order one for small effects; this saves the
 fits when nothing is missing).
@@ -38,6 +39,7 @@ from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit
 from surrogate_rbrdo.discrepancy.holdout import residuals
 from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
+from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
@@ -57,10 +59,17 @@ class Assessment:
     fit: CandidateFit | None
     holdout_gain: dict
     checks: dict
+    #: the encompassing test against the generic local changes (:mod:`.rivals`)
+    rival: RivalTest | None = None
 
     @property
     def passed(self) -> bool:
         return all(self.checks.values())
+
+    @property
+    def separable(self) -> bool:
+        """Whether the data tell this candidate from every generic local change."""
+        return self.rival is None or self.rival.passed
 
     def to_dict(self) -> dict:
         d = {"name": self.name, "delta_chi2": self.delta_chi2, "p_raw": self.p_raw,
@@ -69,6 +78,8 @@ class Assessment:
         if self.fit is not None:
             d.update(parameters=self.fit.parameters, ci=self.fit.ci,
                      chi2=self.fit.fit.chi2)
+        if self.rival is not None:
+            d["generic_rival"] = self.rival.to_dict()
         return d
 
 
@@ -106,7 +117,8 @@ class HoldoutProblems:
 
 def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
               holdout: HoldoutProblems, *, alpha: float, n_draws: int,
-              holdout_tolerance: float, rng: np.random.Generator, max_nfev: int) -> Stage:
+              holdout_tolerance: float, rng: np.random.Generator, max_nfev: int,
+              confound_delta: float) -> Stage:
     """Calibrate, fit and check every candidate on top of ``base``."""
     lin = linearise(problem, base, candidates)
     null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
@@ -122,6 +134,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     p_crit = null.critical_p(alpha) if lin.candidates else 0.0
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
     base_ho = holdout.chi2(base)
+    law = damping_law_columns(problem, lin, base.par.names)
     out = []
     for k, (c, _) in enumerate(lin.candidates):
         threshold = tails[k].isf(p_crit)
@@ -141,7 +154,10 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             "holdout": (gain["interleaved"] + gain["extrapolated"] > 0
                         and min(gain.values()) >= -holdout_tolerance),
         }
-        out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks))
+        rt = rival_test(problem, lin, base.chi2, r, cf.fit.chi2, cf.fit.evaluation.residuals[0],
+                        cf.fit.jac, len(cf.slot.free), confound_delta, law)
+        out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
+                              rt))
     return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
 
 

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from surrogate_rbrdo.core.files import read_meta
-from surrogate_rbrdo.discrepancy.experiment import DiscrepancyTable
+from surrogate_rbrdo.core.files import read_input, read_meta
+from surrogate_rbrdo.discrepancy.experiment import DiscrepancyTable, data_files
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
 from surrogate_rbrdo.rig.config import RigPlan, RigTable, rig_plan
 from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
@@ -86,8 +86,9 @@ def _rig_run(folder: Path, sp: ReferenceSpindle, geometry: str) -> Path:
                          f"a finished rig campaign (meta.json: kind {meta.get('kind')!r}, status "
                          f"{meta.get('status')!r}; needs campaign/phasors.csv)")
     try:
-        rig = json.loads((folder / "config.json").read_text()).get("rig", {})
-    except (OSError, ValueError) as exc:
+        rig = json.loads(read_input(folder / "config.json", "data.path's config.json")
+                         ).get("rig", {})
+    except ValueError as exc:
         raise ValueError(f"data.path = {str(folder)!r}: its config.json: {exc}") from None
     _same_design(f"data.path = {str(folder)!r}: its rig.design", rig.get("design"), sp,
                  geometry)
@@ -102,6 +103,8 @@ def _data_folder(c: DiscrepancyConfig, sp: ReferenceSpindle, base_dir: Path) -> 
     if not ((p / "phasors.csv").is_file() or (p / "index.jsonl").is_file()):
         raise ValueError(f"data.path = {c.data.path!r} is not allowed: {str(p)!r} holds no "
                          "phasors.csv, no dataset (index.jsonl) and is no rig run folder")
+    for f in data_files(p):                  # hashed into meta.json inputs: --resume checks
+        read_input(f, "data file")
     return p
 
 

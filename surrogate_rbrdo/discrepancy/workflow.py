@@ -6,7 +6,9 @@ much the gap shrinks once it is added.
    show where the data leave the model.
 2. **Which effect.** Every candidate of the library is fitted on top of the recalibrated model
    (nuisance refitted with it) and tested (:mod:`.naming`); the best passing one is added and the
-   search repeats for a second effect (forward selection, at most ``max_effects``).
+   search repeats for a second effect (forward selection, at most ``max_effects``). A name
+   must also beat every plausible generic local change (:mod:`.rivals`); a first-stage
+   detection that none beats is an unnamed residual.
 3. **Nothing missing / unnamed residual.** Whatever is named, the final model's residual must
    pass three lack-of-fit tests (each at ``alpha_residual / 3``): the χ² goodness of fit, a GP
    structure test along speed and frequency, and the projection on generic local
@@ -48,6 +50,7 @@ from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jac
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.rivals import RIVAL_SEPARATION
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
@@ -256,14 +259,22 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     current = base
     stages, named = [], []
     confounded: list[Assessment] = []
+    withheld: tuple[Assessment, ...] = ()
     while True:
         left = tuple(c for c in cands if c.name not in {a.name for a in named})
         n_left = len(left) if len(named) < options.max_effects and not confounded else 0
         st = run_stage(train, current, left[:n_left], ho, alpha=options.alpha,
                        n_draws=options.n_draws, holdout_tolerance=options.holdout_tolerance,
-                       rng=rng.spawn(1)[0], max_nfev=options.max_nfev)
+                       rng=rng.spawn(1)[0], max_nfev=options.max_nfev,
+                       confound_delta=options.confound_delta)
         stages.append(st)
         group = decide(st, options.confound_delta) if n_left else []
+        if group and not any(a.separable for a in group):
+            # detected, but a generic local change fits as well: at the first stage nothing
+            # can be named (unnamed residual); later, the names stand and the residual tests
+            # judge what is left (the stage's rival tests are in the findings)
+            withheld = () if named else tuple(group)
+            break
         if not group:
             break
         current = group[0].fit.fit
@@ -272,7 +283,8 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         else:
             named.append(group[0])
     res = _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
-                    tuple(confounded), options, one_x[0].coord, time.perf_counter() - t0)
+                    tuple(confounded), withheld, options, one_x[0].coord,
+                    time.perf_counter() - t0)
     everything = _problem(fm, data, None, options.nuisance, runs)
     held_pts = split.interleaved | split.extrapolated
     gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
@@ -284,8 +296,8 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
                    seconds=time.perf_counter() - t0)
 
 
-def _conclude(data, train, held, split, base, final, stages, named, confounded, options,
-              speeds, seconds) -> DiscrepancyResult:
+def _conclude(data, train, held, split, base, final, stages, named, confounded, withheld,
+              options, speeds, seconds) -> DiscrepancyResult:
     last = stages[-1]
     level = options.alpha_residual / 3
     residual = {"gof_chi2": final.chi2, "gof_dof": final.dof, "gof_p": last.gof_p,
@@ -294,19 +306,24 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
     ps = {"gof": (final.chi2, last.gof_p), "structure": (last.structure, last.structure_p),
           "generic": (last.generic, last.generic_p)}
     worst = min(ps, key=lambda k: ps[k][1])
-    unexplained = ps[worst][1] <= level
+    unexplained = ps[worst][1] <= level or bool(withheld)
     u = tuple(x[0] for x in base.evaluation.unbalance)
     before = gap(held, residuals(held, base.par, base.x, u))
     first = stages[0]
     partial: tuple[str, ...] = ()
     if unexplained:
         verdict = "unnamed_residual"
-        partial = tuple(a.name for a in named + confounded)
+        partial = tuple(a.name for a in named + confounded + withheld)
         corr = gp_correction(train, final.evaluation.residuals[0], held)
         fu = tuple(x[0] for x in final.evaluation.unbalance)
         after = gap(held, residuals(held, final.par, final.x, fu, corr))
         test = {"statistic": ps[worst][0], "p_value": ps[worst][1], "threshold": level,
                 "kind": f"residual lack of fit ({worst})"}
+        if withheld:
+            rt = max((a.rival for a in withheld), key=lambda t: t.statistic)
+            test = {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
+                    "kind": "detected, not separable from a generic local change "
+                            f"(encompassing test; closest: {rt.rival})"}
         effects, conf = (), ()
     else:
         fu = tuple(x[0] for x in final.evaluation.unbalance)
@@ -325,5 +342,6 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
                 "candidate": lead.name if lead else None}
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
-        np.asarray(speeds), partial, separating_test(list(conf)) if conf else "", seconds,
+        np.asarray(speeds), partial, separating_test(list(conf)) if conf
+        else (RIVAL_SEPARATION if withheld else ""), seconds,
         options)

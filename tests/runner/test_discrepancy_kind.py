@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import tomllib
 from pathlib import Path
 
@@ -125,6 +126,25 @@ def test_resume_does_not_redo_finished_stages(tmp_path, monkeypatch, housing_run
                          resume=True)
     assert read_meta(run.path)["status"] == "complete"
     assert (run.path / "figures" / "residual_map.png").is_file()
+
+
+def test_resume_refuses_changed_data(tmp_path, monkeypatch, housing_run):
+    """The data files are hashed into the run's inputs: a resumed run whose data changed
+    since it started refuses (its finished stages rest on other data)."""
+    run0, _ = housing_run
+    data = tmp_path / "data"
+    shutil.copytree(run0.path / "campaign", data)
+    cfg = _write(tmp_path, HEAD.format(name="changed") + f"[data]\npath = '{data}'\n")
+    monkeypatch.setattr(kind, "write_discrepancy_run", lambda *a, **k: 1 / 0)
+    with pytest.raises(RunFailed):
+        run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False)
+    monkeypatch.undo()
+    assert str(data / "phasors.csv") in read_meta(tmp_path / "res" / "changed" / "r")["inputs"]
+    with (data / "phasors.csv").open("a") as fh:
+        fh.write("\n")
+    with pytest.raises(ValueError, match="phasors.csv.*changed"):
+        run_experiment(cfg, results_dir=tmp_path / "res", run_id="r", progress=False,
+                       resume=True)
 
 
 @pytest.mark.parametrize("name", ["discrepancy.toml", "discrepancy_null.toml"])

@@ -3,7 +3,8 @@ missing, the model with it added and the gap before/after (``docs/discrepancy.md
 
 The tables (``[spindle]``, ``[discrepancy]`` and the data: ``[rig]``, a campaign on the
 virtual rig streamed into ``<run>/campaign/`` and resumed record by record, or ``[data]
-path``) and their checks are :mod:`surrogate_rbrdo.discrepancy.plan`'s. Stages:
+path``, whose files are hashed into ``meta.json`` ``inputs`` so that ``--resume`` refuses
+changed data) and their checks are :mod:`surrogate_rbrdo.discrepancy.plan`'s. Stages:
 ``campaign`` (the ``rig`` kind's, or the data folder resolved) → ``analyse``
 (``discrepancy.find_discrepancy``, stream 1 of the seed); the report
 (``reporting.plots_discrepancy.write_discrepancy_run``) writes ``findings.json``,

@@ -1,0 +1,191 @@
+"""Can a library name be told from a generic local change? An encompassing test.
+
+A library effect that passes the likelihood-ratio test explains *something*; it does not follow
+that the something is that effect. The generic local parameters of sensitivity-based updating
+(:mod:`.generic`: the stiffness and mass of each shaft element, each disk's mass and inertia,
+a grounded spring at each node — Friswell & Mottershead 1995, ch. 7) are the rival
+explanations: a heavier motor rotor, a magnetic pull, a local loss of shaft stiffness are each
+one of them to first order, and a library effect can mimic part of any — but only changes of
+a plausible size count as rivals (:data:`~.generic.PLAUSIBLE`: at 1× a bearing stiffness that
+falls as ``Ω²`` *is* a mass at the bearing, ``−Ω² Δm``, yet the mass that mimics a few percent
+of softening is more than the shaft element weighs; the rival's coefficient is confined to its
+range, where its χ² is a clipped quadratic). The candidate is
+*separable* only if it explains the data significantly better than every one-parameter generic
+change, in the sense of the encompassing (J-) test of non-nested models (Davidson & MacKinnon
+1981, *Econometrica* 49:781; Mizon & Richard 1986, *Econometrica* 54:657): adding the library
+effect to the generic rival must reduce χ² by more than the χ² quantile of the level that
+defines a confounded set (``confound_delta``, χ²₁ 99 %; χ²ₖ at the same level for a candidate
+with ``k`` free parameters). The test is the intersection of one test per rival (every rival
+must be rejected), so it needs no correction for the number of rivals.
+
+Beside the structural rivals, the nuisance's own *form* is a rival: the model's bearing damping
+has a fixed speed law, and at 1× a skew-symmetric cross-coupled stiffness ``k_xy`` acts on a
+forward circular orbit exactly as a damping ``−k_xy/Ω`` — so a bearing damping that varies with
+speed in a way the model does not know (``c(Ω) = s c₀(Ω) (Ω/Ω_ref)^p``, one exponent per
+bearing: Jorgensen & Shin 1998 and most spindle-bearing damping measurements find damping
+falling with speed) is a rival of ``cross_coupling`` that names nothing. Its column is the
+damping factor's column scaled row by row by ``ln(Ω/Ω_ref)`` (each observation sees the
+damping at its own speed).
+
+The generic rivals are linear at the stage's base fit (nuisance refitted with them, to first
+order); the library candidate is its nonlinear fit. With both in one model the χ² is
+``χ²_lib − Δ(rival | lib)``, the rival's first-order gain on the candidate's residual with the
+candidate's fit Jacobian and the nuisance projected out. A strong effect far from its
+linearisation favours the library (its rival is only linear): that direction of error names an
+effect the final lack-of-fit tests then still check.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from surrogate_rbrdo.discrepancy.calibration import Linearisation, _apply, _data_whitening
+from surrogate_rbrdo.discrepancy.problem import Problem
+
+
+@dataclass(frozen=True)
+class RivalTest:
+    """A candidate against its closest generic rival.
+
+    Attributes
+    ----------
+    statistic : float
+        ``min_j [χ²(rival_j) − χ²(rival_j + candidate)]``: what the candidate adds to the
+        rival that mimics it best.
+    threshold : float
+        χ²ₖ quantile at the confound level (``k`` the candidate's free parameters).
+    rival : str
+        The generic local change attaining the minimum.
+    rival_delta_chi2 : float
+        That rival's own first-order gain over the stage's base.
+    level : float
+        The confound level (``P(χ²₁ > confound_delta)``).
+    n_free : int
+    """
+
+    statistic: float
+    threshold: float
+    rival: str
+    rival_delta_chi2: float
+    level: float = 0.01
+    n_free: int = 1
+
+    @property
+    def p_value(self) -> float:
+        """``P(χ²ₖ > statistic)``: small when the candidate adds to every rival."""
+        return float(chi2.sf(self.statistic, self.n_free)) if self.statistic > 0 else 1.0
+
+    @property
+    def passed(self) -> bool:
+        return self.statistic > self.threshold
+
+    def to_dict(self) -> dict:
+        return {"statistic": self.statistic, "threshold": self.threshold,
+                "p_value": self.p_value, "level": self.level, "rival": self.rival,
+                "rival_delta_chi2": self.rival_delta_chi2, "passed": self.passed}
+
+
+def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """``Y`` with its projection on the columns of ``B`` removed (Householder QR)."""
+    if B.shape[1] == 0:
+        return Y
+    Q, _ = np.linalg.qr(B)
+    return Y - Q @ (Q.T @ Y)
+
+
+#: the experiment that separates a library effect from its generic rivals (1x data: ω = Ω)
+RIVAL_SEPARATION = (
+    "excitation off the synchronous line (impact tests or a shaker at speed, ω ≠ Ω): under 1× "
+    "unbalance alone a bearing stiffness varying as Ω² equals a mass at the bearing, a polar "
+    "inertia equals minus a diametral inertia, a cross-coupled stiffness equals a damping ∝ "
+    "1/Ω; off the synchronous line they part")
+
+#: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
+DAMPING_EXPONENT = (-1.0, 1.0)
+
+
+def damping_law_columns(problem: Problem, lin: Linearisation, names: tuple[str, ...]
+                        ) -> tuple[np.ndarray, tuple[str, ...], np.ndarray]:
+    """Unwhitened columns of a speed exponent of each bearing's damping (module doc), from the
+    damping factors' columns of ``lin.nuisance`` (outer parameter ``names`` in its order),
+    their labels and plausible ranges (:data:`DAMPING_EXPONENT`)."""
+    idx = [i for i, n in enumerate(names) if n.startswith("log_damping")]
+    scale = np.zeros(problem.n_obs)
+    off = 0
+    for b in problem.blocks:
+        X, C = b.mean.shape
+        spin = np.asarray(b.sweep.spin_rad_s, dtype=float)
+        if np.all(spin > 0):
+            ln = np.log(spin / np.exp(np.mean(np.log(spin))))
+            scale[off:off + 2 * X * C] = np.repeat(ln, 2 * C)
+        off += 2 * X * C
+    cols = lin.nuisance[:, idx] * scale[:, None]
+    labels = tuple(f"speed law of damping ({names[i].removeprefix('log_damping_')})"
+                   for i in idx)
+    return cols, labels, np.tile(DAMPING_EXPONENT, (len(idx), 1))
+
+
+def _bounded_gain(U: np.ndarray, r: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Per column ``u`` the χ² reduction of the best multiple ``c u`` of it with ``c`` inside
+    its ``bounds``: ``2 c uᵀr − c² uᵀu`` (a quadratic in ``c``: its bounded minimiser is the
+    clipped free one). A column the projection left empty gains nothing."""
+    uu = np.einsum("nk,nk->k", U, U)
+    ur = U.T @ r
+    live = uu > 0
+    c = np.clip(np.where(live, ur / np.where(live, uu, 1.0), 0.0), bounds[:, 0], bounds[:, 1])
+    return np.where(live, 2 * c * ur - c * c * uu, 0.0)
+
+
+def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: np.ndarray,
+               fit_chi2: float, fit_r: np.ndarray, fit_jac: np.ndarray, n_free: int,
+               confound_delta: float,
+               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
+               ) -> RivalTest:
+    """The encompassing test of a fitted candidate against every generic rival (module doc).
+
+    Parameters
+    ----------
+    problem : Problem
+        The stage's training problem.
+    lin : Linearisation
+        The stage's linearisation (nuisance and generic columns at its base, with the generic
+        changes' plausible ranges).
+    base_chi2, base_r : float, ndarray
+        χ² and whitened residuals of the stage's base fit.
+    fit_chi2, fit_r, fit_jac : float, ndarray, ndarray
+        The candidate's fit: χ², whitened residuals and Jacobian (outer parameters).
+    n_free : int
+        The candidate's free parameters.
+    confound_delta : float
+        χ²₁ quantile of the confound level.
+    extra : (ndarray, tuple of str, ndarray), optional
+        Further rival columns (unwhitened), labels and ranges (:func:`damping_law_columns`).
+    """
+    level = float(chi2.sf(confound_delta, 1))
+    k = max(n_free, 1)
+    threshold = float(chi2.isf(level, k))
+    cols, labels = lin.generic, lin.generic_labels
+    bounds = (lin.generic_bounds if lin.generic_bounds is not None
+              else np.tile([-np.inf, np.inf], (cols.shape[1], 1)))
+    if extra is not None and extra[0].shape[1]:
+        cols, labels = np.hstack([cols, extra[0]]), labels + extra[1]
+        bounds = np.vstack([bounds, extra[2]])
+    if cols.shape[1] == 0:
+        return RivalTest(np.inf, threshold, "", 0.0, level, k)
+    W = _data_whitening(problem)
+    N = _apply(W, lin.nuisance)
+    G = _apply(W, cols)
+    gg = np.einsum("nk,nk->k", G, G)
+    U = _orth(N, G)
+    live = np.einsum("nk,nk->k", U, U) > 1e-12 * gg          # not absorbed by the nuisance
+    gain = _bounded_gain(U, _orth(N, base_r[:, None])[:, 0], bounds)       # rival alone
+    V = _orth(np.hstack([N, fit_jac]), G)
+    V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
+    both = fit_chi2 - _bounded_gain(V, fit_r, bounds)                     # rival + candidate
+    stat = np.where(live, (base_chi2 - gain) - both, np.inf)
+    j = int(np.argmin(stat))
+    return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),
+                     float(gain[j]), level, k)

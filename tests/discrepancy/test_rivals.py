@@ -1,0 +1,84 @@
+"""The encompassing test of a library candidate against generic rivals (known answers on a
+linear problem with identity whitening, where every χ² is a projection)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.calibration import Linearisation
+from surrogate_rbrdo.discrepancy.rivals import rival_test
+
+N_CELLS = 30                      # complex cells: 60 real observations, no priors
+
+
+def _problem():
+    whiten = [np.broadcast_to(np.eye(2), (N_CELLS, 1, 2, 2))]
+    return SimpleNamespace(whiten=whiten, noise_cells=lambda: (None, None, np.ones(0), None))
+
+
+def _setup(rng):
+    n = 2 * N_CELLS
+    nuis = rng.standard_normal((n, 2))
+    gen = rng.standard_normal((n, 3))
+    lin = Linearisation(nuis, (), (), gen, 0, ("g0", "g1", "g2"))
+    return lin, nuis, gen
+
+
+def _ls_residual(A, y):
+    return y - A @ np.linalg.lstsq(A, y, rcond=None)[0]
+
+
+@pytest.mark.known_answer
+def test_a_candidate_that_is_a_generic_direction_adds_nothing_to_it():
+    """Truth along generic column g1, the candidate's direction equal to it: both explain the
+    same, so the candidate adds 0 to its rival g1 and is not separable."""
+    rng = np.random.default_rng(1)
+    lin, nuis, gen = _setup(rng)
+    y = 3.0 * gen[:, 1] + 0.1 * rng.standard_normal(nuis.shape[0])
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([nuis, gen[:, 1:2]])
+    r1 = _ls_residual(A, y)
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    assert t.rival == "g1"
+    assert t.statistic == pytest.approx(0.0, abs=1e-8)
+    assert not t.passed
+
+
+@pytest.mark.known_answer
+def test_a_candidate_no_rival_can_mimic_adds_its_whole_fit():
+    """Truth along a direction orthogonal to the nuisance and every generic column: the
+    closest rival explains nothing and the candidate adds its whole Δχ² = |r0|² − |r1|²."""
+    rng = np.random.default_rng(2)
+    lin, nuis, gen = _setup(rng)
+    d = _ls_residual(np.hstack([nuis, gen]), rng.standard_normal(nuis.shape[0]))
+    y = 5.0 * d / np.linalg.norm(d)
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([nuis, d[:, None]])
+    r1 = _ls_residual(A, y)
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    assert t.statistic == pytest.approx(25.0, rel=1e-9)
+    assert t.rival_delta_chi2 == pytest.approx(0.0, abs=1e-9)
+    assert t.passed and t.threshold == pytest.approx(6.63)
+
+
+@pytest.mark.known_answer
+def test_a_rival_needing_an_implausible_size_is_held_to_its_range():
+    """The same mimic as above, but the rival may change by at most 1 (column units) while the
+    data need 3: the rival's χ² is that of its bounded best, ``|r0 − u|²`` (u its
+    nuisance-orthogonal part), and the candidate, which fits all of it, adds that minus its
+    own χ²."""
+    rng = np.random.default_rng(1)
+    lin, nuis, gen = _setup(rng)
+    lin = Linearisation(nuis, (), (), gen, 0, ("g0", "g1", "g2"), np.tile([-1.0, 1.0], (3, 1)))
+    y = 3.0 * gen[:, 1] + 0.1 * rng.standard_normal(nuis.shape[0])
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([nuis, gen[:, 1:2]])
+    r1 = _ls_residual(A, y)
+    u = _ls_residual(nuis, gen[:, 1])
+    c = float(u @ r0) / float(u @ u)
+    assert c > 1.0
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    expected = float((r0 - u) @ (r0 - u)) - float(r1 @ r1)
+    assert t.rival == "g1" and t.statistic == pytest.approx(expected, rel=1e-9)
+    assert t.passed
