@@ -20,6 +20,13 @@ interval instead of the estimate: Clopper–Pearson for MC (in the quantile scal
 at level ``k/N`` with ``k`` the largest failure count whose exact upper bound is still
 ``≤ P_target``), ``pf ± z·se`` or the log-normal interval for IS/ais/subset.
 
+A design whose estimate is only a *lower* bound of P_f (``diagnostics["pf_bound"] ==
+"lower"``: FORM/SORM/IS where the design-point search did not settle from a safe mean, or the
+limit state was not reached from a failing one) cannot be certified feasible: a lower bound at
+or below ``P_target`` says nothing about ``P_f``. Such designs get ``P_f = 1`` in the column
+(infeasible); a lower bound above ``P_target`` proves infeasibility and is kept. An
+``"upper"`` label (``P_f`` at most the value) is conservative and used as it is.
+
 >>> quantile_rank(1000, 0.05, "estimate", 0.95), quantile_rank(1000, 0.05, "upper", 0.95)
 (50, 36)
 >>> g = np.arange(1.0, 1001.0)[None, :]          # the 5 % quantile of 1..1000 is about 50
@@ -65,9 +72,26 @@ def harrell_davis(g: np.ndarray, p: float) -> np.ndarray:
     return low @ np.diff(edges)
 
 
-def probability_of(est: Estimate, pf_bound: str) -> np.ndarray:
-    """The estimate ``pf`` or the upper end of its interval."""
-    return np.asarray(est.pf if pf_bound == "estimate" else est.pf_ci[:, 1], dtype=float)
+def probability_of(est: Estimate, pf_bound: str, p_target: float | None = None
+                   ) -> np.ndarray:
+    """The estimate ``pf`` or the upper end of its interval; with ``p_target``, a design whose
+    value is only a lower bound of P_f (``diagnostics["pf_bound"] == "lower"``) at or below
+    ``p_target`` counts as ``1`` (its feasibility is not shown).
+
+    >>> from surrogate_rbrdo.core.protocols import Estimate
+    >>> z = np.zeros(2)
+    >>> est = Estimate(z, z, np.array([1e-4, 1e-4]), z, z, z, np.full((2, 2), 1e-4), 0, "form",
+    ...                {"pf_bound": np.array(["", "lower"])})
+    >>> probability_of(est, "estimate", 1e-3).tolist()
+    [0.0001, 1.0]
+    """
+    p = np.array(est.pf if pf_bound == "estimate" else est.pf_ci[:, 1], dtype=float)
+    labels = est.diagnostics.get("pf_bound") if p_target is not None else None
+    if labels is not None:
+        lower = np.asarray(labels).astype(str) == "lower"
+        if lower.shape == p.shape:
+            p[lower & ~(p > p_target)] = 1.0
+    return p
 
 
 def reliability_column(measure: str, pf_bound: str, est: Estimate, values: np.ndarray | None,
@@ -89,7 +113,7 @@ def reliability_column(measure: str, pf_bound: str, est: Estimate, values: np.nd
         g = np.where(np.isnan(values), np.inf, limit.g(np.nan_to_num(values)))
         scale = abs(limit.threshold) if limit.threshold != 0 else 1.0
         return -harrell_davis(np.clip(g, -1e300, 1e300), k / n) / scale
-    p = probability_of(est, pf_bound)
+    p = probability_of(est, pf_bound, p_target)
     if measure == "probability":
         return p / p_target - 1.0
     with np.errstate(divide="ignore"):

@@ -7,6 +7,7 @@ from scipy import special, stats
 
 from surrogate_rbrdo.core import LimitState
 from surrogate_rbrdo.core.errors import OutsideDomainError
+from surrogate_rbrdo.core.protocols import Estimate
 from surrogate_rbrdo.estimators import EstimatorWarning
 from surrogate_rbrdo.formulations import (
     DesignConstraint,
@@ -14,7 +15,11 @@ from surrogate_rbrdo.formulations import (
     FormulationOptions,
     make_formulation,
 )
-from surrogate_rbrdo.formulations.reliability import harrell_davis, quantile_rank
+from surrogate_rbrdo.formulations.reliability import (
+    harrell_davis,
+    quantile_rank,
+    reliability_column,
+)
 from surrogate_rbrdo.uncertainty import MultivariateNormal
 
 NO_DET = DeterministicOptions(stress=False, resonance="none")
@@ -190,3 +195,20 @@ def test_points_outside_the_physical_domain_are_not_failures(measure):
         g = np.where(theta < -1.0, np.inf, 1.0 - theta)
         assert -ev.G[0, 0] == pytest.approx(np.sort(g)[4000], abs=0.01)
     assert np.isfinite(ev.F).all()
+
+
+@pytest.mark.parametrize("measure", ["probability", "beta"])
+def test_a_lower_bound_below_the_target_is_not_feasible(measure):
+    """A P_f that is only a lower bound (FORM unconverged from a safe mean) cannot certify
+    P_f ≤ P_target: at or below the target it counts as infeasible; above it, it proves
+    infeasibility and is kept; labels "" and "upper" pass unchanged."""
+    pf = np.array([1e-3, 1e-3, 1e-3, 5e-2])
+    z = np.zeros(4)
+    est = Estimate(z, z, pf, z, z, z, np.c_[pf, pf], 0, "form",
+                   {"pf_bound": np.array(["", "upper", "lower", "lower"])})
+    limit = LimitState(threshold=1.0)
+    col = reliability_column(measure, "estimate", est, None, limit, 1e-2, 0.95)
+    assert np.all(col[:2] < 0)                   # certified feasible
+    assert col[2] > 0 and col[3] > 0             # unproven, proven infeasible
+    if measure == "probability":
+        assert col[3] == pytest.approx(5e-2 / 1e-2 - 1.0)   # the bound itself is kept
