@@ -48,6 +48,7 @@ test is linear. Bearings with a housing stage are refused (its damping is not se
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -171,6 +172,14 @@ def _frfs(records: Sequence[Record], opts: ImpactOptions) -> dict[str, FRFEstima
         if not chans:
             raise RecordError(f"record {recs[0].id!r}", "channels",
                               f"no response channel at the tool in direction {d!r}")
+        if len(recs) < 2:
+            # one hit: H1's coherence is 1 by construction, so neither its random error
+            # (the fit's weights) nor the coherence filter can see the noise
+            warnings.warn(f"impact damping: one hit in direction {d!r} (record {recs[0].id!r}):"
+                          " with a single average the coherence is 1 by construction, so the"
+                          " fit is unweighted and its standard errors assume noise-free FRFs;"
+                          " average at least 2 hits (rig: impacts_per_direction >= 2)",
+                          UserWarning, stacklevel=3)
         out[d] = h1_frf(recs, [chans[0].name], exp_window_end=opts.exp_window_end)
     return out
 
