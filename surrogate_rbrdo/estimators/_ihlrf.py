@@ -155,6 +155,85 @@ def _start(G: Any, m: int, start: tuple[np.ndarray, float] | None
     return u, float(G(u[None, :])[0]), float(start[1])
 
 
+class _Run:
+    """The named steps of one :func:`ihlrf` search (its options and the scale and sign of
+    ``G(0)``)."""
+
+    def __init__(self, G: LimitStateU, scale: float, sign0: float, tol_g: float,
+                 tol_u: float, fd_step: float, fd_scheme: str, beta_max: float) -> None:
+        self.G, self.scale, self.sign0 = G, scale, sign0
+        self.tol_g, self.tol_u, self.fd_step, self.fd_scheme = tol_g, tol_u, fd_step, fd_scheme
+        self.beta_max = beta_max
+
+    def end_before_step(self, u: np.ndarray, g: float, grad: np.ndarray, it: int,
+                        stop: Callable[[np.ndarray], bool] | None
+                        ) -> tuple[str, str, np.ndarray, float] | None:
+        """``(status, message, u, g)`` where the search ends at this iterate (beyond
+        ``beta_max``, stopped by the caller, ``G`` flat, no gradient, converged), else None."""
+        if self.sign0 * g > 0 and float(np.linalg.norm(u)) >= self.beta_max:
+            return ("not_reached", f"limit state not reached within beta_max = "
+                    f"{self.beta_max:g} (|beta| >= {np.linalg.norm(u):.4g})", u, g)
+        if stop is not None and stop(u):
+            return "failed", "stopped by the caller", u, g
+        ng = float(np.linalg.norm(grad))
+        if it > 1 and self.sign0 * g > 0 and ng * self.fd_step <= FLAT * max(self.scale,
+                                                                             abs(g)):
+            return self.flat_end(u, g)   # e.g. bounded inputs at the end of their support
+        if not np.isfinite(ng) or ng == 0.0:
+            return ("failed", f"zero or non-finite gradient of the limit state at "
+                    f"u={u.tolist()}", u, g)
+        if abs(g) <= self.tol_g * max(self.scale, ng) and _alignment(
+                u, -grad / ng) <= self.tol_u:
+            return "converged", "converged", u, g
+        return None
+
+    def flat_end(self, u: np.ndarray, g: float) -> tuple[str, str, np.ndarray, float]:
+        """``G`` flat with the sign of ``G(0)``: not reached; the point is carried out radially
+        to ``beta_max`` and kept there if ``G`` still has that sign."""
+        if np.isfinite(self.beta_max) and np.linalg.norm(u) > 0:
+            ub = u * (self.beta_max / float(np.linalg.norm(u)))   # checked out to beta_max
+            gb = float(self.G(ub[None, :])[0])
+            if np.isfinite(gb) and self.sign0 * gb > 0:
+                u, g = ub, gb
+        return ("not_reached", "limit state not reached: G is flat (its change over a "
+                f"finite-difference step is below {FLAT:g} of its scale) at |beta| = "
+                f"{np.linalg.norm(u):.4g} with the sign of G(0)", u, g)
+
+    def step(self, u: np.ndarray, g: float, grad: np.ndarray, blocked: int
+             ) -> tuple[np.ndarray, float, np.ndarray, bool, int, tuple[str, str] | None]:
+        """One iHL-RF step with its line search: the new point, ``G``, gradient, whether Armijo
+        accepted it, the count of steps in a row blocked by the domain's edge, and
+        ``(status, message)`` where the edge ends the search (the limit state not reached
+        inside the physical domain)."""
+        ng = float(np.linalg.norm(grad))
+        d = ((grad @ u - g) / ng**2) * grad - u
+        c = 2.0 * float(np.linalg.norm(u)) / ng + 10.0
+        un, gn, accepted, lam_in, lam_out = _line_search(self.G, u, g, grad, d, c)
+        blocked = blocked + 1 if np.isfinite(lam_out) else 0
+        if blocked >= 2 and self.sign0 * gn > 0:
+            ub, gb, crossed = _boundary(self.G, u, g, d, 0.0 if np.isnan(lam_in) else lam_in,
+                                        lam_out)
+            if not crossed:
+                return ub, gb, grad, accepted, blocked, (
+                    "not_reached", "limit state not reached inside the model's physical "
+                    f"domain (|beta| >= {np.linalg.norm(ub):.4g} along the search direction)")
+            blocked, un, gn = 0, ub, gb
+        # the last trial inside is taken even if Armijo failed (as FERUM does)
+        grad = fd_gradient(self.G, un, gn, self.fd_step, self.fd_scheme)
+        return un, gn, grad, accepted, blocked, None
+
+    def result(self, u: np.ndarray, g: float, grad: np.ndarray, status: str, msg: str,
+               it: int, g_origin: float) -> DesignPoint:
+        """The :class:`DesignPoint` of the search's end (``β`` capped at ``beta_max`` where
+        the limit state was not reached)."""
+        ng = float(np.linalg.norm(grad))
+        alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(u.size, np.nan)
+        beta = self.sign0 * min(float(np.linalg.norm(u)),
+                                self.beta_max if status == "not_reached" else np.inf)
+        return DesignPoint(beta, u, alpha, grad, g, status == "converged", it, self.G.calls,
+                           msg, status, g_origin)
+
+
 def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
           fd_step: float, fd_scheme: str, beta_max: float = np.inf,
           start: tuple[np.ndarray, float] | None = None,
@@ -192,59 +271,24 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
                            g_origin)
     # |G| is judged against |G(0)| and the threshold's own scale (G = threshold - y: a G of
     # 1e-12 m is converged for a 1 µm limit whatever G(0) is)
-    scale = max(abs(g_origin), float(getattr(G, "scale", 0.0)))
-    sign0 = 1.0 if g_origin >= 0 else -1.0
+    run = _Run(G, max(abs(g_origin), float(getattr(G, "scale", 0.0))),
+               1.0 if g_origin >= 0 else -1.0, tol_g, tol_u, fd_step, fd_scheme, beta_max)
     grad = fd_gradient(G, u, g, fd_step, fd_scheme)
-    msg, status, it, blocked = "maximum number of iterations reached", "failed", 0, 0
-    stalls = 0
+    msg, status, it, blocked, stalls = "maximum number of iterations reached", "failed", 0, 0, 0
     while it < max_iter:
         it += 1
-        if sign0 * g > 0 and float(np.linalg.norm(u)) >= beta_max:
-            status = "not_reached"
-            msg = (f"limit state not reached within beta_max = {beta_max:g} "
-                   f"(|beta| >= {np.linalg.norm(u):.4g})")
+        end = run.end_before_step(u, g, grad, it, stop)
+        if end is not None:
+            status, msg, u, g = end
             break
-        if stop is not None and stop(u):
-            msg = "stopped by the caller"
+        u, g, grad, accepted, blocked, end = run.step(u, g, grad, blocked)
+        if end is not None:
+            status, msg = end
             break
-        ng = float(np.linalg.norm(grad))
-        if it > 1 and sign0 * g > 0 and ng * fd_step <= FLAT * max(scale, abs(g)):
-            status = "not_reached"   # e.g. bounded inputs at the end of their support
-            if np.isfinite(beta_max) and np.linalg.norm(u) > 0:
-                ub = u * (beta_max / float(np.linalg.norm(u)))   # checked out to beta_max
-                gb = float(G(ub[None, :])[0])
-                if np.isfinite(gb) and sign0 * gb > 0:
-                    u, g = ub, gb
-            msg = ("limit state not reached: G is flat (its change over a finite-difference "
-                   f"step is below {FLAT:g} of its scale) at |beta| = {np.linalg.norm(u):.4g} "
-                   "with the sign of G(0)")
-            break
-        if not np.isfinite(ng) or ng == 0.0:
-            msg = f"zero or non-finite gradient of the limit state at u={u.tolist()}"
-            break
-        alpha = -grad / ng
-        if abs(g) <= tol_g * max(scale, ng) and _alignment(u, alpha) <= tol_u:
-            status, msg = "converged", "converged"
-            break
-        d = ((grad @ u - g) / ng**2) * grad - u
-        c = 2.0 * float(np.linalg.norm(u)) / ng + 10.0
-        un, gn, accepted, lam_in, lam_out = _line_search(G, u, g, grad, d, c)
-        blocked = blocked + 1 if np.isfinite(lam_out) else 0
-        if blocked >= 2 and sign0 * gn > 0:
-            ub, gb, crossed = _boundary(G, u, g, d, 0.0 if np.isnan(lam_in) else lam_in,
-                                        lam_out)
-            if not crossed:
-                u, g, status = ub, gb, "not_reached"
-                msg = ("limit state not reached inside the model's physical domain "
-                       f"(|beta| >= {np.linalg.norm(ub):.4g} along the search direction)")
-                break
-            blocked, un, gn = 0, ub, gb
-        u, g = un, gn  # the last trial inside is taken even if Armijo failed (as FERUM does)
-        grad = fd_gradient(G, u, g, fd_step, fd_scheme)
         stalls = 0 if accepted else stalls + 1
         if not accepted:  # after 12 halvings (λ = 2⁻¹²)
             msg = "line search stalled"
-            if _settled(u, g, grad, scale, tol_g, tol_u):
+            if _settled(u, g, grad, run.scale, tol_g, tol_u):
                 status = "converged"
                 msg = ("converged (the line search cannot improve further: the accuracy is "
                        "limited by the finite-difference gradient)")
@@ -253,13 +297,8 @@ def ihlrf(G: LimitStateU, m: int, *, max_iter: int, tol_g: float, tol_u: float,
                 msg = f"line search stalled {stalls} times in a row"
                 break
     else:
-        if _settled(u, g, grad, scale, tol_g, tol_u):
+        if _settled(u, g, grad, run.scale, tol_g, tol_u):
             status = "converged"
             msg = ("converged (at max_iter, within the accuracy a finite-difference gradient "
                    "allows)")
-    ng = float(np.linalg.norm(grad))
-    alpha = -grad / ng if np.isfinite(ng) and ng > 0 else np.full(m, np.nan)
-    beta = sign0 * min(float(np.linalg.norm(u)),
-                       beta_max if status == "not_reached" else np.inf)
-    return DesignPoint(beta, u, alpha, grad, g, status == "converged", it, G.calls, msg, status,
-                       g_origin)
+    return run.result(u, g, grad, status, msg, it, g_origin)

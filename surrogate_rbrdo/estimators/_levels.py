@@ -79,7 +79,13 @@ ON_FAILURE = ("bound", "raise", "nan")
 def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: np.ndarray,
                    rng: np.random.Generator, u: np.ndarray | None, *, what: str, why: str,
                    advice: str) -> PerDesign:
-    """Check the arguments, run ``est._one(G, m, u, rng) -> LevelResult`` for every design.
+    """Check the arguments, run ``est._one(G, m, u, rng_i) -> LevelResult`` for every design.
+
+    Common random numbers: one seed is drawn from ``rng`` once per call and every design runs
+    with its own generator ``default_rng(seed)`` started from that same seed, so every design
+    sees the same chain randomness and a design's ``P_f`` does not depend on its position in
+    ``x`` or on the other rows (with a shared generator, design i's levels would continue the
+    stream left by designs 0…i−1).
 
     A design whose failure domain is not reached within ``max_levels`` (or whose thresholds
     stopped decreasing) follows ``est.on_failure``: ``"bound"`` reports the upper bound
@@ -95,9 +101,10 @@ def run_per_design(est: Any, response: Any, inputs: Any, limit: LimitState, x: n
     status = np.full(p, "converged", dtype=object)
     nout = np.zeros(p, int)
     y0s, calls = [], 0
+    seed = np.random.SeedSequence(rng.integers(0, 2**63, size=4))
     for i in range(p):
         G = LimitStateU(response, inputs, limit, x[i])
-        r = est._one(G, m, u, rng)
+        r = est._one(G, m, u, np.random.default_rng(seed))
         calls += G.calls
         nout[i] = G.n_outside
         y0s.append(r.y0)

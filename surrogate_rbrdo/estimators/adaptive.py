@@ -29,7 +29,8 @@ fail: see ``on_failure``. Points outside the model's physical domain are not fai
 (:mod:`._common`).
 
 ``mean``/``std`` of ``y`` come from the level-1 sample (plain Monte Carlo, ``n_per_level``
-points, or the fixed ``u``); the levels after it use ``rng``.
+points, or the fixed ``u``); the levels after it use a generator seeded once per call from
+``rng``, the same for every design (common random numbers, :func:`._levels.run_per_design`).
 """
 
 from __future__ import annotations

@@ -16,6 +16,7 @@ in *Reliability and Optimization of Structural Systems*, Springer.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -27,7 +28,7 @@ from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.protocols import Estimate, LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive
 from surrogate_rbrdo.estimators._common import LimitStateU, check_args, make_estimate
-from surrogate_rbrdo.estimators._constrained import refine
+from surrogate_rbrdo.estimators._constrained import ray_roots, refine
 from surrogate_rbrdo.estimators._ihlrf import (
     FLAT,
     IHLRF_ITER,
@@ -38,12 +39,17 @@ from surrogate_rbrdo.estimators._ihlrf import (
     fd_gradient,
     ihlrf,
 )
+from surrogate_rbrdo.estimators._minimum import nearer_point
 from surrogate_rbrdo.estimators._periodic import (
     conditional_search,
     dominant_theta,
     periodic_columns,
 )
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.registry import ESTIMATORS
+
+#: restarts of the search from a nearer poll point at most (:meth:`FORM._descend`)
+MAX_RESTARTS = 3
 
 
 @ESTIMATORS.register("form")
@@ -100,6 +106,12 @@ class FORM:
         ``"sqp"`` continues from its last point with SLSQP on ``min ½‖u‖² s.t. G(u) = 0`` and,
         where that point is not settled (a kink of ``G``), a ray search for the shortest
         distance to the limit state (:mod:`._constrained`); ``"none"`` reports the failure.
+    check_minimum : bool
+        After convergence, poll ``2(m − 1)`` points just inside the sphere ``‖u‖ = β`` around
+        ``u*`` (one batched call, :mod:`._minimum`): a stationary point that is not a local
+        minimum of the distance (a saddle of a limit state concave towards the origin) is left
+        for a nearer point and the search restarts there; where that does not converge,
+        ``status = "unconverged"`` (``|β|`` an upper bound) with an ``EstimatorWarning``.
 
     **Periodic inputs.** With a phase the result is ``P_f = mean_j Φ(−β(φ_j))`` over the
     nodes: ``beta`` is the generalised index ``−Φ⁻¹(P_f)``, ``u_star``/``alpha`` those of the
@@ -138,6 +150,7 @@ class FORM:
     phase_max_nodes: int = 32
     phase_rtol: float = 0.05
     fallback: str = "sqp"
+    check_minimum: bool = True
 
     def __post_init__(self) -> None:
         check_int("max_iter", self.max_iter, minimum=1)
@@ -153,6 +166,9 @@ class FORM:
                              f"be >= phase_nodes = {self.phase_nodes}")
         check_positive("phase_rtol", self.phase_rtol)
         check_choice("fallback", self.fallback, ("sqp", "none"))
+        if not isinstance(self.check_minimum, bool):
+            raise ValueError(f"check_minimum = {self.check_minimum!r} is not allowed: must be "
+                             "True or False")
 
     def search(self, response: Any, inputs: Any, limit: LimitState,
                x_row: np.ndarray) -> DesignPoint:
@@ -172,9 +188,62 @@ class FORM:
                    tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
                    fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop,
                    max_stalls=3 if fall else None)
-        if not fall or dp.status != "failed" or not np.all(np.isfinite(dp.u_star)):
-            return dp
-        return self._fallback(G, m, dp)
+        if fall and dp.status == "failed" and np.all(np.isfinite(dp.u_star)):
+            dp = self._fallback(G, m, dp)
+        if self.check_minimum and stop is None and dp.status == "converged":
+            dp = self._descend(G, m, dp, n_iter)
+        return dp
+
+    def _descend(self, G: Any, m: int, dp: DesignPoint, n_iter: int) -> DesignPoint:
+        """The local-minimum check of a converged point (:mod:`._minimum`): where the poll finds
+        a point of the far side nearer than ``β``, the search restarts there (at most
+        ``MAX_RESTARTS`` times); a restart that does not converge to a nearer point leaves
+        ``status = "unconverged"`` at the limit-state point on the ray through the poll point
+        (``|β|`` an upper bound of the distance) and an :class:`EstimatorWarning`."""
+        sign0 = 1.0 if dp.g_origin >= 0 else -1.0
+        for k in range(MAX_RESTARTS + 1):
+            p = nearer_point(G, dp.u_star, sign0)
+            if p is None:
+                note = f" (local minimum checked; {k} restart(s) from a saddle)" if k else ""
+                return replace(dp, calls=G.calls, message=dp.message + note)
+            if k == MAX_RESTARTS:
+                break
+            new = self._restart(G, m, p, dp, n_iter)
+            if new.status != "converged" or abs(new.beta) >= abs(dp.beta):
+                break
+            dp = new
+        return self._not_minimum(G, m, dp, p, sign0)
+
+    def _restart(self, G: Any, m: int, p: np.ndarray, dp: DesignPoint, n_iter: int
+                 ) -> DesignPoint:
+        fall = self.fallback == "sqp"
+        new = ihlrf(G, m, max_iter=min(n_iter, IHLRF_ITER) if fall else n_iter,
+                    tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
+                    fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=(p, dp.g_origin),
+                    max_stalls=3 if fall else None)
+        if fall and new.status == "failed" and np.all(np.isfinite(new.u_star)):
+            new = self._fallback(G, m, new)
+        return new
+
+    def _not_minimum(self, G: Any, m: int, dp: DesignPoint, p: np.ndarray,
+                     sign0: float) -> DesignPoint:
+        """``"unconverged"`` at the limit state on the ray through ``p`` (nearer than ``β``)."""
+        e = p / float(np.linalg.norm(p))
+        rho = float(ray_roots(G, e[None, :], np.array([float(np.linalg.norm(p))]),
+                              1e-3 * SETTLED_BETA * abs(dp.beta))[0])
+        u = rho * e if np.isfinite(rho) and rho < np.linalg.norm(p) else p
+        g = float(G(u[None, :])[0])
+        grad = fd_gradient(G, u, g, self.fd_step, self.fd_scheme)
+        ng = float(np.linalg.norm(grad))
+        msg = (f"FORM: the design point at |beta| = {abs(dp.beta):.4g} is not a local minimum "
+               "of the distance (a saddle of a limit state concave towards the origin): a "
+               f"point of the limit state lies at |beta| <= {np.linalg.norm(u):.4g} and the "
+               "search from it did not converge; beta is an upper bound of the distance "
+               "(pf_bound), use 'is', 'ais' or 'subset'")
+        warnings.warn(msg, EstimatorWarning, stacklevel=4)
+        return DesignPoint(sign0 * float(np.linalg.norm(u)), u,
+                           -grad / ng if ng > 0 else np.full(m, np.nan), grad, g, False,
+                           dp.n_iter, G.calls, msg, "unconverged", dp.g_origin)
 
     def _fallback(self, G: Any, m: int, dp: DesignPoint) -> DesignPoint:
         """SLSQP and the ray search from the last point of a failed iHL-RF search."""
