@@ -596,6 +596,22 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      {}, [], r"optimization.reliability_measure = 'quantile' is not allowed with estimator"),
     ("estimator_options_str", S("optimization", "estimator_options = 'fast'"), {}, [],
      r"optimization.estimator_options = 'fast' is not allowed: " + TAB),
+    # the estimator is built at parse time: a bad option is refused before any work (F12-1)
+    ("estimator_options_value", S("optimization", "estimator = 'subset'\n"
+                                  "estimator_options = { target_cov = -1 }"), {}, [],
+     r"optimization.estimator_options.target_cov = -1 is not allowed: must be a finite number"),
+    ("estimator_options_key", S("optimization", "estimator = 'form'\n"
+                                "estimator_options = { beta_maxx = 5 }"), {}, [],
+     r"optimization.estimator_options has unknown key\(s\) \['beta_maxx'\] for estimator "
+     r"'form'; allowed: \[.*'beta_max'"),
+    ("estimator_options_mc_key", S("optimization", "estimator_options = { n = 5 }"), {}, [],
+     r"optimization.estimator_options has unknown key\(s\) \['n'\] for estimator 'mc'"),
+    ("estimator_options_type", S("optimization", "estimator = 'subset'\n"
+                                 "estimator_options = { target_cov = 'low' }"), {}, [],
+     r"optimization.estimator_options.target_cov = 'low' is not allowed"),
+    ("loop_estimator_options", E("optimization", "estimator = 'subset'\n"
+                                 "estimator_options = { target_cov = 0 }"), {}, [],
+     r"optimization.estimator_options.target_cov = 0 is not allowed"),
     ("slsqp_fronts", S("optimization", "optimizer = 'slsqp'"), {}, [],
      r"optimization.optimizer = 'slsqp' is not allowed with the rbrdo runs: it minimises one"),
     ("slsqp_staircase", S("optimization", "single_objective_optimizer = 'slsqp'"), {}, [],
