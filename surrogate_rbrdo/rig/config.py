@@ -36,6 +36,7 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.memory import require_memory
 from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, stability_speeds
+from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.simulate import check_nominal_stable
 from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth
@@ -116,12 +117,17 @@ def rig_plan(cfg: RigConfig, effects: Any = ()) -> RigPlan:
     """The checks before work (the nominal truth stable at the campaign's speeds, memory) and
     the disk the campaign needs, for a truth and campaign made into objects (``[rig]``'s
     ``effects`` named in the error)."""
-    sp = stability_speeds(cfg.options)       # the campaign checks them all for each tool
+    o = cfg.options
+    try:        # the sample rate against the top speed (the record lengths: CampaignOptions)
+        check_record_lengths(o.duration_s, o.speeds_rpm, o.sensors.daq.sample_rate_hz, o.runup)
+    except ValueError as exc:
+        raise ValueError(f"rig.{exc}") from None
+    sp = stability_speeds(o)       # the campaign checks them all for each tool
     try:
         check_nominal_stable(cfg.truth, np.linspace(sp[0], sp[-1], 12))
     except ModelError as exc:
         raise ValueError(f"rig.effects = {list(effects)} is not allowed: {exc}") from None
-    o, fp = cfg.options, footprint(cfg.options)
+    fp = footprint(o)
     require_memory(f"rig.campaign.{fp.memory_by}", getattr(o, fp.memory_by), fp.memory_bytes,
                    "its records (a run's steady records, a ramp or an impact held at once)")
     return RigPlan(cfg, ("rig.campaign.repeats", o.repeats, fp.disk_bytes,

@@ -24,6 +24,7 @@ from surrogate_rbrdo.core.validate import (
     check_positive,
     check_range,
 )
+from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.spindle.harmonic import PeakOptions
 from surrogate_rbrdo.validation.replicas import (
@@ -165,6 +166,10 @@ class ValidationOptions:
         object.__setattr__(self, "ramp_rpm", (float(a), float(b)))
         check_positive("ramp_s", self.ramp_s)
         check_positive("ramp_segment_s", self.ramp_segment_s)
+        check_record_lengths(self.duration_s, (*self.speed_range_rpm, *self.speeds_rpm),
+                             self.sensors.daq.sample_rate_hz,
+                             (*self.ramp_rpm, self.ramp_s) if self.ramps else None,
+                             ramp_field="ramp_s")
         if "tool_x" not in self.sensors.probe_channels:
             raise ValueError(f"sensors.targets = {list(self.sensors.targets)} is not allowed: "
                              "validation measures the tool tip, so 'tool' must be a target")

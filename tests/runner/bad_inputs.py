@@ -785,6 +785,32 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"rig.campaign.rundown = 1 is not allowed: " + BOOL),
     ("rig_duration_zero", _sub(RIG, "duration_s = 0.1", "duration_s = 0.0"), {}, [],
      r"rig.campaign.duration_s = 0.0 is not allowed: must be a finite number > 0"),
+    # records too short or sampled too slowly to analyse, refused at parse (F12-2)
+    ("rig_duration_tiny", _sub(RIG, "duration_s = 0.1", "duration_s = 1e-6"), {}, [],
+     r"rig.campaign.duration_s = 1e-06 is not allowed: a steady record must hold at least 5 "
+     r"revolutions at the lowest speed \(6000 rpm\), i.e. >= 0.05 s"),
+    ("rig_duration_short", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [600.0, 6000.0]"),
+     {}, [], r"rig.campaign.duration_s = 0.1 is not allowed: .* lowest speed \(600 rpm\), i.e."
+     r" >= 0.5 s"),
+    ("rig_runup_short", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]",
+                             "runup = [1000.0, 2000.0, 1e-6]"), {}, [],
+     r"rig.campaign.runup = \[1000.0, 2000.0, 1e-06\] is not allowed: "
+     r"the ramp from 1000 to 2000 rpm must hold at least 5 revolutions \(duration >= 0.2 s"),
+    ("rig_impact_short", _sub(RIG, "impacts_per_direction = 0",
+                              "impacts_per_direction = 1\nimpact_duration_s = 1e-6"), {}, [],
+     r"rig.campaign.impact_duration_s = 1e-06 is not allowed: at least 0.05 s"),
+    ("rig_daq_slow", G("rig.sensors", "daq = { sample_rate_hz = 300.0 }"), {}, [],
+     r"rig.sensors.daq.sample_rate_hz = 300 is not allowed: at least 4 samples per revolution "
+     r"at the top speed \(6000 rpm\), i.e. >= 400 Hz"),
+    ("disc_duration_tiny", _sub(DISC, "duration_s = 0.4", "duration_s = 0.01"), {}, [],
+     r"rig.campaign.duration_s = 0.01 is not allowed: .* lowest speed \(1000 rpm\)"),
+    ("loop_duration_tiny", E("rig.campaign", "duration_s = 0.001"), {}, [],
+     r"rig.campaign.duration_s = 0.001 is not allowed: a steady record must hold"),
+    ("rv_duration_tiny", W("validation", "duration_s = 1e-6"), {}, [],
+     r"validation.duration_s = 1e-06 is not allowed: .* lowest speed \(1000 rpm\)"),
+    ("rv_ramp_short", _sub(RIG_VAL, "ramps = 0", "ramps = 1\nramp_s = 1e-4"), {}, [],
+     r"validation.ramp_s = 0.0001 is not allowed: the ramp from 1000 to 24000 rpm must hold at "
+     r"least 5 revolutions"),
     ("rig_impacts_neg", _sub(RIG, "impacts_per_direction = 0", "impacts_per_direction = -1"),
      {}, [], r"rig.campaign.impacts_per_direction = -1 is not allowed: must be an integer >= 0"),
     ("rig_builds_zero", G("rig.campaign", "builds = 0"), {}, [],
