@@ -50,6 +50,16 @@ def optimizer_options_class(name: str) -> type:
     raise ValueError(f"optimizer {name!r} has no options dataclass in its signature")
 
 
+def _check_p_target(name: str, p: float) -> None:
+    """A target probability of failure in (0, 0.5): at 0.5 and above β_t <= 0, the median
+    design or worse, which no reliability constraint means."""
+    check_range(name, p, 0.0, 1.0, inclusive=False)
+    if p >= 0.5:
+        raise ValueError(f"{name} = {p!r} is not allowed: must be below 0.5 (a failure "
+                         "target of 50 % or more is β_t <= 0, the median design or worse, "
+                         "not a reliability requirement)")
+
+
 def _estimator_fields(name: str) -> list[str]:
     """The options ``get_estimator(name, ...)`` accepts (its dataclass's init fields)."""
     return sorted(f.name for f in dataclasses.fields(ESTIMATORS.get(name)) if f.init)
@@ -126,11 +136,11 @@ class OptimizationOptions:
             raise ValueError("p_targets = [] is not allowed with strategies = []: give at least "
                              "one run")
         for i, p in enumerate(self.p_targets):
-            check_range(f"p_targets[{i}]", p, 0.0, 1.0, inclusive=False)
+            _check_p_target(f"p_targets[{i}]", p)
         if len(set(self.p_targets)) != len(self.p_targets):
             raise ValueError(f"p_targets = {list(self.p_targets)} is not allowed: contains "
                              "duplicates")
-        check_range("strategy_p_target", self.strategy_p_target, 0.0, 1.0, inclusive=False)
+        _check_p_target("strategy_p_target", self.strategy_p_target)
         for i, s in enumerate(self.strategies):   # the RBRDO runs are the p_targets
             if s == "rbrdo":
                 raise ValueError(f"strategies[{i}] = 'rbrdo' is not allowed: the RBRDO runs are "

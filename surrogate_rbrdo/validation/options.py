@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.magnitudes import check_displacement_limit
 from surrogate_rbrdo.core.validate import (
     check_choice,
     check_int,
@@ -141,7 +142,7 @@ class ValidationOptions:
 
     def __post_init__(self) -> None:
         check_int("n_replications", self.n_replications, minimum=4)
-        check_positive("delta_lim_um", self.delta_lim_um)
+        check_displacement_limit("delta_lim_um", self.delta_lim_um)
         lo, hi = self.speed_range_rpm
         if not (0 < lo < hi and np.isfinite(hi)):
             raise ValueError(f"speed_range_rpm = {self.speed_range_rpm} is not allowed: "

@@ -1177,6 +1177,41 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("absurd_geometry_length", _sub(S("spindle", "geometry = 'g.toml'"), "", ""),
      {"g.toml": GEOMETRY_OK.replace("length_mm = 300.0", "length_mm = 1e300")}, [],
      r"geometry.sections\[1\].length_mm = 1e\+300 is not allowed: must be at most 10000 mm"),
+    # finite but absurd values with a physical lower or upper bound (F12-3)
+    ("delta_lim_tiny", S("limit", "delta_lim_um = 1e-9"), {}, [],
+     r"limit.delta_lim_um = 1e-09 is not allowed: must be at least 0.001 µm \(1 nm, below the "
+     r"resolution of any displacement probe"),
+    ("rv_delta_lim_tiny", W("validation", "delta_lim_um = 1e-4"), {}, [],
+     r"validation.delta_lim_um = 0.0001 is not allowed: must be at least 0.001 µm"),
+    ("omega_max_low", S("deterministic", "omega_max_rpm = 1.0"), {}, [],
+     r"deterministic.omega_max_rpm = 1 is not allowed: must be at least \d+ rpm, the top of the "
+     r"response's speed range"),
+    ("omega_max_at_speed", S("response", "kind = 'at_speed'\nspeed_rpm = 12000.0")
+     .replace("[deterministic]\n", "[deterministic]\nomega_max_rpm = 6000.0\n"), {}, [],
+     r"deterministic.omega_max_rpm = 6000 is not allowed: must be at least 12000 rpm"),
+    ("rig_speed_over", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [6000.0, 9e5]"), {}, [],
+     r"rig.campaign.speeds_rpm\[1\] = 900000 is not allowed: must be at most 36000 rpm, 1.5 x "
+     r"the spindle's speed_max_rpm = 24000"),
+    ("rig_runup_over", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]", "runup = [1000.0, 5e4, 2.0]"),
+     {}, [], r"rig.campaign.runup = \[1000.0, 50000.0, 2.0\] is not allowed: end_rpm must be at "
+     r"most 36000 rpm"),
+    ("disc_speed_over", _sub(DISC, "stop = 24000.0", "stop = 9e5"), {}, [],
+     r"rig.campaign.speeds_rpm\[\d+\] = [\d.e+]+ is not allowed: must be at most 36000 rpm"),
+    ("loop_speed_over", _sub(LOOP, "stop = 24000.0", "stop = 4e4"), {}, [],
+     r"rig.campaign.speeds_rpm\[7\] = 40000 is not allowed: must be at most 36000 rpm"),
+    ("p_target_half", S("optimization", "strategy_p_target = 0.5"), {}, [],
+     r"optimization.strategy_p_target = 0.5 is not allowed: must be below 0.5 \(a failure "
+     r"target of 50 % or more is β_t <= 0"),
+    ("p_targets_high", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 0.7]"), {},
+     [], r"optimization.p_targets\[1\] = 0.7 is not allowed: must be below 0.5"),
+    ("n_jobs_huge", _sub(STUDY, "n_gen = 3\nn_jobs = 1", "n_gen = 3\nn_jobs = 1000"), {}, [],
+     r"optimization.n_jobs = 1000 is not allowed: must be at most \d+ worker processes \(4 x "
+     r"the \d+ cores here, at least 8\)"),
+    ("n_jobs_huge_verification", _sub(STUDY, "n_theta = 6\nn_jobs = 1", "n_theta = 6\n"
+                                      "n_jobs = 100000"), {}, [],
+     r"verification.n_jobs = 100000 is not allowed: must be at most \d+ worker processes"),
+    ("n_jobs_huge_ident", ID("n_jobs = 5000"), DS_NO_TRIAL, [],
+     r"identification.n_jobs = 5000 is not allowed: must be at most \d+ worker processes"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),
