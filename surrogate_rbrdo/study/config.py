@@ -73,7 +73,7 @@ def check_factor_moments(mean: tuple[float, ...] | None, std: tuple[float, ...] 
                              "bearing 10 times softer or stiffer is another bearing law)")
     for i, s in enumerate(std or ()):
         m = mean[i] if mean is not None and i < len(mean) else 1.0
-        if s > FACTOR_MAX_COV * m:
+        if m > 0 and s > FACTOR_MAX_COV * m:    # m <= 0: the mean is the error
             raise ValueError(f"std[{i}] = {s!r} is not allowed: must be at most "
                              f"{FACTOR_MAX_COV:g} x the mean ({FACTOR_MAX_COV * m:g}): a "
                              "stiffness factor's coefficient of variation above 100 %")

@@ -279,7 +279,8 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("geometry_missing_json", R("spindle", "geometry = 'nope.json'"), {}, [],
      r"spindle.geometry file '.*nope.json' does not exist"),
     ("geometry_suffix", R("spindle", "geometry = 'g.yaml'"), {"g.yaml": "a: 1"}, [],
-     r"spindle.geometry file '.*g.yaml' is not allowed: the suffix must be .toml or .json"),
+     r"spindle.geometry = 'g.yaml' is not allowed: give a built-in spindle \['credible', "
+     r"'reference'\] or a .toml/.json geometry file$"),
     ("geometry_json_syntax", R("spindle", "geometry = 'g.json'"), {"g.json": "{bad"}, [],
      r"spindle.geometry file '.*g.json' is not valid JSON"),
     ("geometry_json_list", R("spindle", "geometry = 'g.json'"), {"g.json": "[1, 2]"}, [],
@@ -373,6 +374,11 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     # ------------------------------------------------------------------ [uncertainty]
     ("mean_negative", S("uncertainty", "mean = [-1.0, 1.0]"), {}, [],
      r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay positive"),
+    ("mean_negative_with_std", S("uncertainty", "mean = [-1.0, 1.0]\nstd = [0.015, 0.033]"),
+     {}, [], r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay "
+     r"positive"),
+    ("mean_zero_with_std", S("uncertainty", "mean = [1.0, 0.0]\nstd = [0.015, 0.033]"),
+     {}, [], r"uncertainty.mean\[1\] = 0.0 is not allowed"),
     ("mean_str", S("uncertainty", "mean = '1,1'"), {}, [],
      r"uncertainty.mean = '1,1' is not allowed: " + ARR),
     ("mean_len", S("uncertainty", "mean = [1.0, 1.0, 1.0]"), {}, [],
@@ -421,7 +427,12 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("pu_speed", PU("response", "speed_rpm = 20000.0"), {}, [],
      r"response.speed_rpm = 20000.0 is not allowed with kind = 'peak_unbalance'"),
     ("geometry_name", S("spindle", "geometry = 'credibel'"), {}, [],
-     r"spindle.geometry file '.*credibel' is not allowed: the suffix must be"),
+     r"spindle.geometry = 'credibel' is not allowed: give a built-in spindle \['credible', "
+     r"'reference'\] or a .toml/.json geometry file; did you mean 'credible'\?"),
+    ("geometry_name_ref", S("spindle", "geometry = 'refrence'"), {}, [],
+     r"spindle.geometry = 'refrence' is not allowed: .*; did you mean 'reference'\?"),
+    ("geometry_name_credibl", R("spindle", "geometry = 'credibl'"), {}, [],
+     r"spindle.geometry = 'credibl' is not allowed: .*; did you mean 'credible'\?"),
     ("credible_grade", S("spindle", "geometry = 'credible'\nbalance_grade_mm_s = 0.0"), {}, [],
      r"spindle.balance_grade_mm_s = 0.0 is not allowed"),
     # ------------------------------------------------------------------ [[constraints]]
