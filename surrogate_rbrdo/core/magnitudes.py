@@ -25,8 +25,11 @@ rig.campaign.speeds_rpm[1] = 1e+300 is not allowed: must be at most 1e+06 rpm in
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Mapping
 from typing import Any
+
+from surrogate_rbrdo.core.validate import check_positive
 
 #: (name suffix, largest magnitude, unit as shown, why), the longest suffixes first
 UNIT_LIMITS: tuple[tuple[str, float, str, str], ...] = (
@@ -70,6 +73,56 @@ def unit_limit(name: str) -> tuple[float, str, str] | None:
     return None
 
 
+#: the smallest displacement limit δ_lim worth stating (µm): 1 nm, below the resolution of
+#: any displacement probe used on a spindle (eddy-current probes resolve ~0.01-0.1 µm,
+#: capacitive ones ~1 nm); below it P_f is that of the probe's noise, not of the spindle
+MIN_DISPLACEMENT_LIMIT_UM = 1e-3
+
+
+def check_displacement_limit(name: str, value_um: float) -> None:
+    """Refuse a displacement limit (µm) that is not a finite number of at least
+    :data:`MIN_DISPLACEMENT_LIMIT_UM`.
+
+    >>> check_displacement_limit("delta_lim_um", 1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: delta_lim_um = 1e-09 is not allowed: must be at least 0.001 µm (1 nm, below \
+the resolution of any displacement probe on a spindle)
+    """
+    check_positive(name, value_um)
+    if value_um < MIN_DISPLACEMENT_LIMIT_UM:
+        raise ValueError(f"{name} = {value_um:g} is not allowed: must be at least "
+                         f"{MIN_DISPLACEMENT_LIMIT_UM:g} µm (1 nm, below the resolution of any "
+                         "displacement probe on a spindle)")
+
+
+def _cores() -> int:
+    """The cores this process may use."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def max_workers() -> int:
+    """The most worker processes a config may ask for (``n_jobs``): 4 x the cores this
+    process may use (at least 8). The work is CPU-bound (BLAS pinned to one thread), so
+    processes beyond the cores only add memory and start-up time; a little
+    oversubscription is harmless and keeps a config portable between machines.
+
+    >>> max_workers() >= 8
+    True
+    """
+    return max(8, 4 * _cores())
+
+
+def _check_workers(path: str, value: Any) -> None:
+    top = max_workers()
+    if isinstance(value, int) and not isinstance(value, bool) and value > top:
+        raise ValueError(f"{path} = {value} is not allowed: must be at most {top} worker "
+                         f"processes (4 x the {_cores()} cores here, at least 8): more "
+                         "processes than cores only add memory and start-up time")
+
+
 def _numbers(value: Any, path: str):
     """(path, number) of a number or of the numbers in nested tuples/lists."""
     if isinstance(value, bool):
@@ -89,6 +142,8 @@ def check_magnitudes(obj: Any, where: str = "", limit: tuple[float, str, str] | 
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         for f in dataclasses.fields(obj):
             key = f.name[:-1] if f.name.endswith("_") else f.name
+            if key == "n_jobs":
+                _check_workers(f"{where}.{key}" if where else key, getattr(obj, f.name))
             check_magnitudes(getattr(obj, f.name), f"{where}.{key}" if where else key,
                              unit_limit(key))
     elif isinstance(obj, Mapping):
@@ -106,4 +161,5 @@ def check_magnitudes(obj: Any, where: str = "", limit: tuple[float, str, str] | 
                                  f"{' ' + unit if unit else ''} in magnitude ({why})")
 
 
-__all__ = ["UNIT_LIMITS", "check_magnitudes", "unit_limit"]
+__all__ = ["MIN_DISPLACEMENT_LIMIT_UM", "UNIT_LIMITS", "check_displacement_limit",
+           "check_magnitudes", "max_workers", "unit_limit"]

@@ -32,7 +32,7 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive
-from surrogate_rbrdo.rig.demod import demodulate
+from surrogate_rbrdo.rig.demod import check_record_lengths, demodulate
 from surrogate_rbrdo.rig.integrate import SpeedProfile, unbalance_pattern
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import SensorSet
@@ -126,6 +126,9 @@ class CampaignOptions:
                 raise ValueError(f"runup = {self.runup} is not allowed: need 0 < start_rpm < "
                                  "end_rpm <= 1e6 and 0 < duration_s <= 1e5")
             object.__setattr__(self, "runup", (float(a), float(b), float(d)))
+        # the sample rate is checked with the final sensors (run_campaign, [rig] RigTable)
+        check_record_lengths(self.duration_s, self.speeds_rpm, None, self.runup,
+                             self.impact_duration_s)
         if self.trial_unbalance is not None:
             pos, U, ph = (float(v) for v in self.trial_unbalance)
             # a trial mass is a few grams at the rotor's radius: 1e-2 kg m is 100 g at 100 mm
@@ -174,6 +177,8 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     """Simulate the campaign into ``out_dir/dataset`` (resumable) and write ``phasors.csv`` and
     ``summary.json`` into ``out_dir``."""
     require_rng(rng)
+    check_record_lengths(options.duration_s, options.speeds_rpm,
+                         options.sensors.daq.sample_rate_hz, options.runup)
     t_start = time.perf_counter()
     out = Path(out_dir)
     root_ss = _root_seed(rng)

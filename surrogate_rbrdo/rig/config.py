@@ -36,6 +36,7 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.memory import require_memory
 from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, stability_speeds
+from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.simulate import check_nominal_stable
 from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth
@@ -112,16 +113,43 @@ class RigPlan:
     disk_need: tuple[str, Any, float, str]
 
 
+#: the fastest a rig campaign may run a spindle, as a multiple of its ``speed_max_rpm``: an
+#: overspeed test runs at 1.15 x the maximum continuous speed (API 617 section 4.3.3 and
+#: API RP 684), Campbell sweeps a little beyond; 1.5 x leaves room for both, faster is
+#: outside any rig test (and outside the bearing laws' fitted range)
+RIG_SPEED_FACTOR = 1.5
+
+
+def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
+    """Refuse campaign speeds (steady and ramp) above :data:`RIG_SPEED_FACTOR` x the
+    spindle's ``speed_max_rpm`` (``ValueError`` naming ``campaign.speeds_rpm[i]`` or
+    ``campaign.runup``)."""
+    top = RIG_SPEED_FACTOR * speed_max_rpm
+    why = (f"must be at most {top:g} rpm, {RIG_SPEED_FACTOR:g} x the spindle's speed_max_rpm "
+           f"= {speed_max_rpm:g} (an overspeed test runs at 1.15 x)")
+    for i, v in enumerate(options.speeds_rpm):
+        if v > top:
+            raise ValueError(f"campaign.speeds_rpm[{i}] = {v:g} is not allowed: {why}")
+    if options.runup is not None and options.runup[1] > top:
+        raise ValueError(f"campaign.runup = {list(options.runup)} is not allowed: end_rpm {why}")
+
+
 def rig_plan(cfg: RigConfig, effects: Any = ()) -> RigPlan:
     """The checks before work (the nominal truth stable at the campaign's speeds, memory) and
     the disk the campaign needs, for a truth and campaign made into objects (``[rig]``'s
     ``effects`` named in the error)."""
-    sp = stability_speeds(cfg.options)       # the campaign checks them all for each tool
+    o = cfg.options
+    try:        # the sample rate against the top speed (the record lengths: CampaignOptions)
+        check_rig_speeds(o, cfg.truth.geometry.speed_max_rpm)
+        check_record_lengths(o.duration_s, o.speeds_rpm, o.sensors.daq.sample_rate_hz, o.runup)
+    except ValueError as exc:
+        raise ValueError(f"rig.{exc}") from None
+    sp = stability_speeds(o)       # the campaign checks them all for each tool
     try:
         check_nominal_stable(cfg.truth, np.linspace(sp[0], sp[-1], 12))
     except ModelError as exc:
         raise ValueError(f"rig.effects = {list(effects)} is not allowed: {exc}") from None
-    o, fp = cfg.options, footprint(cfg.options)
+    fp = footprint(o)
     require_memory(f"rig.campaign.{fp.memory_by}", getattr(o, fp.memory_by), fp.memory_bytes,
                    "its records (a run's steady records, a ramp or an impact held at once)")
     return RigPlan(cfg, ("rig.campaign.repeats", o.repeats, fp.disk_bytes,
@@ -129,4 +157,5 @@ def rig_plan(cfg: RigConfig, effects: Any = ()) -> RigPlan:
                          f"{o.duration_s:g} s, ramps, impacts)"))
 
 
-__all__ = ["RigConfig", "RigPlan", "RigTable", "RigTruthTable", "rig_plan"]
+__all__ = ["RIG_SPEED_FACTOR", "RigConfig", "RigPlan", "RigTable", "RigTruthTable",
+           "check_rig_speeds", "rig_plan"]

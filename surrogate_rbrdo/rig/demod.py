@@ -125,6 +125,63 @@ class Phasors:
         return complex(self.X[self.channels.index(channel), self.orders.index(order)])
 
 
+#: revolutions a steady record (or a ramp) must hold: then at least 4 whole revolutions lie
+#: between keyphasor pulses whatever the initial shaft angle, one more than the 3
+#: :func:`demodulate` needs (a pulse at the record's edge may be lost); a ramp gives one
+#: tracking block of :func:`track_1x`'s 4 revolutions
+MIN_RECORD_REVOLUTIONS = 5
+#: samples per revolution at the top speed: the 1x and 2x orders below the Nyquist frequency
+MIN_SAMPLES_PER_REVOLUTION = 4
+#: shortest impact record: a frequency resolution 1/T of 20 Hz, the half-power bandwidth
+#: 2ζf of a 500 Hz spindle mode with ζ = 2 % (the FRF must resolve its peak)
+MIN_IMPACT_DURATION_S = 0.05
+
+
+def check_record_lengths(duration_s: float, speeds_rpm: tuple[float, ...],
+                         sample_rate_hz: float | None,
+                         runup: tuple[float, float, float] | None = None,
+                         impact_duration_s: float = 1.0, *, ramp_field: str = "runup") -> None:
+    """Refuse records too short or sampled too slowly to analyse (``ValueError`` naming
+    ``duration_s``, ``runup``, ``impact_duration_s`` or ``sensors.daq.sample_rate_hz``):
+    steady records need :data:`MIN_RECORD_REVOLUTIONS` at the lowest speed and
+    :data:`MIN_SAMPLES_PER_REVOLUTION` at the top speed (of the steady speeds and the ramp);
+    a ramp ``(start_rpm, end_rpm, duration_s)`` needs :data:`MIN_RECORD_REVOLUTIONS` in all;
+    an impact record :data:`MIN_IMPACT_DURATION_S`. ``ramp_field`` names the ramp in the
+    error (``"runup"``: the triple; another name: its duration). ``sample_rate_hz = None``
+    skips the sampling check (the sensors are not known yet).
+
+    >>> check_record_lengths(1e-3, (6000.0,), 10_000.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: duration_s = 0.001 is not allowed: a steady record must hold at least 5 \
+revolutions at the lowest speed (6000 rpm), i.e. >= 0.05 s (demodulation needs 3 whole \
+revolutions between keyphasor pulses)
+    """
+    lo = min(speeds_rpm) / 60.0     # rev/s
+    hi = max([*speeds_rpm, *([] if runup is None else runup[:2])]) / 60.0
+    n = MIN_RECORD_REVOLUTIONS
+    if duration_s * lo < n:
+        raise ValueError(f"duration_s = {duration_s:g} is not allowed: a steady record must "
+                         f"hold at least {n} revolutions at the lowest speed ({60 * lo:g} rpm), "
+                         f"i.e. >= {n / lo:.3g} s (demodulation needs 3 whole revolutions "
+                         "between keyphasor pulses)")
+    if runup is not None and runup[2] * (runup[0] + runup[1]) / 120.0 < n:
+        shown = list(runup) if ramp_field == "runup" else f"{runup[2]:g}"
+        raise ValueError(f"{ramp_field} = {shown} is not allowed: the ramp from {runup[0]:g} "
+                         f"to {runup[1]:g} rpm must hold at least {n} revolutions (duration >= "
+                         f"{120.0 * n / (runup[0] + runup[1]):.3g} s)")
+    if impact_duration_s < MIN_IMPACT_DURATION_S:
+        raise ValueError(f"impact_duration_s = {impact_duration_s:g} is not allowed: at least "
+                         f"{MIN_IMPACT_DURATION_S} s (a frequency resolution of 20 Hz, the "
+                         "half-power bandwidth of a 500 Hz mode with 2 % damping)")
+    if sample_rate_hz is not None and sample_rate_hz < MIN_SAMPLES_PER_REVOLUTION * hi:
+        raise ValueError(f"sensors.daq.sample_rate_hz = {sample_rate_hz:g} is not allowed: "
+                         f"at least {MIN_SAMPLES_PER_REVOLUTION} samples per revolution at the "
+                         f"top speed ({60 * hi:g} rpm), i.e. >= "
+                         f"{MIN_SAMPLES_PER_REVOLUTION * hi:.6g} Hz (the 1x and 2x orders "
+                         "below the Nyquist frequency)")
+
+
 def demodulate(record: Record, channels: tuple[str, ...] | None = None, *,
                orders: tuple[int, ...] = (1,), min_revolutions: int = 3) -> Phasors:
     """Synchronous demodulation of a constant-speed record over whole revolutions."""

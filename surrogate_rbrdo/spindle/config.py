@@ -12,6 +12,7 @@ dotted path ``spindle.<field>``).
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,9 @@ from surrogate_rbrdo.core.validate import check_positive
 from surrogate_rbrdo.spindle.effects import effects_from_data
 from surrogate_rbrdo.spindle.geometry import DesignMap, SpindleGeometry, check_balance_grade
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle, credible_spindle, reference_spindle
+
+#: the built-in spindles ``[spindle] geometry`` names (else a geometry file)
+BUILT_IN = ("credible", "reference")
 
 
 @dataclass(frozen=True)
@@ -55,6 +59,12 @@ class SpindleTable:
         if not self.geometry or self.geometry != self.geometry.strip():
             raise ValueError(f"geometry = {self.geometry!r} is not allowed: give a built-in "
                              "spindle (e.g. 'reference') or a .toml/.json file")
+        if self.geometry not in BUILT_IN and Path(self.geometry).suffix not in (".toml",
+                                                                                ".json"):
+            near = difflib.get_close_matches(self.geometry, BUILT_IN, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise ValueError(f"geometry = {self.geometry!r} is not allowed: give a built-in "
+                             f"spindle {list(BUILT_IN)} or a .toml/.json geometry file{hint}")
         if self.balance_grade_mm_s is not None:
             check_balance_grade("balance_grade_mm_s", self.balance_grade_mm_s)
 
@@ -70,7 +80,7 @@ def _geometry_file(path: Path) -> SpindleGeometry:
 
 def build_spindle(t: SpindleTable, base_dir: str | Path = ".") -> ReferenceSpindle:
     """The spindle of a ``[spindle]`` table (every field checked, errors name it)."""
-    if t.geometry in ("reference", "credible"):
+    if t.geometry in BUILT_IN:
         grade = 2.5 if t.balance_grade_mm_s is None else t.balance_grade_mm_s
         factory = reference_spindle if t.geometry == "reference" else credible_spindle
         sp = factory(balance_grade_mm_s=check_positive("spindle.balance_grade_mm_s", grade))

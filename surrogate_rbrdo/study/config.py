@@ -15,6 +15,7 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import AliasChoices, Field
 
+from surrogate_rbrdo.core.magnitudes import check_displacement_limit
 from surrogate_rbrdo.core.protocols import LimitState
 from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
 from surrogate_rbrdo.formulations import DeterministicOptions
@@ -72,7 +73,7 @@ def check_factor_moments(mean: tuple[float, ...] | None, std: tuple[float, ...] 
                              "bearing 10 times softer or stiffer is another bearing law)")
     for i, s in enumerate(std or ()):
         m = mean[i] if mean is not None and i < len(mean) else 1.0
-        if s > FACTOR_MAX_COV * m:
+        if m > 0 and s > FACTOR_MAX_COV * m:    # m <= 0: the mean is the error
             raise ValueError(f"std[{i}] = {s!r} is not allowed: must be at most "
                              f"{FACTOR_MAX_COV:g} x the mean ({FACTOR_MAX_COV * m:g}): a "
                              "stiffness factor's coefficient of variation above 100 %")
@@ -209,7 +210,7 @@ class LimitTable:
     delta_lim_um: float = 19.5
 
     def __post_init__(self) -> None:
-        check_positive("delta_lim_um", self.delta_lim_um)
+        check_displacement_limit("delta_lim_um", self.delta_lim_um)
 
     def limit(self) -> LimitState:
         return LimitState(self.delta_lim_um * 1e-6)
@@ -260,9 +261,16 @@ class DeterministicTable:
         return unbalance_design_cases(inputs, response)
 
     def options(self, speed_max_rpm: float) -> DeterministicOptions:
-        """The g_det of the design model (the separation guard is a design constraint)."""
+        """The g_det of the design model (the separation guard is a design constraint);
+        ``speed_max_rpm``: the top of the speeds the response is taken at, which
+        ``omega_max_rpm`` (the top operating speed the resonance guard protects) must cover."""
         if self.omega_max_rpm is not None:
             check_positive("deterministic.omega_max_rpm", self.omega_max_rpm)
+            if self.omega_max_rpm < speed_max_rpm:
+                raise ValueError(f"deterministic.omega_max_rpm = {self.omega_max_rpm:g} is not "
+                                 f"allowed: must be at least {speed_max_rpm:g} rpm, the top of "
+                                 "the response's speed range (the resonance guard must cover "
+                                 "every speed the spindle is assessed at)")
         top = speed_max_rpm if self.omega_max_rpm is None else self.omega_max_rpm
         try:
             return DeterministicOptions(

@@ -30,7 +30,7 @@ from types import UnionType
 from typing import Any
 
 from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
-from surrogate_rbrdo.estimators import ESTIMATORS
+from surrogate_rbrdo.estimators import ESTIMATORS, get_estimator
 from surrogate_rbrdo.formulations import FORMULATIONS
 from surrogate_rbrdo.formulations.options import check_reliability
 from surrogate_rbrdo.formulations.reliability import quantile_rank
@@ -48,6 +48,21 @@ def optimizer_options_class(name: str) -> type:
         if dataclasses.is_dataclass(a):
             return a
     raise ValueError(f"optimizer {name!r} has no options dataclass in its signature")
+
+
+def _check_p_target(name: str, p: float) -> None:
+    """A target probability of failure in (0, 0.5): at 0.5 and above β_t <= 0, the median
+    design or worse, which no reliability constraint means."""
+    check_range(name, p, 0.0, 1.0, inclusive=False)
+    if p >= 0.5:
+        raise ValueError(f"{name} = {p!r} is not allowed: must be below 0.5 (a failure "
+                         "target of 50 % or more is β_t <= 0, the median design or worse, "
+                         "not a reliability requirement)")
+
+
+def _estimator_fields(name: str) -> list[str]:
+    """The options ``get_estimator(name, ...)`` accepts (its dataclass's init fields)."""
+    return sorted(f.name for f in dataclasses.fields(ESTIMATORS.get(name)) if f.init)
 
 
 def _n_obj(formulation: str) -> int:
@@ -121,11 +136,11 @@ class OptimizationOptions:
             raise ValueError("p_targets = [] is not allowed with strategies = []: give at least "
                              "one run")
         for i, p in enumerate(self.p_targets):
-            check_range(f"p_targets[{i}]", p, 0.0, 1.0, inclusive=False)
+            _check_p_target(f"p_targets[{i}]", p)
         if len(set(self.p_targets)) != len(self.p_targets):
             raise ValueError(f"p_targets = {list(self.p_targets)} is not allowed: contains "
                              "duplicates")
-        check_range("strategy_p_target", self.strategy_p_target, 0.0, 1.0, inclusive=False)
+        _check_p_target("strategy_p_target", self.strategy_p_target)
         for i, s in enumerate(self.strategies):   # the RBRDO runs are the p_targets
             if s == "rbrdo":
                 raise ValueError(f"strategies[{i}] = 'rbrdo' is not allowed: the RBRDO runs are "
@@ -142,6 +157,7 @@ class OptimizationOptions:
             check_positive(f"weights[{i}]", w)
         check_choice("estimator", self.estimator, sorted(ESTIMATORS))
         object.__setattr__(self, "estimator_options", dict(self.estimator_options))
+        self._check_estimator()
         check_choice("optimizer", self.optimizer, sorted(OPTIMIZERS))
         if self.single_objective_optimizer is not None:
             check_choice("single_objective_optimizer", self.single_objective_optimizer,
@@ -172,6 +188,23 @@ class OptimizationOptions:
         k = len(self.runs)
         return {"pop_size*n_theta": 64.0 * self.pop_size * self.n_theta * min(self.n_jobs, k),
                 "pop_size*n_gen": 256.0 * self.pop_size * self.n_gen * k}
+
+    def _check_estimator(self) -> None:
+        """Build the estimator once now, so a bad option is refused before any work, named
+        ``estimator_options.<key>``."""
+        opts = self.estimator_options
+        unknown = sorted(set(map(str, opts)) - set(_estimator_fields(self.estimator)))
+        if unknown:
+            raise ValueError(f"estimator_options has unknown key(s) {unknown} for estimator "
+                             f"{self.estimator!r}; allowed: {_estimator_fields(self.estimator)}")
+        try:
+            get_estimator(self.estimator, **opts)
+        except (ValueError, TypeError) as exc:
+            key = str(exc).split(" ", 1)[0]
+            if key in opts:
+                raise ValueError(f"estimator_options.{exc}") from None
+            raise ValueError(f"estimator_options = {dict(opts)!r} is not allowed for "
+                             f"estimator {self.estimator!r}: {exc}") from None
 
     def _check_reliability(self) -> None:
         check_reliability(self.reliability_measure, self.pf_bound, self.estimator)

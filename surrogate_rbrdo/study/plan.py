@@ -112,7 +112,7 @@ def build_study(c: StudyConfig, base_dir: str | Path = ".") -> StudyPlan:
                          f"spindle's speed range [{g.speed_min_rpm}, {g.speed_max_rpm}] rpm "
                          "(the bearing laws are fitted there)")
     sur = surrogate_options(c.surrogate, r, "surrogate")
-    det = c.deterministic.options(g.speed_max_rpm)
+    det = c.deterministic.options(r.speed_rpm if r.kind == "at_speed" else g.speed_max_rpm)
     cons = c.deterministic.constraints(spindle)
     for i, e in enumerate(c.constraints):
         if e.name in {k.name for k in cons}:

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from surrogate_rbrdo.core.magnitudes import check_displacement_limit
 from surrogate_rbrdo.core.validate import (
     check_choice,
     check_int,
@@ -24,6 +25,7 @@ from surrogate_rbrdo.core.validate import (
     check_positive,
     check_range,
 )
+from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.spindle.harmonic import PeakOptions
 from surrogate_rbrdo.validation.replicas import (
@@ -140,7 +142,7 @@ class ValidationOptions:
 
     def __post_init__(self) -> None:
         check_int("n_replications", self.n_replications, minimum=4)
-        check_positive("delta_lim_um", self.delta_lim_um)
+        check_displacement_limit("delta_lim_um", self.delta_lim_um)
         lo, hi = self.speed_range_rpm
         if not (0 < lo < hi and np.isfinite(hi)):
             raise ValueError(f"speed_range_rpm = {self.speed_range_rpm} is not allowed: "
@@ -165,6 +167,10 @@ class ValidationOptions:
         object.__setattr__(self, "ramp_rpm", (float(a), float(b)))
         check_positive("ramp_s", self.ramp_s)
         check_positive("ramp_segment_s", self.ramp_segment_s)
+        check_record_lengths(self.duration_s, (*self.speed_range_rpm, *self.speeds_rpm),
+                             self.sensors.daq.sample_rate_hz,
+                             (*self.ramp_rpm, self.ramp_s) if self.ramps else None,
+                             ramp_field="ramp_s")
         if "tool_x" not in self.sensors.probe_channels:
             raise ValueError(f"sensors.targets = {list(self.sensors.targets)} is not allowed: "
                              "validation measures the tool tip, so 'tool' must be a target")

@@ -279,7 +279,8 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("geometry_missing_json", R("spindle", "geometry = 'nope.json'"), {}, [],
      r"spindle.geometry file '.*nope.json' does not exist"),
     ("geometry_suffix", R("spindle", "geometry = 'g.yaml'"), {"g.yaml": "a: 1"}, [],
-     r"spindle.geometry file '.*g.yaml' is not allowed: the suffix must be .toml or .json"),
+     r"spindle.geometry = 'g.yaml' is not allowed: give a built-in spindle \['credible', "
+     r"'reference'\] or a .toml/.json geometry file$"),
     ("geometry_json_syntax", R("spindle", "geometry = 'g.json'"), {"g.json": "{bad"}, [],
      r"spindle.geometry file '.*g.json' is not valid JSON"),
     ("geometry_json_list", R("spindle", "geometry = 'g.json'"), {"g.json": "[1, 2]"}, [],
@@ -373,6 +374,11 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     # ------------------------------------------------------------------ [uncertainty]
     ("mean_negative", S("uncertainty", "mean = [-1.0, 1.0]"), {}, [],
      r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay positive"),
+    ("mean_negative_with_std", S("uncertainty", "mean = [-1.0, 1.0]\nstd = [0.015, 0.033]"),
+     {}, [], r"uncertainty.mean\[0\] = -1.0 is not allowed: a stiffness factor must stay "
+     r"positive"),
+    ("mean_zero_with_std", S("uncertainty", "mean = [1.0, 0.0]\nstd = [0.015, 0.033]"),
+     {}, [], r"uncertainty.mean\[1\] = 0.0 is not allowed"),
     ("mean_str", S("uncertainty", "mean = '1,1'"), {}, [],
      r"uncertainty.mean = '1,1' is not allowed: " + ARR),
     ("mean_len", S("uncertainty", "mean = [1.0, 1.0, 1.0]"), {}, [],
@@ -421,7 +427,12 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("pu_speed", PU("response", "speed_rpm = 20000.0"), {}, [],
      r"response.speed_rpm = 20000.0 is not allowed with kind = 'peak_unbalance'"),
     ("geometry_name", S("spindle", "geometry = 'credibel'"), {}, [],
-     r"spindle.geometry file '.*credibel' is not allowed: the suffix must be"),
+     r"spindle.geometry = 'credibel' is not allowed: give a built-in spindle \['credible', "
+     r"'reference'\] or a .toml/.json geometry file; did you mean 'credible'\?"),
+    ("geometry_name_ref", S("spindle", "geometry = 'refrence'"), {}, [],
+     r"spindle.geometry = 'refrence' is not allowed: .*; did you mean 'reference'\?"),
+    ("geometry_name_credibl", R("spindle", "geometry = 'credibl'"), {}, [],
+     r"spindle.geometry = 'credibl' is not allowed: .*; did you mean 'credible'\?"),
     ("credible_grade", S("spindle", "geometry = 'credible'\nbalance_grade_mm_s = 0.0"), {}, [],
      r"spindle.balance_grade_mm_s = 0.0 is not allowed"),
     # ------------------------------------------------------------------ [[constraints]]
@@ -596,6 +607,22 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      {}, [], r"optimization.reliability_measure = 'quantile' is not allowed with estimator"),
     ("estimator_options_str", S("optimization", "estimator_options = 'fast'"), {}, [],
      r"optimization.estimator_options = 'fast' is not allowed: " + TAB),
+    # the estimator is built at parse time: a bad option is refused before any work (F12-1)
+    ("estimator_options_value", S("optimization", "estimator = 'subset'\n"
+                                  "estimator_options = { target_cov = -1 }"), {}, [],
+     r"optimization.estimator_options.target_cov = -1 is not allowed: must be a finite number"),
+    ("estimator_options_key", S("optimization", "estimator = 'form'\n"
+                                "estimator_options = { beta_maxx = 5 }"), {}, [],
+     r"optimization.estimator_options has unknown key\(s\) \['beta_maxx'\] for estimator "
+     r"'form'; allowed: \[.*'beta_max'"),
+    ("estimator_options_mc_key", S("optimization", "estimator_options = { n = 5 }"), {}, [],
+     r"optimization.estimator_options has unknown key\(s\) \['n'\] for estimator 'mc'"),
+    ("estimator_options_type", S("optimization", "estimator = 'subset'\n"
+                                 "estimator_options = { target_cov = 'low' }"), {}, [],
+     r"optimization.estimator_options.target_cov = 'low' is not allowed"),
+    ("loop_estimator_options", E("optimization", "estimator = 'subset'\n"
+                                 "estimator_options = { target_cov = 0 }"), {}, [],
+     r"optimization.estimator_options.target_cov = 0 is not allowed"),
     ("slsqp_fronts", S("optimization", "optimizer = 'slsqp'"), {}, [],
      r"optimization.optimizer = 'slsqp' is not allowed with the rbrdo runs: it minimises one"),
     ("slsqp_staircase", S("optimization", "single_objective_optimizer = 'slsqp'"), {}, [],
@@ -769,6 +796,32 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"rig.campaign.rundown = 1 is not allowed: " + BOOL),
     ("rig_duration_zero", _sub(RIG, "duration_s = 0.1", "duration_s = 0.0"), {}, [],
      r"rig.campaign.duration_s = 0.0 is not allowed: must be a finite number > 0"),
+    # records too short or sampled too slowly to analyse, refused at parse (F12-2)
+    ("rig_duration_tiny", _sub(RIG, "duration_s = 0.1", "duration_s = 1e-6"), {}, [],
+     r"rig.campaign.duration_s = 1e-06 is not allowed: a steady record must hold at least 5 "
+     r"revolutions at the lowest speed \(6000 rpm\), i.e. >= 0.05 s"),
+    ("rig_duration_short", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [600.0, 6000.0]"),
+     {}, [], r"rig.campaign.duration_s = 0.1 is not allowed: .* lowest speed \(600 rpm\), i.e."
+     r" >= 0.5 s"),
+    ("rig_runup_short", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]",
+                             "runup = [1000.0, 2000.0, 1e-6]"), {}, [],
+     r"rig.campaign.runup = \[1000.0, 2000.0, 1e-06\] is not allowed: "
+     r"the ramp from 1000 to 2000 rpm must hold at least 5 revolutions \(duration >= 0.2 s"),
+    ("rig_impact_short", _sub(RIG, "impacts_per_direction = 0",
+                              "impacts_per_direction = 1\nimpact_duration_s = 1e-6"), {}, [],
+     r"rig.campaign.impact_duration_s = 1e-06 is not allowed: at least 0.05 s"),
+    ("rig_daq_slow", G("rig.sensors", "daq = { sample_rate_hz = 300.0 }"), {}, [],
+     r"rig.sensors.daq.sample_rate_hz = 300 is not allowed: at least 4 samples per revolution "
+     r"at the top speed \(6000 rpm\), i.e. >= 400 Hz"),
+    ("disc_duration_tiny", _sub(DISC, "duration_s = 0.4", "duration_s = 0.01"), {}, [],
+     r"rig.campaign.duration_s = 0.01 is not allowed: .* lowest speed \(1000 rpm\)"),
+    ("loop_duration_tiny", E("rig.campaign", "duration_s = 0.001"), {}, [],
+     r"rig.campaign.duration_s = 0.001 is not allowed: a steady record must hold"),
+    ("rv_duration_tiny", W("validation", "duration_s = 1e-6"), {}, [],
+     r"validation.duration_s = 1e-06 is not allowed: .* lowest speed \(1000 rpm\)"),
+    ("rv_ramp_short", _sub(RIG_VAL, "ramps = 0", "ramps = 1\nramp_s = 1e-4"), {}, [],
+     r"validation.ramp_s = 0.0001 is not allowed: the ramp from 1000 to 24000 rpm must hold at "
+     r"least 5 revolutions"),
     ("rig_impacts_neg", _sub(RIG, "impacts_per_direction = 0", "impacts_per_direction = -1"),
      {}, [], r"rig.campaign.impacts_per_direction = -1 is not allowed: must be an integer >= 0"),
     ("rig_builds_zero", G("rig.campaign", "builds = 0"), {}, [],
@@ -1135,6 +1188,41 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
     ("absurd_geometry_length", _sub(S("spindle", "geometry = 'g.toml'"), "", ""),
      {"g.toml": GEOMETRY_OK.replace("length_mm = 300.0", "length_mm = 1e300")}, [],
      r"geometry.sections\[1\].length_mm = 1e\+300 is not allowed: must be at most 10000 mm"),
+    # finite but absurd values with a physical lower or upper bound (F12-3)
+    ("delta_lim_tiny", S("limit", "delta_lim_um = 1e-9"), {}, [],
+     r"limit.delta_lim_um = 1e-09 is not allowed: must be at least 0.001 µm \(1 nm, below the "
+     r"resolution of any displacement probe"),
+    ("rv_delta_lim_tiny", W("validation", "delta_lim_um = 1e-4"), {}, [],
+     r"validation.delta_lim_um = 0.0001 is not allowed: must be at least 0.001 µm"),
+    ("omega_max_low", S("deterministic", "omega_max_rpm = 1.0"), {}, [],
+     r"deterministic.omega_max_rpm = 1 is not allowed: must be at least \d+ rpm, the top of the "
+     r"response's speed range"),
+    ("omega_max_at_speed", S("response", "kind = 'at_speed'\nspeed_rpm = 12000.0")
+     .replace("[deterministic]\n", "[deterministic]\nomega_max_rpm = 6000.0\n"), {}, [],
+     r"deterministic.omega_max_rpm = 6000 is not allowed: must be at least 12000 rpm"),
+    ("rig_speed_over", _sub(RIG, "speeds_rpm = [6000.0]", "speeds_rpm = [6000.0, 9e5]"), {}, [],
+     r"rig.campaign.speeds_rpm\[1\] = 900000 is not allowed: must be at most 36000 rpm, 1.5 x "
+     r"the spindle's speed_max_rpm = 24000"),
+    ("rig_runup_over", _sub(RIG, "runup = [1000.0, 2000.0, 0.5]", "runup = [1000.0, 5e4, 2.0]"),
+     {}, [], r"rig.campaign.runup = \[1000.0, 50000.0, 2.0\] is not allowed: end_rpm must be at "
+     r"most 36000 rpm"),
+    ("disc_speed_over", _sub(DISC, "stop = 24000.0", "stop = 9e5"), {}, [],
+     r"rig.campaign.speeds_rpm\[\d+\] = [\d.e+]+ is not allowed: must be at most 36000 rpm"),
+    ("loop_speed_over", _sub(LOOP, "stop = 24000.0", "stop = 4e4"), {}, [],
+     r"rig.campaign.speeds_rpm\[7\] = 40000 is not allowed: must be at most 36000 rpm"),
+    ("p_target_half", S("optimization", "strategy_p_target = 0.5"), {}, [],
+     r"optimization.strategy_p_target = 0.5 is not allowed: must be below 0.5 \(a failure "
+     r"target of 50 % or more is β_t <= 0"),
+    ("p_targets_high", _sub(STUDY, "p_targets = [0.10, 0.05]", "p_targets = [0.1, 0.7]"), {},
+     [], r"optimization.p_targets\[1\] = 0.7 is not allowed: must be below 0.5"),
+    ("n_jobs_huge", _sub(STUDY, "n_gen = 3\nn_jobs = 1", "n_gen = 3\nn_jobs = 1000"), {}, [],
+     r"optimization.n_jobs = 1000 is not allowed: must be at most \d+ worker processes \(4 x "
+     r"the \d+ cores here, at least 8\)"),
+    ("n_jobs_huge_verification", _sub(STUDY, "n_theta = 6\nn_jobs = 1", "n_theta = 6\n"
+                                      "n_jobs = 100000"), {}, [],
+     r"verification.n_jobs = 100000 is not allowed: must be at most \d+ worker processes"),
+    ("n_jobs_huge_ident", ID("n_jobs = 5000"), DS_NO_TRIAL, [],
+     r"identification.n_jobs = 5000 is not allowed: must be at most \d+ worker processes"),
     # ------------------------------------------------------------------ the command line
     ("cli_seed_neg", SPINDLE, {}, ["--seed", "-1"], r"--seed = -1 is not allowed"),
     ("cli_seed_dup", SPINDLE, {}, ["--seed", "5", "5"], r"--seed 5 5 is not allowed"),

@@ -323,7 +323,7 @@ PATTERNS = {
     'geo_empty': r"spindle\.geometry = '' is not allowed:",
     'geo_space': r"spindle\.geometry = 'reference ' is not allowed:",
     'geo_dotdot_missing': r"spindle\.geometry file '.*nothere\.toml' does not exist",
-    'geo_abs_passwd': r"spindle\.geometry file '/etc/passwd' is not allowed:",
+    'geo_abs_passwd': r"spindle\.geometry = '/etc/passwd' is not allowed:",
     'geo_dir': r"spindle\.geometry file '.*g\.toml' is a directory: must be a file",
     'geo_symlink_loop': r"spindle\.geometry file '.*g\.toml' does not exist",
     'geo_symlink_dangling': r"spindle\.geometry file '.*g\.toml' does not exist",
