@@ -54,6 +54,7 @@ from surrogate_rbrdo.spindle.bearing_rating import (
 )
 from surrogate_rbrdo.spindle.geometry import PreloadLaw, SpindleGeometry
 from surrogate_rbrdo.spindle.reference import ReferenceSpindle
+from surrogate_rbrdo.spindle.unbalance import mass_properties
 
 GRAVITY = 9.81
 CHECKS = ("speed_front", "speed_rear", "life_front", "life_rear", "static_front",
@@ -153,20 +154,9 @@ class PracticeSpec:
 
 def _layout(g: SpindleGeometry, front: str, rear: str) -> tuple[float, ...]:
     """Tool, front and rear bearing positions (m), rotor mass (kg), centre of mass (m) and
-    polar inertia (kg m²) of one geometry: shaft sections and disks."""
-    rho = {k: m.rho_kg_m3 for k, m in g.materials.items()}
-    z0, mass, moment, J = 0.0, 0.0, 0.0, 0.0
-    for s in g.sections:
-        L, ro, ri = s.length_mm * 1e-3, s.outer_diameter_mm * 5e-4, s.inner_diameter_mm * 5e-4
-        m = rho[s.material] * np.pi * (ro**2 - ri**2) * L
-        mass, moment = mass + m, moment + m * (z0 + L / 2)
-        J += 0.5 * m * (ro**2 + ri**2)
-        z0 += L
-    for d in g.disks:
-        mass, moment = mass + d.mass_kg, moment + d.mass_kg * d.position_mm * 1e-3
-        J += d.polar_inertia_kgm2
+    polar inertia (kg m²) of one geometry (:func:`~.unbalance.mass_properties`)."""
     return (g.tool_tip_mm * 1e-3, g.bearing(front).position_mm * 1e-3,
-            g.bearing(rear).position_mm * 1e-3, mass, moment / mass, J)
+            g.bearing(rear).position_mm * 1e-3, *mass_properties(g))
 
 
 @dataclass(frozen=True)

@@ -101,10 +101,27 @@ def _plane_masses(g: SpindleGeometry, rotor_mass_kg: float,
     return out
 
 
+def mass_properties(g: SpindleGeometry) -> tuple[float, float, float]:
+    """Rotor mass (kg), centre of mass (m from the left end) and polar inertia (kg m²) from the
+    geometry alone: shaft sections (ρ π (r_o² − r_i²) L, ½ m (r_o² + r_i²)) and disks — what the
+    FE model assembles without building its matrices."""
+    rho = {k: m.rho_kg_m3 for k, m in g.materials.items()}
+    z0, mass, moment, J = 0.0, 0.0, 0.0, 0.0
+    for s in g.sections:
+        L, ro, ri = s.length_mm * 1e-3, s.outer_diameter_mm * 5e-4, s.inner_diameter_mm * 5e-4
+        m = rho[s.material] * np.pi * (ro**2 - ri**2) * L
+        mass, moment = mass + m, moment + m * (z0 + L / 2)
+        J += 0.5 * m * (ro**2 + ri**2)
+        z0 += L
+    for d in g.disks:
+        mass, moment = mass + d.mass_kg, moment + d.mass_kg * d.position_mm * 1e-3
+        J += d.polar_inertia_kgm2
+    return mass, moment / mass, J
+
+
 def geometry_rotor_mass_kg(geometry: SpindleGeometry) -> float:
-    """Rotor mass (kg) from the geometry alone: shaft sections (ρ π (r_o² − r_i²) L) and
-    disks, the mass the FE model assembles (``SpindleModel.rotor_mass_kg``) without building
-    its matrices.
+    """Rotor mass (kg) from the geometry alone (:func:`mass_properties`), the mass the FE
+    model assembles (``SpindleModel.rotor_mass_kg``) without building its matrices.
 
     >>> import numpy as np
     >>> from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -114,10 +131,7 @@ def geometry_rotor_mass_kg(geometry: SpindleGeometry) -> float:
     ...                 sp.model(x).rotor_mass_kg, rtol=1e-12))
     True
     """
-    rho = {k: m.rho_kg_m3 for k, m in geometry.materials.items()}
-    mass = sum(rho[s.material] * np.pi / 4 * (s.outer_diameter_mm**2 - s.inner_diameter_mm**2)
-               * 1e-6 * s.length_mm * 1e-3 for s in geometry.sections)
-    return float(mass + sum(d.mass_kg for d in geometry.disks))
+    return float(mass_properties(geometry)[0])
 
 
 def permissible_unbalance(model: SpindleModel, tolerances: UnbalanceTolerances) -> np.ndarray:
@@ -146,6 +160,7 @@ __all__ = [
     "UnbalanceTolerances",
     "geometry_permissible_unbalance",
     "geometry_rotor_mass_kg",
+    "mass_properties",
     "permissible_unbalance",
     "plane_masses",
 ]
