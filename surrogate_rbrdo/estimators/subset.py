@@ -105,8 +105,10 @@ class SubsetSimulation:
     >>> prob = linear_standard(beta=4.5, dim=10)
     >>> est = SubsetSimulation().estimate(prob.response, prob.inputs, prob.limit, prob.x,
     ...                                   rng=np.random.default_rng(0))
-    >>> bool(abs(est.pf[0] - prob.pf_exact[0]) < 3 * est.pf_se[0]), int(est.diagnostics["runs"][0])
-    (True, 3)
+    >>> bool(abs(est.pf[0] - prob.pf_exact[0]) < 3 * est.pf_se[0])   # exact P_f = Φ(−4.5)
+    True
+    >>> 1 < int(est.diagnostics["runs"][0]) <= 4    # δ of one run > 0.3 here: runs are pooled
+    True
     """
 
     n_per_level: int = 1000
