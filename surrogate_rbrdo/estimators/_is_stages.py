@@ -3,6 +3,7 @@ design (and one phase stratum, :mod:`._periodic`): see that module's docstring."
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -145,6 +146,36 @@ def geometry(pts: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     shares = special.ndtr(-np.abs(beta))
     shares = shares / shares.sum() if shares.sum() > 0 else np.full(len(pts), 1 / len(pts))
     return beta, np.array([q.u_star for q in pts]), shares
+
+
+class Negated:
+    """``−G`` with ``G``'s call counters: the limit-state function whose failure domain is the
+    safe set of ``G`` (points outside the physical domain, ``G = +inf``, become ``−inf``: they
+    count with the safe set, so ``1 − P(−G < 0)`` is ``P(failure and inside)``)."""
+
+    def __init__(self, G: Any) -> None:
+        self.G = G
+
+    def __getattr__(self, name: str) -> Any:       # calls, n_outside, scale, last_y
+        return getattr(self.G, name)
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        return -self.G(u)
+
+
+def negated(dp: Any) -> Any:
+    """The design point ``dp`` of ``G`` as one of ``−G`` (same ``u*``, signs flipped)."""
+    return replace(dp, beta=-dp.beta, alpha=-np.asarray(dp.alpha), grad=-np.asarray(dp.grad),
+                   g_star=-dp.g_star, g_origin=-dp.g_origin)
+
+
+def complement(out: Collect, i: int, n: int) -> None:
+    """Row ``i`` of ``out`` filled for ``−G`` (``P(safe)``, ``n`` points) turned into ``G``'s:
+    ``P_f = 1 − P(safe)`` (same SE), the β's negative, failures counted in ``G``'s domain."""
+    out.pf[i] = 1.0 - out.pf[i]
+    out.stages[i] = 1.0 - out.stages[i]
+    out.beta[i], out.betas[i] = -out.beta[i], -out.betas[i]
+    out.nfail[i] = n - out.nfail[i]
 
 
 class Collect:

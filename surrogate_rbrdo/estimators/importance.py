@@ -55,7 +55,7 @@ from surrogate_rbrdo.estimators._common import (
 )
 from surrogate_rbrdo.estimators._design_points import design_points
 from surrogate_rbrdo.estimators._is_density import is_weights_estimate
-from surrogate_rbrdo.estimators._is_stages import Collect, Stages
+from surrogate_rbrdo.estimators._is_stages import Collect, Negated, Stages, complement, negated
 from surrogate_rbrdo.estimators._periodic import Conditioned, Stratum, cells, lift, periodic_columns
 from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.form import FORM, bound_labels
@@ -169,11 +169,11 @@ class ImportanceSampling:
             # does not depend on it being exact ("unconverged" bounds FORM's value, not IS's)
             out.status[i] = "converged" if dp.status == "unconverged" else dp.status
             if dp.status != "failed":
-                pts = [dp]
-                if dp.status == "converged" and dp.beta >= 0:
-                    pts = design_points(G, m, dp, self.form, max_points=self.n_design_points)
+                Gt, pts = self._points(G, m, dp)
                 out.form_calls += G.calls
-                Stages(self, G, pts, u).run(out, i)
+                Stages(self, Gt, pts, u).run(out, i)
+                if Gt is not G:
+                    complement(out, i, u.shape[0])
             else:
                 out.form_calls += G.calls
             out.calls += G.calls
@@ -209,10 +209,7 @@ class ImportanceSampling:
             cond = Conditioned(inputs, cols, lo + span * 0.5 * (a + b))
             Gc = LimitStateU(response, cond, limit, x_row)
             dp = self.form.run(Gc, cond.dim)
-            pts = [dp]
-            if dp.status == "converged" and dp.beta >= 0:
-                pts = design_points(Gc, cond.dim, dp, self.form,
-                                    max_points=self.n_design_points)
+            Gct, pts = self._points(Gc, cond.dim, dp)
             G = LimitStateU(response, Stratum(inputs, cols, a, b), limit, x_row)
             sub.status[k] = ("converged" if dp.status in ("failed", "unconverged")
                              else dp.status)
@@ -220,7 +217,10 @@ class ImportanceSampling:
                 pts = [replace(q, u_star=lift(q.u_star, cond.keep, m),
                                alpha=lift(q.alpha, cond.keep, m),
                                grad=lift(q.grad, cond.keep, m)) for q in pts]
-                Stages(self, G, pts, u[k * n_k:(k + 1) * n_k]).run(sub, k)
+                Gt = G if Gct is Gc else Negated(G)
+                Stages(self, Gt, pts, u[k * n_k:(k + 1) * n_k]).run(sub, k)
+                if Gt is not G:
+                    complement(sub, k, n_k)
             else:   # no design point: the cell's own distribution (crude MC in the cell)
                 fail = G(u[k * n_k:(k + 1) * n_k]) < 0
                 sub.pf[k], sub.se[k], sub.diag["ess"][k] = is_weights_estimate(
@@ -247,6 +247,16 @@ class ImportanceSampling:
         out.diag["other_share"][i] = float(np.nansum(w * sub.diag["other_share"]))
         out.diag["shell_share"][i] = float(np.nanmean(sub.diag["shell_share"]))
         out.diag["n_mc_strata"][i] = n_mc
+
+    def _points(self, G: Any, m: int, dp: Any) -> tuple[Any, list]:
+        """The function whose tail IS samples and its design points: ``G`` and its points when
+        the mean is safe; when it fails (converged, ``β < 0``) the safe set is the tail, so
+        ``−G`` (:class:`Negated`) and the design points of the safe set, searched like those of
+        a failure domain (a safe set of several slivers: one per point)."""
+        if dp.status != "converged":
+            return G, [dp]
+        Gt, first = (G, dp) if dp.beta >= 0 else (Negated(G), negated(dp))
+        return Gt, design_points(Gt, m, first, self.form, max_points=self.n_design_points)
 
     @staticmethod
     def _warn(khat: np.ndarray, share: np.ndarray, nother: np.ndarray) -> None:

@@ -223,6 +223,24 @@ def two_sided_linear(dim: int = 10, beta: float = 5.0) -> Problem:
                    source="two symmetric linear components; closed form 2Φ(−β)")
 
 
+def two_sided_safe(dim: int = 2, beta: float = 4.5) -> Problem:
+    """A failing mean point whose safe set is two slivers: failure ``|a·u| < β`` (``‖a‖ = 1``),
+    ``y = β − |a·u| > 0``; the complement of :func:`two_sided_linear`.
+
+    Exact: ``1 − P_f = 2Φ(−β)`` (6.8e-6 at β = 4.5; ``P_f`` reported as ``1 − 2Φ(−β)``). A search
+    from the (failing) mean finds one sliver's design point; IS of the complement at it sees
+    half of ``1 − P_f`` — the analytic analogue of a credible-problem design where almost every
+    sample fails (review of issue 13: IS reported ``1 − P_f`` = 1.0e-6 ± 5e-7 where MC gave
+    2.0e-5 ± 4.5e-6).
+    """
+    a = np.ones(dim) / np.sqrt(dim)
+    return Problem(f"two_sided_safe_{dim}d_b{beta:g}",
+                   lambda x, t: (beta - np.abs(t @ a))[None, :] + 0 * _shift(x),
+                   MultivariateNormal(np.zeros(dim), cov=np.eye(dim)), LimitState(0.0),
+                   np.zeros((1, 0)), np.array([1.0 - 2.0 * special.ndtr(-beta)]),
+                   source="complement of two symmetric linear components; closed form")
+
+
 def exponential_sum(dim: int = 10, pf: float = 3e-7) -> Problem:
     """``y = Σ X_i`` of ``dim`` independent ``Exp(1)`` variables, failure ``y > c`` with ``c``
     the ``(1 − pf)``-quantile of ``Gamma(dim, 1)``.
