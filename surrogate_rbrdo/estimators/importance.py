@@ -203,6 +203,7 @@ class ImportanceSampling:
         n_k = u.shape[0] // len(cs)
         sub = Collect(len(cs), m, self.n_design_points)
         n_mc = 0
+        flipped = np.zeros(len(cs), dtype=bool)     # cells whose tail is the safe set
         lo = np.array([c[1] for c in cols])
         span = np.array([c[2] - c[1] for c in cols])
         for k, (a, b) in enumerate(cs):
@@ -221,6 +222,7 @@ class ImportanceSampling:
                 Stages(self, Gt, pts, u[k * n_k:(k + 1) * n_k]).run(sub, k)
                 if Gt is not G:
                     complement(sub, k, n_k)
+                    flipped[k] = True
             else:   # no design point: the cell's own distribution (crude MC in the cell)
                 fail = G(u[k * n_k:(k + 1) * n_k]) < 0
                 sub.pf[k], sub.se[k], sub.diag["ess"][k] = is_weights_estimate(
@@ -241,7 +243,10 @@ class ImportanceSampling:
         out.stages[i] = np.mean(sub.stages, axis=0)
         for name in ("nfail", "ndis", "nout", "n_other"):
             getattr(out, name)[i] = int(getattr(sub, name).sum())
-        w = sub.pf / sub.pf.sum() if sub.pf.sum() > 0 else np.full(len(cs), 1 / len(cs))
+        # diagnostics weighted by each cell's share of the sampled tail (1 - P_f where the mean
+        # fails: weighting by P_f ~ 1 hid a cell carrying 65 % of 1 - P_f at a credible design)
+        tail = np.where(flipped, 1.0 - sub.pf, sub.pf)
+        w = tail / tail.sum() if tail.sum() > 0 else np.full(len(cs), 1 / len(cs))
         out.diag["ess"][i] = float(np.sum(sub.diag["ess"]))
         out.diag["pareto_k"][i] = float(np.nanmax(sub.diag["pareto_k"], initial=-np.inf))
         out.diag["other_share"][i] = float(np.nansum(w * sub.diag["other_share"]))
@@ -271,7 +276,8 @@ class ImportanceSampling:
         if other.size:
             warnings.warn(
                 f"importance sampling: for design(s) {other[:10].tolist()} "
-                f"{np.round(100 * share[other[:10]]).astype(int).tolist()} % of P_f comes from "
+                f"{np.round(100 * share[other[:10]]).astype(int).tolist()} % of P_f (of 1 - P_f "
+                "where the mean fails) comes from "
                 f"{nother[other[:10]].tolist()} failures outside every design point's "
                 "half-space: the failure domain has other regions or bends back towards the "
                 "mean, pf_se is approximate; use 'ais' or 'subset'",

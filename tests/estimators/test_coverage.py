@@ -62,10 +62,6 @@ def test_is_warns_where_the_failure_domain_bends_back():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason=(
-    "issue 13, not met since every design got its own generator (common random numbers, "
-    "est5): ais on the four-branch series system k = 7 covers 36 of 40 runs (0.90), four "
-    "silent misses of a branch"))
 def test_full_coverage_table():
     """≥ 95 % of the unwarned runs covered in every cell (cells where every run warned pass)."""
     bad = []
