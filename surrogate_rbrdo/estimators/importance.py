@@ -21,10 +21,12 @@ design point's hyperplane give controls ``C_k = w·1[u_k·v ≥ ‖u_k‖²]`` w
 failure domain, exact for a union of half-spaces (a series system of limit states linear in
 ``u``). Under common random numbers the rows of the fixed ``u`` are transformed, never redrawn.
 
-When the mean point lies in the failure domain (FORM's β < 0, P_f > 1/2) the density at ``u*``
-covers the *safe* tail and the complement is estimated, ``P_f = 1 − P(safe)`` (weighting the
-failures there has a variance of order ``exp(β²)``: at β = −3 a plain IS run of 2000 points
-returned 0.46 ± 0.06 for P_f = 0.9987).
+When the mean point lies in the failure domain (FORM's β < 0, P_f > 1/2) the *safe* set is the
+tail: everything above runs on ``−G`` (:class:`~._is_stages.Negated`; its failure domain is the
+safe set, with all its design points and the discovery searches) and ``P_f = 1 − P(safe)``
+(weighting the failures instead has a variance of order ``exp(β²)``: at β = −3 a plain IS run of
+2000 points returned 0.46 ± 0.06 for P_f = 0.9987; with the first safe design point only, a safe
+set of two slivers ``|a·u| > 4.5`` gave half of ``1 − P_f`` with a 0.7 % error).
 
 **What it cannot see, and says.** Two diagnostics raise an :class:`~._tail.EstimatorWarning`:
 more than 20 % of P_f from failures outside every design point's half-space (a failure domain
