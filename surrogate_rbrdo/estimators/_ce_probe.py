@@ -20,7 +20,8 @@ The probe looks with the first level, a plain standard-normal sample that sees e
    expected to visit fewer than ``MIN_HITS`` times, and which is relevant
    (``Φ(−β*) ≥ RELEVANCE · P̂``, ``P̂`` the last level's estimate), is a missed branch. The
    candidates that ``N(u*, I)`` covers are then covered, and the next uncovered one is searched
-   (at most ``MAX_PROBES`` searches).
+   (at most ``MAX_PROBES`` searches, together at most ``n_final`` model calls: a search that
+   would exceed them is stopped — the probe never costs more than the final sample).
 
 Each missed branch enters the final density as ``N(u*, I)`` (the density of post-FORM
 importance sampling; shares ``∝ Φ(−β*)``, their total ``b = ΣΦ(−β*)/(P̂ + ΣΦ(−β*))`` clipped to
@@ -130,12 +131,15 @@ def probe_missed(G: Any, q: Any, v1: np.ndarray, g1: np.ndarray, pf_hint: float,
     draws = q.sample(N_COVER, rng)
     open_ = n_final * half_space_share(draws, dirs, radii) < MIN_HITS
     centres, betas, searches, g0 = [], [], 0, None
-    while open_.any() and searches < MAX_PROBES:
+    def spent(u: np.ndarray) -> bool:
+        return G.calls - calls0 >= n_final
+
+    while open_.any() and searches < MAX_PROBES and not spent(v1[0]):
         j = int(np.flatnonzero(open_)[0])
         open_[j] = False
         if g0 is None:
             g0 = float(G(np.zeros((1, m)))[0])
-        dp = form.run(G, m, start=(v1[cand[j]], g0), max_iter=PROBE_ITER, stop=lambda u: False)
+        dp = form.run(G, m, start=(v1[cand[j]], g0), max_iter=PROBE_ITER, stop=spent)
         searches += 1
         if dp.status != "converged" or not dp.beta > 0:
             continue
