@@ -3,9 +3,9 @@ the final IS density.
 
 A cross-entropy density is refitted at every level from samples of the previous one; a failure
 branch that one fit leaves out is not sampled again and is lost for good. On the four-branch
-series system (k = 7) the two straight branches (21 % of P_f) were lost in 6 of 100 runs, each
-reported with a tight interval around a value 4–8 standard errors low: the final sample never
-visits a branch its density lacks, so no weight diagnostic can see it.
+series system (k = 7) one or both straight branches (each 10.5 % of P_f) were lost in 5 of 100
+runs, each reported with a tight interval around a value 3–8 standard errors low: the final
+sample never visits a branch its density lacks, so no weight diagnostic can see it.
 
 The probe looks with the first level, a plain standard-normal sample that sees every direction:
 

@@ -20,7 +20,7 @@ Nakagami components in polar coordinates (:mod:`._vmfn`; Wang & Song 2016; Papai
 components (≤ ``n_components``) is chosen by the BIC at every fit.
 
 A fit can leave out a failure branch, which is then never sampled again (the four-branch
-series system: a branch of 21 % of P_f lost in 6 of 100 runs, each reported 4–8 SE low without
+series system: a straight branch lost in 5 of 100 runs, each reported 3–8 SE low without
 a warning). Before the final sample, ``probe`` (:mod:`._ce_probe`) looks for such branches from
 the first level's standard-normal points nearest failure: a design-point search from each one
 the final density would not visit, and every relevant design point the final density misses
