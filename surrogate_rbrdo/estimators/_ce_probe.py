@@ -17,11 +17,16 @@ The probe looks with the first level, a plain standard-normal sample that sees e
    of ``q``. A candidate expected to be visited fewer than ``MIN_HITS`` times is uncovered.
 3. *Search*: from the lowest uncovered candidate, an iHL-RF design-point search (the FORM of the
    ``is`` estimator). A converged ``u*`` whose half-space ``{a*·w ≥ β*}`` the final sample is
-   expected to visit fewer than ``MIN_HITS`` times, and which is relevant
-   (``Φ(−β*) ≥ RELEVANCE · P̂``, ``P̂`` the last level's estimate), is a missed branch. The
-   candidates that ``N(u*, I)`` covers are then covered, and the next uncovered one is searched
-   (at most ``MAX_PROBES`` searches, together at most ``n_final`` model calls: a search that
-   would exceed them is stopped — the probe never costs more than the final sample).
+   expected to visit fewer than ``MIN_HITS`` times — or fewer than ``STARVED`` (1/4) of the
+   ``n_final π*/2`` times its own ``N(u*, I)`` would at its FORM share
+   ``π* = Φ(−β*)/(P̂ + Φ(−β*))`` (a *starved* branch: in 20-D the fit covered a branch of 45 %
+   of P_f with 2–5 % of its points) — and which is relevant (``Φ(−β*) ≥ RELEVANCE · P̂``,
+   ``P̂`` the last level's estimate), is a missed branch. The
+   candidates the branch at ``u*`` accounts for (:func:`explained`: ``N(u*, I)`` reaches their
+   half-space, or the tangent plane at ``u*`` predicts their ``G``) are then closed, and the
+   next open one is searched (at most ``MAX_PROBES`` searches, together at most ``n_final``
+   model calls: a search that would exceed them is stopped — the probe never costs more than
+   the final sample).
 
 Each missed branch enters the final density as ``N(u*, I)`` (the density of post-FORM
 importance sampling; shares ``∝ Φ(−β*)``, their total ``b = ΣΦ(−β*)/(P̂ + ΣΦ(−β*))`` clipped to
@@ -45,7 +50,11 @@ from surrogate_rbrdo.estimators.form import FORM
 #: a half-space the final sample is expected to visit fewer times than this is not covered
 MIN_HITS = 5.0
 #: design-point searches at most per design
-MAX_PROBES = 3
+MAX_PROBES = 8
+#: a branch visited less than this share of its fair number of points is starved: added too
+STARVED = 0.25
+#: a candidate lies on a found branch when its tangent plane predicts its G to this distance
+LIN_TOL = 0.5
 #: a missed branch counts when Φ(−β*) ≥ RELEVANCE · P̂
 RELEVANCE = 1e-2
 #: draws of the final density used to measure coverage (no model calls)
@@ -131,6 +140,7 @@ def probe_missed(G: Any, q: Any, v1: np.ndarray, g1: np.ndarray, pf_hint: float,
     draws = q.sample(N_COVER, rng)
     open_ = n_final * half_space_share(draws, dirs, radii) < MIN_HITS
     centres, betas, searches, g0 = [], [], 0, None
+
     def spent(u: np.ndarray) -> bool:
         return G.calls - calls0 >= n_final
 
@@ -145,17 +155,44 @@ def probe_missed(G: Any, q: Any, v1: np.ndarray, g1: np.ndarray, pf_hint: float,
             continue
         u_star = np.asarray(dp.u_star, dtype=float)
         beta = float(np.linalg.norm(u_star))
-        # N(u*, I) covers the candidates whose half-space it reaches with probability >= 1 %
-        open_ &= special.ndtr(dirs @ u_star - radii) < 1e-2
+        open_ &= ~explained(v1[cand], g1[cand], dirs, radii, u_star, np.asarray(dp.grad))
         hits = n_final * half_space_share(draws, (u_star / beta)[None], np.array([beta]))[0]
+        p_k = float(special.ndtr(-beta))
         relevant = special.log_ndtr(-beta) >= np.log(RELEVANCE * max(pf_hint, 1e-300))
         new = all(np.linalg.norm(u_star - c) > 0.5 * beta for c in centres)
-        if hits < MIN_HITS and relevant and new:
+        # its own N(u*, I) at its FORM share would put half its points in the half-space
+        fair = 0.5 * n_final * p_k / (max(pf_hint, 0.0) + p_k) if p_k > 0 else 0.0
+        if hits < max(MIN_HITS, STARVED * fair) and relevant and new:
             centres.append(u_star)
             betas.append(beta)
     if not centres:
         return ProbeResult(np.empty((0, m)), np.empty(0), searches, G.calls - calls0)
     return ProbeResult(np.array(centres), np.array(betas), searches, G.calls - calls0)
+
+
+def explained(v: np.ndarray, g: np.ndarray, dirs: np.ndarray, radii: np.ndarray,
+              u_star: np.ndarray, grad: np.ndarray) -> np.ndarray:
+    """Candidates ``v`` (values ``g``) the branch at design point ``u*`` accounts for: its
+    density ``N(u*, I)`` reaches their half-space with probability ≥ 1 %, or the tangent plane
+    at ``u*`` predicts their ``G`` to within ``LIN_TOL`` in distance (``|∇G·(v − u*) − g| ≤
+    LIN_TOL ‖∇G‖``; in many dimensions a candidate's radius is mostly noise across the branch,
+    and only the second test recognises it).
+
+    Series system ``G = min(3 − u₁, 3 − u₂)``; the branch of ``u₁`` (``u* = 3 e₁``) accounts
+    for the first candidate, not for the second (on the branch of ``u₂``):
+
+    >>> v = np.array([[2.5, 2.0, -1.5], [0.1, 2.6, 1.0]])
+    >>> g = np.minimum(3.0 - v[:, 0], 3.0 - v[:, 1])
+    >>> r = np.linalg.norm(v, axis=1)
+    >>> u_star, grad = np.array([3.0, 0, 0]), np.array([-1.0, 0, 0])
+    >>> explained(v, g, v / r[:, None], r, u_star, grad).tolist()
+    [True, False]
+    """
+    near = special.ndtr(dirs @ u_star - radii) >= 1e-2
+    ng = float(np.linalg.norm(grad))
+    if not (np.isfinite(ng) and ng > 0):
+        return near
+    return near | (np.abs((v - u_star) @ grad - g) <= LIN_TOL * ng)
 
 
 def augment(q: Any, probe: ProbeResult, pf_hint: float) -> Any:
@@ -167,5 +204,5 @@ def augment(q: Any, probe: ProbeResult, pf_hint: float) -> Any:
     return DensityMix(np.array([1.0 - b, b]), (q, unit_gaussians(probe.centres, p)))
 
 
-__all__ = ["DensityMix", "ProbeResult", "augment", "half_space_share", "probe_missed",
-           "unit_gaussians"]
+__all__ = ["DensityMix", "ProbeResult", "augment", "explained", "half_space_share",
+           "probe_missed", "unit_gaussians"]
