@@ -46,18 +46,32 @@ def nearer_point(G: Any, u: np.ndarray, sign0: float, h: float = POLL_ANGLE,
     >>> nearer_point(Linear(), np.array([3.0, 0.0]), 1.0) is None
     True
     """
+    far = far_side_points(G, u, sign0, h, eps)
+    return far[0] if far.shape[0] else None
+
+
+def far_side_points(G: Any, u: np.ndarray, sign0: float, h: float = POLL_ANGLE,
+                    eps: float = POLL_SHRINK) -> np.ndarray:
+    """Every poll point of :func:`nearer_point` on the far side of the limit state, deepest
+    first (``(k, m)``, ``k = 0`` at a local minimum as far as the poll can see).
+
+    >>> class Corner:                      # series system min(3 − u₁, 3 − u₂): corner (3, 3)
+    ...     def __call__(self, u): return np.minimum(3.0 - u[:, 0], 3.0 - u[:, 1])
+    >>> far_side_points(Corner(), np.array([3.0, 3.0]), 1.0).shape[0]   # both tilts fail
+    2
+    """
     beta = float(np.linalg.norm(u))
     m = u.size
     if m < 2 or not (np.isfinite(beta) and beta > 0):
-        return None
+        return np.empty((0, m))
     e = u / beta
     tilts = orthonormal_complement(e)
     tilts = np.vstack([tilts, -tilts])
     P = beta * (1.0 - eps) * (np.cos(h) * e[None, :] + np.sin(h) * tilts)
     g = sign0 * np.asarray(G(P), dtype=float)
     g = np.where(np.isfinite(g), g, np.inf)   # outside the physical domain: not a failure
-    j = int(np.argmin(g))
-    return P[j] if g[j] < 0 else None
+    order = np.argsort(g, kind="stable")
+    return P[order[g[order] < 0]]
 
 
-__all__ = ["POLL_ANGLE", "POLL_SHRINK", "nearer_point"]
+__all__ = ["POLL_ANGLE", "POLL_SHRINK", "far_side_points", "nearer_point"]

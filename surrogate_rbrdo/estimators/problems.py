@@ -223,6 +223,26 @@ def two_sided_linear(dim: int = 10, beta: float = 5.0) -> Problem:
                    source="two symmetric linear components; closed form 2Φ(−β)")
 
 
+def series_linear(dim: int = 10, beta: tuple[float, float] = (3.0, 3.5)) -> Problem:
+    """A four-branch series system of limit states linear in ``u``, in ``dim`` dimensions:
+    failure ``u₁ > β₁`` or ``u₂ > β₁`` or ``−u₁ > β₂`` or ``−u₂ > β₂`` (two pairs of opposite
+    half-spaces on two orthogonal axes; four design points, two of them less probable).
+
+    Exact: ``P_f = 1 − (1 − Φ(−β₁) − Φ(−β₂))²`` (the two coordinates are independent). The
+    straight-branch analogue of the four-branch system in many dimensions, where a
+    cross-entropy fit loses the weaker branches (review of issue 13, est6).
+    """
+    b1, b2 = beta
+    q = 1.0 - special.ndtr(-b1) - special.ndtr(-b2)
+    return Problem(f"series_linear_{dim}d",
+                   lambda x, t: np.max(np.stack([t[:, 0] - b1, t[:, 1] - b1, -t[:, 0] - b2,
+                                                 -t[:, 1] - b2]), axis=0)[None, :]
+                   + 0 * _shift(x),
+                   MultivariateNormal(np.zeros(dim), cov=np.eye(dim)), LimitState(0.0),
+                   np.zeros((1, 0)), np.array([1.0 - q * q]),
+                   source="four linear components on two axes; closed form")
+
+
 def two_sided_safe(dim: int = 2, beta: float = 4.5) -> Problem:
     """A failing mean point whose safe set is two slivers: failure ``|a·u| < β`` (``‖a‖ = 1``),
     ``y = β − |a·u| > 0``; the complement of :func:`two_sided_linear`.
