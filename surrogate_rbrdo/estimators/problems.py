@@ -302,8 +302,8 @@ def benchmark_problems() -> list[Problem]:
     sum of two uniforms, Breitung's paraboloid (5-D; 10-D convex at 1e-7 and concave at 3e-4),
     the four-branch series system (k = 6, 7), the two-design-point parabola, the convex
     limit state of Borri & Speranzini, two-sided linear limit states (two design points, 5-D and
-    10-D), the sum of ten exponentials at 3e-7, the non-linear oscillator and a failing mean
-    point (β = −1).
+    10-D), a four-branch linear series system in 10-D, the sum of ten exponentials at 3e-7, the
+    non-linear oscillator and a failing mean point (β = −1).
 
     >>> [p.name for p in benchmark_problems()][:3]
     ['linear_2d_beta3', 'linear_10d_beta5', 'linear_100d_beta3.5']
@@ -318,6 +318,6 @@ def benchmark_problems() -> list[Problem]:
         paraboloid(beta=4.0, kappa=-0.1, dim=10), series_four_branch(6.0),
         series_four_branch(7.0), two_design_points(), convex_waarts(),
         two_sided_linear(dim=5, beta=3.5), two_sided_linear(dim=10, beta=5.0),
-        exponential_sum(dim=10, pf=3e-7), nonlinear_oscillator(),
+        series_linear(dim=10), exponential_sum(dim=10, pf=3e-7), nonlinear_oscillator(),
         linear_standard(beta=-1.0, dim=2),
     ]
