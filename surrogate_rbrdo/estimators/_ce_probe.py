@@ -129,9 +129,8 @@ def probe_missed(G: Any, q: Any, v1: np.ndarray, g1: np.ndarray, pf_hint: float,
     m = v1.shape[1]
     calls0 = G.calls
     ok = np.isfinite(g1)
-    none = ProbeResult(np.empty((0, m)), np.empty(0), 0, 0)
     if ok.sum() < 2:
-        return none
+        return ProbeResult(np.empty((0, m)), np.empty(0), 0, 0)
     cand = np.flatnonzero(ok & (g1 <= np.quantile(g1[ok], CANDIDATE_QUANTILE)))
     cand = cand[np.argsort(g1[cand])]
     radii = np.linalg.norm(v1[cand], axis=1)
@@ -165,9 +164,8 @@ def probe_missed(G: Any, q: Any, v1: np.ndarray, g1: np.ndarray, pf_hint: float,
         if hits < max(MIN_HITS, STARVED * fair) and relevant and new:
             centres.append(u_star)
             betas.append(beta)
-    if not centres:
-        return ProbeResult(np.empty((0, m)), np.empty(0), searches, G.calls - calls0)
-    return ProbeResult(np.array(centres), np.array(betas), searches, G.calls - calls0)
+    return ProbeResult(np.array(centres).reshape(-1, m), np.array(betas, dtype=float),
+                       searches, G.calls - calls0)
 
 
 def explained(v: np.ndarray, g: np.ndarray, dirs: np.ndarray, radii: np.ndarray,
