@@ -30,11 +30,11 @@ def model():
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
     """The rig with its noise off, a random build (damping factors CoV 20 %), tool (mass 3 %)
-    and thermal states: 3 speeds × 2 runs with and without a trial mass, one hit per
-    direction at the tool."""
+    and thermal states: 3 speeds (22 000 rpm is 620 rpm from the condensed rotor's pole) × 2
+    runs with and without a trial mass, one hit per direction at the tool."""
     path = tmp_path_factory.mktemp("impact_rig")
     truth = reference_truth()
-    run_campaign(truth, CampaignOptions(speeds_rpm=(6000.0, 12000.0, 18000.0), repeats=2,
+    run_campaign(truth, CampaignOptions(speeds_rpm=(6000.0, 12000.0, 22000.0), repeats=2,
                                         runup=None, impacts_per_direction=1,
                                         trial_unbalance=TRIAL, sensors=SensorSet(noise=False)),
                  path, rng=np.random.default_rng(5))
@@ -45,12 +45,13 @@ def rig(tmp_path_factory):
 @pytest.mark.known_answer
 def test_noise_free_impacts_give_the_damping_of_an_identification_run(rig, model):
     """``damping = "impact"``, ``tool_mass = "impact"`` on the noise-free rig: η of both
-    bearings within 2 % (what is left is the rig's own FRF error above ~1.4 kHz, 0.3–1 %
-    against its truth's model), the standstill stiffness factors and the tool mass within
-    0.5 %; the reactions condensed with the weighed tool mass give k within 1e-4 at 6 000 and
-    12 000 rpm and 1e-3 at 18 000 (with the model's nominal tool mass the hidden 3 % scatter
-    costs up to 1e-2 there); every record's c = η̂ k̂ within 2 % of its true c; the
-    uncertainty model's provenance names the source and η̂ per installation."""
+    bearings within 0.5 % (the rig's FRF is within ~3e-4 of its truth's model since the
+    recorded force is the one the integrator applied), the standstill stiffness factors within
+    0.5 % and the tool mass within 2e-4; the reactions condensed with the weighed tool mass
+    give k within 1e-4 at every speed (with the model's nominal tool mass the hidden 3 %
+    scatter costs up to 1e-2); every record's c = η̂ k̂ within 1 % of its true c (the issue's
+    noise-free bound); the uncertainty model's provenance names the source and η̂ per
+    installation."""
     path, truth, ds, recs = rig
     run = identify_records(model, path, IdentificationOptions(
         damping="impact", tool_mass="impact", n_boot=20, max_rel_se=1e9),
@@ -60,23 +61,21 @@ def test_noise_free_impacts_give_the_damping_of_an_identification_run(rig, model
     got = dmp["installations"]["build=0|tool=0"]
     d = recs[0].provenance["truth_draws"]
     np.testing.assert_allclose(got["eta_s"], 4e-6 * np.array(d["build"]["damping_factor"]),
-                               rtol=0.02)
+                               rtol=5e-3)
     par = got["parameters"]
     for ax in ("x", "y"):            # the truth's bearings are isotropic here
         np.testing.assert_allclose([par[f"front_stiffness_{ax}"], par[f"rear_stiffness_{ax}"]],
                                    record_state(truth, recs[0].provenance).theta[0], rtol=5e-3)
-    assert par["tool_mass"] == pytest.approx(d["tool"]["mass_factor"], rel=5e-3)
+    assert par["tool_mass"] == pytest.approx(d["tool"]["mass_factor"], rel=2e-4)
     prov = {r["id"]: ds.load(r).provenance for r in ds.index}
     ids = [i.split("|")[1] for i in run.responses.record_ids]
     true = truth_coefficients(truth, [prov[i] for i in ids], run.responses.speed_rpm)
     c = [2, 3, 6, 7]
     est = run.campaign.identification.estimate
-    np.testing.assert_allclose(est[:, c], true[:, c], rtol=0.02)
-    k, sp = [0, 1, 4, 5], run.responses.speed_rpm
-    np.testing.assert_allclose(est[sp < 15000][:, k], true[sp < 15000][:, k], rtol=1e-4)
-    np.testing.assert_allclose(est[:, k], true[:, k], rtol=1e-3)
+    np.testing.assert_allclose(est[:, c], true[:, c], rtol=0.01)
+    np.testing.assert_allclose(est[:, [0, 1, 4, 5]], true[:, [0, 1, 4, 5]], rtol=1e-4)
     assert run.provenance["tool_mass_factor"]["factor"] == pytest.approx(
-        d["tool"]["mass_factor"], rel=5e-3)
+        d["tool"]["mass_factor"], rel=2e-4)
     np.testing.assert_allclose(run.campaign.table["front_c_yy"], est[:, 2])
     eta = np.array(got["eta_s"])
     np.testing.assert_allclose(est[:, c], est[:, [0, 1, 4, 5]] * eta[[0, 0, 1, 1]])
