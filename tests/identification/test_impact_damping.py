@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from surrogate_rbrdo.identification import IdentificationOptions, identify_records
 from surrogate_rbrdo.identification.experiment import check_source
@@ -166,3 +167,49 @@ def test_anisotropic_bearings_are_updated_per_direction(tmp_path, model):
         np.testing.assert_allclose(got, theta * (1 + sign * s_an), rtol=5e-3)
     np.testing.assert_allclose(res.eta_s, 4e-6 * np.array(d["build"]["damping_factor"]),
                                rtol=0.02)
+
+
+def _impacts(path, truth, seed, hits, duration_s=1.0):
+    run_campaign(truth, CampaignOptions(speeds_rpm=(10000.0,), repeats=1, runup=None,
+                                        impacts_per_direction=hits,
+                                        impact_duration_s=duration_s), path,
+                 rng=np.random.default_rng(seed))
+    ds = open_dataset(path / "dataset")
+    return [ds.load(r) for r in ds.index if r["kind"] == "impact"]
+
+
+@pytest.mark.known_answer
+def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_path, model):
+    """At the rig's default noise with 3 hits of 0.5 s per direction: a truth the model can
+    represent (the default build, tool and thermal draws) passes the lack-of-fit test against
+    the hits' own scatter (χ²/ν 0.7–1.8 over 24 seeds with 5 hits of 1 s, 1.0–1.4 with these;
+    docs/identification.md §5b), and a truth with a
+    tool-interface compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad,
+    as ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model
+    error that made η̂ 21 % low on the shipped campaign without anything saying so."""
+    ok = impact_damping(model, _impacts(tmp_path / "ok", reference_truth(), 2001, 3, 0.5))
+    assert ok.covariance_kind == "jackknife" and ok.n_replicates == 3
+    assert not ok.lack_of_fit["flagged"], ok.lack_of_fit
+    hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
+                                      "k_r_Nm_per_rad": 5e6}])
+    recs = _impacts(tmp_path / "bad", hidden, 2001, 3, 0.5)
+    with pytest.warns(UserWarning, match="lack of fit"):
+        bad = impact_damping(model, recs)
+    assert bad.lack_of_fit["flagged"] and bad.to_dict()["lack_of_fit"]["flagged"]
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_jackknife_standard_error_of_eta_covers_over_seeds(tmp_path, model):
+    """The reported SE of η̂ (delete-one-hit jackknife, 5 hits per direction) against the
+    build's true η over 20 random rigs at the default noise: the 95 % t(4) interval covers
+    the truth in at least 80 % of them for each bearing (measured over 24 seeds: 0.875 front,
+    0.96 rear; the model-based SE from H1's coherence covered 0.42 and 0.75)."""
+    z = []
+    for seed in range(20):
+        recs = _impacts(tmp_path / f"s{seed}", reference_truth(), 3000 + seed, 5)
+        res = impact_damping(model, recs)
+        eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
+        z.append(np.log(res.eta_s / eta) / res.eta_rel_se)
+    cover = np.mean(np.abs(z) <= stats.t.ppf(0.975, 4), axis=0)
+    assert np.all(cover >= 0.8), cover
