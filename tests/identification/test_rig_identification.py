@@ -92,6 +92,27 @@ def test_noise_free_records_recover_the_eight_coefficients(tmp_path, model, seed
 
 
 @pytest.mark.known_answer
+def test_noise_free_records_with_a_sampled_keyphasor(tmp_path, model):
+    """Done-when, noise-free, with a *sampled* keyphasor channel (``timing = "sampled"``, the
+    rig's 10° edges at 10 kHz) instead of counter timestamps: the pulse template and the
+    records' phases refolded to convergence put every phase within ~3e-7 rad (docs/
+    identification.md §3), so k within 1e-4 and c within 1 % at 1 000 rpm (600 samples per
+    revolution: the edges repeat), 12 000 rpm (50) and 23 000 rpm (26.09) — c at 1 000 rpm
+    needs the phase to 4e-6 rad; one fold on the edge angles left it 1–5.5 % off."""
+    truth = reference_truth(variability=Variability(tool_mass_cov=0.0))
+    rng = np.random.default_rng(8)
+    speeds = (1000.0, *np.sort(np.round(rng.uniform(2000.0, 22000.0, 2), 1)), 12000.0, 23000.0)
+    ds = _campaign(tmp_path, truth, sorted(speeds), 2,
+                   SensorSet(noise=False, keyphasor=KeyphasorModel(timing="sampled")), seed=8)
+    run = identify_records(model, tmp_path, IdentificationOptions(max_rel_se=1e9, n_boot=20),
+                           rng=np.random.default_rng(0))
+    err = np.abs(run.campaign.identification.estimate / _truth_of(ds, truth, run.responses)
+                 - 1)
+    assert np.all(err[:, [0, 1, 4, 5]] < 1e-4) and np.all(err[:, [2, 3, 6, 7]] < 0.01), (
+        err.max(axis=0))
+
+
+@pytest.mark.known_answer
 @pytest.mark.parametrize("seed", [6, pytest.param(20261125, marks=pytest.mark.slow)])
 def test_noise_free_recovery_with_the_hidden_tool_mass_scatter(tmp_path, model, seed):
     """Done-when, noise-free, with the rig's physical scatter left on (``reference_truth()``:
