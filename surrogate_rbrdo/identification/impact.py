@@ -29,8 +29,12 @@ Kluwer 1995, ch. 6; Lin & Ewins, *Mech. Syst. Signal Process.* 8(4):437–458, 1
    i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
    weighed by the FRF) and one calibration gain per direction (hammer × accelerometer). The
    weights are H1's random error, ``ε = √(1 − γ²) / (|γ| √(2 n_d))`` of ``|H|`` (Bendat &
-   Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), floored at ``rel_floor``; the
-   covariance of the parameters is ``(JᵀJ)⁻¹`` scaled by ``χ²/ν`` when that exceeds 1.
+   Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), its square averaged over ``smooth_bins``
+   bins and floored at ``rel_floor``;
+4. the covariance of the parameters from a delete-one-hit jackknife (:func:`jackknife`; with
+   fewer than 3 hits per direction ``(JᵀJ)⁻¹`` scaled by ``χ²/ν`` when that exceeds 1), and a
+   lack-of-fit test of the fit against the jackknife variance of H1, flagged (with a warning)
+   above ``max_lack_of_fit``: the model cannot represent the FRFs.
 
 The bearings' damping at any speed then follows from the damping law ``C_b = η_b K_b``
 (:meth:`ImpactDamping.damping`): ``ĉ(Ω) = η̂ k̂(Ω)`` with ``k̂`` identified from the unbalance
@@ -294,6 +298,17 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model):
     return res, pts, sol.x, h
 
 
+def _at_least(model: np.ndarray, jk: np.ndarray) -> np.ndarray:
+    """The jackknife covariance with each variance raised to the model-based one where that is
+    larger (noise-free hits are identical: the jackknife sees no scatter, the model-based
+    covariance keeps H1's accuracy floor); the jackknife's correlations are kept."""
+    dj, dm = np.diag(jk), np.diag(model)
+    if not np.all(dj > 0):
+        return model
+    d = np.sqrt(np.maximum(dj, dm) / dj)
+    return jk * d[:, None] * d[None, :]
+
+
 def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOptions,
               res: ImpactDamping, pts: FitPoints, x: np.ndarray, h: np.ndarray, theta, m,
               band) -> ImpactDamping:
@@ -302,8 +317,11 @@ def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOption
 
     Replicate ``i`` leaves out the ``i``-th hit of every direction and is refitted from the
     full fit's solution on the full fit's FRF bins (Efron & Tibshirani, *An Introduction to
-    the Bootstrap*, 1993, §11.2: ``(n − 1)/n Σ (x_i − x̄)(x_i − x̄)ᵀ``). Fewer than
-    ``MIN_HITS`` hits in a direction: ``res`` unchanged (model-based covariance, no test).
+    the Bootstrap*, 1993, §11.2: ``(n − 1)/n Σ (x_i − x̄)(x_i − x̄)ᵀ``; each variance at
+    least the model-based one). The lack of fit is ``Σ 2|H − Ĥ|² / v / (2N − p)`` with ``v``
+    the jackknife variance of H1 at each point, averaged over ``smooth_bins`` bins and floored
+    at ``(lack_of_fit_floor |H|)²``. Fewer than ``MIN_HITS`` hits in a direction: ``res``
+    unchanged (model-based covariance, no test).
     """
     by_dir: dict[str, list[Record]] = {}
     for r in records:
@@ -323,11 +341,14 @@ def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOption
         xs.append(sol.x)
         acc.append([accelerance(frfs[d]) for d in dirs])
     xs = np.array(xs)
-    cov = (n - 1) / n * (xs - xs.mean(0)).T @ (xs - xs.mean(0))
+    cov = _at_least(res.covariance,
+                    (n - 1) / n * (xs - xs.mean(0)).T @ (xs - xs.mean(0)))
     A = np.array(acc)                                           # (n, nd, F)
     var = (n - 1) / n * np.sum(np.abs(A - A.mean(0)) ** 2, axis=0)
     var = uniform_filter1d(var, max(opts.smooth_bins, 1), axis=1, mode="nearest")
-    v = var[pts.gi, pts.bins]
+    # floor: a misfit below lack_of_fit_floor of |H| is not called a model error (noise-free
+    # hits are identical: no scatter to refer to)
+    v = np.maximum(var[pts.gi, pts.bins], (opts.lack_of_fit_floor * np.abs(pts.H)) ** 2)
     chi2 = float(np.sum(2 * np.abs(pts.H - h) ** 2 / v))
     dof = max(2 * pts.s.size - x.size, 1)
     lof = {"chi2_dof": chi2 / dof, "dof": dof, "threshold": opts.max_lack_of_fit,

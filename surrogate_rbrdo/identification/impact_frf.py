@@ -48,6 +48,18 @@ class ImpactOptions:
     tool_disk : str
     exp_window_end : float or None
         Exponential window of :func:`~surrogate_rbrdo.rig.frf.h1_frf`.
+    smooth_bins : int
+        H1's noise variance (the fit's weights) and its jackknife variance (the lack-of-fit
+        test) are averaged over this many neighbouring bins (the noise spectrum is smooth).
+    covariance : {"jackknife", "model"}
+        The factors' covariance: delete-one-hit jackknife (default; at least 3 hits per
+        direction, else the model-based one) or ``(JᵀJ)⁻¹ max(χ²/ν, 1)`` from H1's coherence.
+    max_lack_of_fit : float
+        χ²/ν of the fit against the jackknife variance of H1 above which the installation is
+        flagged (a model error), calibrated over rig truths (docs/identification.md §5b).
+    lack_of_fit_floor : float
+        Relative FRF misfit never called a model error (an accelerometer's frequency
+        response is known to ~0.1 %): floor of the lack-of-fit variance, ``(floor |H|)²``.
     """
 
     band_hz: tuple[float, float] | None = None
@@ -62,6 +74,7 @@ class ImpactOptions:
     smooth_bins: int = 21
     covariance: str = "jackknife"
     max_lack_of_fit: float = 3.0
+    lack_of_fit_floor: float = 1e-3
 
     def __post_init__(self) -> None:
         if self.band_hz is not None:
@@ -77,6 +90,7 @@ class ImpactOptions:
         check_int("smooth_bins", self.smooth_bins, minimum=1)
         check_choice("covariance", self.covariance, ("jackknife", "model"))
         check_positive("max_lack_of_fit", self.max_lack_of_fit)
+        check_positive("lack_of_fit_floor", self.lack_of_fit_floor)
         if self.exp_window_end is not None:
             check_range("exp_window_end", self.exp_window_end, 1e-6, 1.0)
 

@@ -169,10 +169,11 @@ def test_anisotropic_bearings_are_updated_per_direction(tmp_path, model):
                                rtol=0.02)
 
 
-def _impacts(path, truth, seed, hits, duration_s=1.0):
+def _impacts(path, truth, seed, hits, duration_s=1.0, sensors=None):
     run_campaign(truth, CampaignOptions(speeds_rpm=(10000.0,), repeats=1, runup=None,
                                         impacts_per_direction=hits,
-                                        impact_duration_s=duration_s), path,
+                                        impact_duration_s=duration_s,
+                                        sensors=sensors or SensorSet()), path,
                  rng=np.random.default_rng(seed))
     ds = open_dataset(path / "dataset")
     return [ds.load(r) for r in ds.index if r["kind"] == "impact"]
@@ -186,7 +187,8 @@ def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_pat
     docs/identification.md §5b), and a truth with a
     tool-interface compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad,
     as ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model
-    error that made η̂ 21 % low on the shipped campaign without anything saying so."""
+    error that made η̂ 21 % low on the shipped campaign without anything saying so; noise-free
+    hits (identical: the jackknife sees no scatter) are not flagged and keep an SE."""
     ok = impact_damping(model, _impacts(tmp_path / "ok", reference_truth(), 2001, 3, 0.5))
     assert ok.covariance_kind == "jackknife" and ok.n_replicates == 3
     assert not ok.lack_of_fit["flagged"], ok.lack_of_fit
@@ -196,6 +198,10 @@ def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_pat
     with pytest.warns(UserWarning, match="lack of fit"):
         bad = impact_damping(model, recs)
     assert bad.lack_of_fit["flagged"] and bad.to_dict()["lack_of_fit"]["flagged"]
+    # noise-free hits are identical: no scatter to refer to, the model's accuracy floor holds
+    nf = impact_damping(model, _impacts(tmp_path / "nf", reference_truth(), 2001, 3, 0.5,
+                                        SensorSet(noise=False)))
+    assert not nf.lack_of_fit["flagged"] and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
 
 
 @pytest.mark.slow
