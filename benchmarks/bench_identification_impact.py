@@ -60,6 +60,7 @@ def one_seed(out: Path, seed: int, model) -> dict:
                 impacts[0].provenance["truth_draws"]["tool"]["mass_factor"]) - 1,
             "fit_s": t_fit, "chi2": imp.chi2_dof, "lof": imp.lack_of_fit["chi2_dof"],
             "flagged": imp.lack_of_fit["flagged"], "n_rep": imp.n_replicates,
+            "threshold": imp.lack_of_fit["threshold"],
             "eta_se_model": np.sqrt(np.diag(imp.model_covariance))[
                 [imp.names.index(f"{b}_damping") for b in imp.bearings]]}
 
@@ -112,7 +113,8 @@ def main() -> None:
     print(f"tool mass factor error: RMS {rms(tool):.2%}, max {np.abs(tool).max():.2%}")
     lof = np.array([r["lof"] for r in rows])
     print(f"lack of fit χ²/ν (jackknife variance): {lof.min():.2f}–{lof.max():.2f}, flagged in "
-          f"{sum(r['flagged'] for r in rows)} of {len(rows)} (threshold 3; the model is right)")
+          f"{sum(r['flagged'] for r in rows)} of {len(rows)} (threshold {rows[0]['threshold']:g};"
+          " the model is right)")
 
 
 if __name__ == "__main__":

@@ -336,8 +336,14 @@ def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOption
     for i in range(n):
         sub = [r for d in dirs for k, r in enumerate(by_dir[d]) if k != i]
         frfs = hit_frfs(sub, opts)
-        sol, _ = _least_squares(up, fit_data(up, frfs, theta, m, band, opts, up.model,
-                                             bins=bins), nd, nb, x)
+        try:
+            sol, _ = _least_squares(up, fit_data(up, frfs, theta, m, band, opts, up.model,
+                                                 bins=bins), nd, nb, x)
+        except ModelError as exc:
+            warnings.warn(f"impact damping: jackknife replicate {i} (hit {i} of each direction "
+                          f"left out) did not fit ({exc}); the model-based covariance is kept "
+                          "and the lack of fit is not tested", UserWarning, stacklevel=3)
+            return res
         xs.append(sol.x)
         acc.append([accelerance(frfs[d]) for d in dirs])
     xs = np.array(xs)

@@ -73,7 +73,7 @@ class ImpactOptions:
     exp_window_end: float | None = 0.01
     smooth_bins: int = 21
     covariance: str = "jackknife"
-    max_lack_of_fit: float = 3.0
+    max_lack_of_fit: float = 5.0
     lack_of_fit_floor: float = 1e-3
 
     def __post_init__(self) -> None:

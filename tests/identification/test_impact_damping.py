@@ -183,7 +183,7 @@ def _impacts(path, truth, seed, hits, duration_s=1.0, sensors=None):
 def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_path, model):
     """At the rig's default noise with 3 hits of 0.5 s per direction: a truth the model can
     represent (the default build, tool and thermal draws) passes the lack-of-fit test against
-    the hits' own scatter (χ²/ν 0.7–1.8 over 24 seeds with 5 hits of 1 s, 1.0–1.4 with these;
+    the hits' own scatter (χ²/ν 0.7–2.1 over 44 rigs with 5 hits of 1 s, 1.0–1.4 with these;
     docs/identification.md §5b), and a truth with a
     tool-interface compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad,
     as ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model
@@ -209,8 +209,9 @@ def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_pat
 def test_jackknife_standard_error_of_eta_covers_over_seeds(tmp_path, model):
     """The reported SE of η̂ (delete-one-hit jackknife, 5 hits per direction) against the
     build's true η over 20 random rigs at the default noise: the 95 % t(4) interval covers
-    the truth in at least 80 % of them for each bearing (measured over 24 seeds: 0.875 front,
-    0.96 rear; the model-based SE from H1's coherence covered 0.42 and 0.75)."""
+    the truth in at least 70 % of them for each bearing (measured over 24 other seeds: 0.875
+    front, 0.96 rear — 14 or more of 20 at 0.875 has probability 0.99; the model-based SE from
+    H1's coherence covered 0.42 and 0.75)."""
     z = []
     for seed in range(20):
         recs = _impacts(tmp_path / f"s{seed}", reference_truth(), 3000 + seed, 5)
@@ -218,4 +219,4 @@ def test_jackknife_standard_error_of_eta_covers_over_seeds(tmp_path, model):
         eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
         z.append(np.log(res.eta_s / eta) / res.eta_rel_se)
     cover = np.mean(np.abs(z) <= stats.t.ppf(0.975, 4), axis=0)
-    assert np.all(cover >= 0.8), cover
+    assert np.all(cover >= 0.7), cover
