@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy import stats
 
 from surrogate_rbrdo.identification import IdentificationOptions, identify_records
 from surrogate_rbrdo.identification.impact import impact_damping
@@ -57,7 +58,11 @@ def one_seed(out: Path, seed: int, model) -> dict:
             "c_imp_err": c_imp / true[:, C_COLS] - 1, "c_resp_err": est[:, C_COLS]
             / true[:, C_COLS] - 1, "tool": imp.factor("tool_mass") / float(
                 impacts[0].provenance["truth_draws"]["tool"]["mass_factor"]) - 1,
-            "fit_s": t_fit, "chi2": imp.chi2_dof}
+            "fit_s": t_fit, "chi2": imp.chi2_dof, "lof": imp.lack_of_fit["chi2_dof"],
+            "flagged": imp.lack_of_fit["flagged"], "n_rep": imp.n_replicates,
+            "threshold": imp.lack_of_fit["threshold"],
+            "eta_se_model": np.sqrt(np.diag(imp.model_covariance))[
+                [imp.names.index(f"{b}_damping") for b in imp.bearings]]}
 
 
 def main() -> None:
@@ -74,7 +79,8 @@ def main() -> None:
         rows.append(r)
         print(f"seed {1000 + seed}: η error front {r['eta_err'][0]:+.2%} (SE {r['eta_se'][0]:.2%})"
               f", rear {r['eta_err'][1]:+.2%} (SE {r['eta_se'][1]:.2%}); tool mass "
-              f"{r['tool']:+.2%}; fit {r['fit_s']:.1f} s, χ²/ν {r['chi2']:.2f}", flush=True)
+              f"{r['tool']:+.2%}; fit {r['fit_s']:.1f} s, χ²/ν {r['chi2']:.2f}, lack of fit "
+              f"{r['lof']:.2f}{' FLAGGED' if r['flagged'] else ''}", flush=True)
     eta = np.array([r["eta_err"] for r in rows])
     se = np.array([r["eta_se"] for r in rows])
     ci = np.concatenate([r["c_imp_err"] for r in rows])
@@ -90,12 +96,25 @@ def main() -> None:
     print(f"| η̂ error: RMS | {rms(eta)[0]:.2%} | {rms(eta)[1]:.2%} |")
     print(f"| η̂ error: mean (bias) | {eta.mean(0)[0]:+.2%} | {eta.mean(0)[1]:+.2%} |")
     print(f"| η̂ error: max | {np.abs(eta).max(0)[0]:.2%} | {np.abs(eta).max(0)[1]:.2%} |")
-    print(f"| reported SE: RMS | {rms(se)[0]:.2%} | {rms(se)[1]:.2%} |")
+    sem = np.array([r["eta_se_model"] for r in rows])
+    z, zm = np.log1p(eta) / se, np.log1p(eta) / sem
+    q = stats.t.ppf(0.975, rows[0]["n_rep"] - 1)
+    print(f"| reported SE (jackknife over hits): RMS | {rms(se)[0]:.2%} | {rms(se)[1]:.2%} |")
+    cov_jk, cov_m = np.mean(np.abs(z) <= q, 0), np.mean(np.abs(zm) <= 1.96, 0)
+    print(f"| 95 % t({rows[0]['n_rep'] - 1}) interval covers η | {cov_jk[0]:.2f} | "
+          f"{cov_jk[1]:.2f} |")
+    print(f"| RMS of error / SE: jackknife; model-based (H1 coherence) | {rms(z)[0]:.2f}; "
+          f"{rms(zm)[0]:.2f} | {rms(z)[1]:.2f}; {rms(zm)[1]:.2f} |")
+    print(f"| model-based SE: 95 % normal interval covers η | {cov_m[0]:.2f} | {cov_m[1]:.2f} |")
     print(f"| c = η̂ k̂ per record: RMS error | {rms(ci[:, :2].ravel()):.2%} | "
           f"{rms(ci[:, 2:].ravel()):.2%} |")
     print(f"| c from 1× response per record: RMS error | {rms(cr[:, :2].ravel()):.0%} | "
           f"{rms(cr[:, 2:].ravel()):.0%} |")
     print(f"tool mass factor error: RMS {rms(tool):.2%}, max {np.abs(tool).max():.2%}")
+    lof = np.array([r["lof"] for r in rows])
+    print(f"lack of fit χ²/ν (jackknife variance): {lof.min():.2f}–{lof.max():.2f}, flagged in "
+          f"{sum(r['flagged'] for r in rows)} of {len(rows)} (threshold {rows[0]['threshold']:g};"
+          " the model is right)")
 
 
 if __name__ == "__main__":

@@ -10,8 +10,10 @@ direction — the model's damping law ``C_b = η_b K_b``. Its covariance is prop
 order (``k̂`` and ``η̂`` independent: different tests); the ``c`` columns of ``identified.csv``
 change, their flags are recomputed (``unexcited`` from ``k``, ``imprecise`` against
 ``max_rel_se``, ``outside_box`` against the paper's ``[0.5, 2.0] c_init``), and
-``uncertainty.json``'s provenance gets ``damping``: the source, and per installation
-``η̂``, its relative SE and the other updated factors.
+``uncertainty.json``'s provenance gets ``damping``: the source, per installation ``η̂``, its
+relative SE (delete-one-hit jackknife with 3 or more hits per direction), the other updated
+factors and the lack-of-fit test, and ``lack_of_fit``: the installations whose FRFs the model
+does not fit (a model error: their ``η̂`` and tool mass are not to be trusted).
 """
 
 from __future__ import annotations
@@ -112,7 +114,9 @@ def with_impact_damping(model: SpindleModel, camp: CampaignResult, keys: Sequenc
                                                     | (est[:, c_idx] > PAPER_C_FACTORS[1] * cat))
     new = replace(res, estimate=est, covariance=cov, unexcited=unexcited, imprecise=imprecise,
                   outside_box=outside)
-    prov = {"source": "impact", "installations": {k: d.to_dict() for k, d in dampings.items()}}
+    prov = {"source": "impact", "installations": {k: d.to_dict() for k, d in dampings.items()},
+            "lack_of_fit": sorted(k for k, d in dampings.items()
+                                  if d.lack_of_fit and d.lack_of_fit["flagged"])}
     u = replace(camp.uncertainty, provenance={**camp.uncertainty.provenance, "damping": prov})
     return replace(camp, identification=new, uncertainty=u,
                    table=campaign_table(new, camp.table["speed_rpm"], camp.table["repeat"],

@@ -29,8 +29,12 @@ Kluwer 1995, ch. 6; Lin & Ewins, *Mech. Syst. Signal Process.* 8(4):437–458, 1
    i.e. ``η_b ← d_b η_b``), the tool/holder mass factor ``m`` (hidden on the rig:
    weighed by the FRF) and one calibration gain per direction (hammer × accelerometer). The
    weights are H1's random error, ``ε = √(1 − γ²) / (|γ| √(2 n_d))`` of ``|H|`` (Bendat &
-   Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), floored at ``rel_floor``; the
-   covariance of the parameters is ``(JᵀJ)⁻¹`` scaled by ``χ²/ν`` when that exceeds 1.
+   Piersol, *Random Data*, 4th ed. 2010, eq. 9.90), its square averaged over ``smooth_bins``
+   bins and floored at ``rel_floor``;
+4. the covariance of the parameters from a delete-one-hit jackknife (:func:`jackknife`; with
+   fewer than 3 hits per direction ``(JᵀJ)⁻¹`` scaled by ``χ²/ν`` when that exceeds 1), and a
+   lack-of-fit test of the fit against the jackknife variance of H1, flagged (with a warning)
+   above ``max_lack_of_fit``: the model cannot represent the FRFs.
 
 The bearings' damping at any speed then follows from the damping law ``C_b = η_b K_b``
 (:meth:`ImpactDamping.damping`): ``ĉ(Ω) = η̂ k̂(Ω)`` with ``k̂`` identified from the unbalance
@@ -50,70 +54,28 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 from scipy.optimize import least_squares
 
 from surrogate_rbrdo.core.errors import ModelError
-from surrogate_rbrdo.core.validate import check_positive, check_range
+from surrogate_rbrdo.identification.impact_frf import (
+    FitPoints,
+    ImpactOptions,
+    accelerance,
+    fit_data,
+    force_band_top,
+    hit_frfs,
+    measured_peaks,
+)
 from surrogate_rbrdo.identification.updating import StandstillModel
-from surrogate_rbrdo.rig.frf import FRFEstimate, h1_frf
-from surrogate_rbrdo.rig.records import Record, RecordError
+from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.spindle.assembly import SpindleModel
 
-
-@dataclass(frozen=True)
-class ImpactOptions:
-    """Options of :func:`impact_damping`.
-
-    Parameters
-    ----------
-    band_hz : (lo, hi) or None
-        Frequency band of the modes used; ``None`` (default): from 100 Hz to where the
-        measured force autospectrum has fallen ``force_drop_db`` below its level at low
-        frequency (the band the hammer tip excites; Ewins, *Modal Testing*, 2nd ed. 2000,
-        §3.9.4; the rig's hard tip: ~2 kHz at 6 dB).
-    force_drop_db : float
-        The force spectrum's drop that ends the default band.
-    search : float
-        Relative half-width around a model mode in which its measured peak is looked for.
-    half_width : float
-        Relative half-width around each (updated) mode of the FRF points fitted.
-    min_coherence : float
-        FRF points with a lower coherence are not fitted.
-    rel_floor : float
-        Floor of the relative random error of H1 (the model's own accuracy).
-    fit_tool_mass : bool
-        Fit the tool/holder mass factor (the disk ``tool_disk`` of the model's geometry).
-    tool_disk : str
-    exp_window_end : float or None
-        Exponential window of :func:`~surrogate_rbrdo.rig.frf.h1_frf`.
-    """
-
-    band_hz: tuple[float, float] | None = None
-    force_drop_db: float = 6.0
-    search: float = 0.08
-    half_width: float = 0.03
-    min_coherence: float = 0.8
-    rel_floor: float = 1e-4
-    fit_tool_mass: bool = True
-    tool_disk: str = "tool_holder"
-    exp_window_end: float | None = 0.01
-
-    def __post_init__(self) -> None:
-        if self.band_hz is not None:
-            lo, hi = (float(v) for v in self.band_hz)
-            if not 0.0 < lo < hi:
-                raise ValueError(f"band_hz = {self.band_hz} is not allowed: need 0 < lo < hi")
-            object.__setattr__(self, "band_hz", (lo, hi))
-        check_range("force_drop_db", self.force_drop_db, 0.5, 40.0)
-        check_range("search", self.search, 1e-3, 0.5)
-        check_range("half_width", self.half_width, 1e-3, 0.5)
-        check_range("min_coherence", self.min_coherence, 0.0, 1.0)
-        check_positive("rel_floor", self.rel_floor)
-        if self.exp_window_end is not None:
-            check_range("exp_window_end", self.exp_window_end, 1e-6, 1.0)
+#: the jackknife over hits needs at least this many hits per direction
+MIN_HITS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,6 +94,10 @@ class ImpactDamping:
     n_points: int
     chi2_dof: float
     modes_hz: np.ndarray
+    covariance_kind: str = "model"
+    model_covariance: np.ndarray | None = None
+    n_replicates: int = 0
+    lack_of_fit: dict | None = field(default=None)
 
     def factor(self, name: str) -> float:
         return float(self.parameters[self.names.index(name)])
@@ -151,41 +117,13 @@ class ImpactDamping:
                 "eta_rel_se": self.eta_rel_se.tolist(),
                 "parameters": dict(zip(self.names, self.parameters.tolist(), strict=True)),
                 "log_covariance": self.covariance.tolist(), "n_points": self.n_points,
-                "chi2_dof": self.chi2_dof, "modes_hz": self.modes_hz.tolist()}
-
-
-def _frfs(records: Sequence[Record], opts: ImpactOptions) -> dict[str, FRFEstimate]:
-    """H1 per hit direction, response at the tool in that direction (accelerometer, else a
-    displacement probe)."""
-    by_dir: dict[str, list[Record]] = {}
-    for r in records:
-        if r.kind != "impact" or "hammer" not in r.channel_names:
-            raise RecordError(f"record {r.id!r}", "kind/channels",
-                              "an impact record with a 'hammer' channel is needed")
-        by_dir.setdefault(r.channel("hammer").location.direction, []).append(r)
-    out = {}
-    for d, recs in sorted(by_dir.items()):
-        chans = [c for c in recs[0].channels if c.location.target == "tool"
-                 and c.location.direction == d and c.quantity in ("acceleration",
-                                                                   "displacement")]
-        chans.sort(key=lambda c: c.quantity != "acceleration")
-        if not chans:
-            raise RecordError(f"record {recs[0].id!r}", "channels",
-                              f"no response channel at the tool in direction {d!r}")
-        if len(recs) < 2:
-            # one hit: H1's coherence is 1 by construction, so neither its random error
-            # (the fit's weights) nor the coherence filter can see the noise
-            warnings.warn(f"impact damping: one hit in direction {d!r} (record {recs[0].id!r}):"
-                          " with a single average the coherence is 1 by construction, so the"
-                          " fit is unweighted and its standard errors assume noise-free FRFs;"
-                          " average at least 2 hits (rig: impacts_per_direction >= 2)",
-                          UserWarning, stacklevel=3)
-        out[d] = h1_frf(recs, [chans[0].name], exp_window_end=opts.exp_window_end)
-    return out
+                "chi2_dof": self.chi2_dof, "modes_hz": self.modes_hz.tolist(),
+                "covariance_kind": self.covariance_kind, "n_replicates": self.n_replicates,
+                "lack_of_fit": self.lack_of_fit}
 
 
 def impact_damping(model: SpindleModel, records: Sequence[Record],
-                   options: ImpactOptions = ImpactOptions()) -> ImpactDamping:
+                   options: ImpactOptions | None = None) -> ImpactDamping:
     """Update the bearings' damping (and stiffness at standstill, tool mass, gains) of
     ``model`` on the impact ``records`` of one installation (module docstring).
 
@@ -196,6 +134,7 @@ def impact_damping(model: SpindleModel, records: Sequence[Record],
     ModelError
         No measured peak near the model's modes, or the fit does not converge.
     """
+    options = ImpactOptions() if options is None else options
     if any(s is not None for s in model.supports):
         raise ValueError("model.supports: bearings with a housing stage are not allowed "
                          "(the housing's damping is not separable from the bearing's)")
@@ -209,7 +148,7 @@ def impact_damping(model: SpindleModel, records: Sequence[Record],
     if disk is not None and disk not in {k.name for k in model.geometry.disks}:
         raise ValueError(f"tool_disk = {disk!r} is not allowed: the model's disks are "
                          f"{[k.name for k in model.geometry.disks]}")
-    frfs = _frfs(records, options)
+    frfs = hit_frfs(records, options)
     up = StandstillModel(model, disk)
     _check_planes(up, model)
     lo, hi = options.band_hz or (100.0, force_band_top(records, options.force_drop_db))
@@ -219,7 +158,17 @@ def impact_damping(model: SpindleModel, records: Sequence[Record],
         raise ValueError(f"band_hz = {options.band_hz} is not allowed: the model has no mode "
                          "there")
     theta, m = _align(up, frfs, f0, options, nb)
-    return _update(up, frfs, theta, m, (lo, hi), options, model)
+    res, pts, x, h = _update(up, frfs, theta, m, (lo, hi), options, model)
+    if options.covariance == "jackknife":
+        res = jackknife(up, records, options, res, pts, x, h, theta, m, (lo, hi))
+    lof = res.lack_of_fit
+    if lof is not None and lof["flagged"]:
+        warnings.warn(f"impact damping: the model does not fit the measured FRFs (lack of fit "
+                      f"χ²/ν = {lof['chi2_dof']:.3g} against the hit-to-hit variance, above "
+                      f"{lof['threshold']:g}): the rotor model misses something the tests see "
+                      "(e.g. a tool-interface compliance) and η̂ and the tool mass absorb it",
+                      UserWarning, stacklevel=2)
+    return res
 
 
 def _check_planes(up: StandstillModel, model: SpindleModel) -> None:
@@ -237,49 +186,11 @@ def _check_planes(up: StandstillModel, model: SpindleModel) -> None:
                          "uncoupled")
 
 
-def force_band_top(records: Sequence[Record], drop_db: float = 6.0) -> float:
-    """Frequency (Hz) where the hits' mean force autospectrum has fallen ``drop_db`` below
-    its median over 5–50 Hz.
-
-    >>> from surrogate_rbrdo.rig.records import Calibration, ChannelSpec, SensorLocation
-    >>> fs, T = 200_000.0, 0.4e-3                  # finely sampled: the continuous pulse
-    >>> t = np.arange(200_000) / fs
-    >>> f = np.where((t >= 0.05) & (t < 0.05 + T), np.sin(np.pi * (t - 0.05) / T), 0.0)
-    >>> ch = ChannelSpec("hammer", "force", "N", SensorLocation("tool", "x", 0.0),
-    ...                  Calibration(1.0, 0.0, -1e9, 1e9), 0.0, {})
-    >>> rec = Record("h", "impact", fs, (ch,), f[None, :], speed_rpm=0.0)
-    >>> round(force_band_top([rec], 6.0), -1)      # a 0.4 ms half-sine: −6 dB at 2.05 kHz
-    2050.0
-    """
-    g = np.mean([np.abs(np.fft.rfft(r.values("hammer") - np.median(r.values("hammer")))) ** 2
-                 for r in records], axis=0)
-    f = np.fft.rfftfreq(records[0].n_samples, 1.0 / records[0].sample_rate_hz)
-    ref = np.median(g[(f >= 5.0) & (f <= 50.0)])
-    below = np.nonzero((f > 50.0) & (g < ref * 10 ** (-drop_db / 10)))[0]
-    return float(f[below[0]]) if below.size else float(f[-1])
-
-
-def _peaks(est: FRFEstimate, f0, opts) -> np.ndarray:
-    """The measured peak (Hz) of one direction's FRF nearest each model mode (NaN where none
-    is coherent)."""
-    out = np.full(f0.size, np.nan)
-    for i, f in enumerate(f0):
-        g = ((est.freq_hz >= f * (1 - opts.search)) & (est.freq_hz <= f * (1 + opts.search))
-             & (est.coherence[0] >= opts.min_coherence))
-        if g.sum() < 3:
-            continue
-        a = np.abs(est.receptance()[0][g])
-        j = int(np.argmax(a))
-        if 0 < j < a.size - 1:                   # an interior maximum: a peak
-            out[i] = est.freq_hz[g][j]
-    return out
-
-
 def _align(up: StandstillModel, frfs, f0, opts, nb):
     """Stiffness factors per direction (and one tool mass factor) putting the model's natural
     frequencies on each direction's measured peaks: least squares on log frequency."""
     dirs = sorted(frfs)
-    peaks = [_peaks(frfs[d], f0, opts) for d in dirs]
+    peaks = [measured_peaks(frfs[d], f0, opts) for d in dirs]
     ok = [np.isfinite(pk) for pk in peaks]
     n_ok = int(sum(o.sum() for o in ok))
     if n_ok == 0:
@@ -308,52 +219,31 @@ def _align(up: StandstillModel, frfs, f0, opts, nb):
             float(np.exp(sol.x[nd * nb])) if n_m else 1.0)
 
 
-def _fit_data(up: StandstillModel, frfs, theta, m, band, opts, model):
-    """The FRF points fitted: within ``half_width`` of each direction's (aligned) modes where
-    the coherence is high enough, with H1's random error as SD; and the modes (Hz)."""
-    lo, hi = band
-    data, all_modes = [], []
-    for di, d in enumerate(sorted(frfs)):
-        modes = up.natural_hz(theta[di], m)
-        modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
-        all_modes.append(modes)
-        est = frfs[d]
-        f = est.freq_hz
-        near = np.any(np.abs(f[:, None] / modes[None, :] - 1) <= opts.half_width, axis=1)
-        g = near & (est.coherence[0] >= opts.min_coherence) & (f > 0)
-        gam = np.sqrt(np.clip(est.coherence[0][g], 1e-12, 1.0))
-        eps = np.maximum(np.sqrt(1 - gam**2) / (gam * np.sqrt(2 * est.n_averages)),
-                         opts.rel_floor)
-        H = est.H[0][g] if est.form == "accelerance" else est.receptance()[0][g] * (
-            2j * np.pi * f[g] + est.exp_decay_per_s) ** 2
-        dof = 4 * model.tool_node + (1 if d == "y" else 0)
-        data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H, eps * np.abs(H),
-                     np.full(g.sum(), dof), np.full(g.sum(), di)))
-    s, H, sd, dof, gi = (np.concatenate([x[k] for x in data]) for k in range(5))
-    return s, H, sd, dof, gi, np.unique(np.concatenate(all_modes))
+def _names(model: SpindleModel, dirs, n_m: int) -> list[str]:
+    return ([f"{b}_stiffness_{d}" for d in dirs for b in model.theta_bearings]
+            + [f"{b}_damping" for b in model.theta_bearings]
+            + (["tool_mass"] if n_m else []) + [f"gain_{d}" for d in dirs])
 
 
-def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDamping:
-    nd, nb = theta.shape
-    dirs = sorted(frfs)
-    s, H, sd, dof, gi, modes = _fit_data(up, frfs, theta, m, band, opts, model)
-    if s.size < (nd + 1) * nb + 2:
-        raise ModelError(f"impact_damping: {s.size} coherent FRF points near the modes "
-                         f"{np.round(modes, 1).tolist()} Hz; too few to fit")
+def _least_squares(up: StandstillModel, pts: FitPoints, nd: int, nb: int, p0: np.ndarray):
+    """Weighted least squares of the accelerance on the log factors (module docstring):
+    the solution, and the model's FRF at the points."""
     n_m = 1 if up.tool_disk is not None else 0
-    names = ([f"{b}_stiffness_{d}" for d in dirs for b in model.theta_bearings]
-             + [f"{b}_damping" for b in model.theta_bearings]
-             + (["tool_mass"] if n_m else []) + [f"gain_{d}" for d in dirs])
     k0 = nd * nb                                 # first damping factor
+    s, dof, gi = pts.s, pts.dof, pts.gi
 
-    def unpack(p):
-        return (np.exp(p[:k0]).reshape(nd, nb), np.exp(p[k0:k0 + nb]),
-                float(np.exp(p[k0 + nb])) if n_m else 1.0, np.exp(p[k0 + nb + n_m:]))
+    last: list = [None, None]                   # the residual and Jacobian share one solve
 
     def model_frf(p):
+        if last[0] is None or not np.array_equal(last[0], p):
+            last[0], last[1] = p.copy(), _frf(p)
+        return last[1]
+
+    def _frf(p):
         # at standstill the experimenter's model has no coupling between the two planes:
         # each direction's FRF sees that direction's bearing stiffness only
-        th, dd, mm, gain = unpack(p)
+        th, dd = np.exp(p[:k0]).reshape(nd, nb), np.exp(p[k0:k0 + nb])
+        mm, gain = (float(np.exp(p[k0 + nb])) if n_m else 1.0), np.exp(p[k0 + nb + n_m:])
         h = np.zeros(s.size, complex)
         jac = np.zeros((s.size, p.size), complex)
         for di in range(nd):
@@ -367,29 +257,110 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model) -> ImpactDam
         return h, jac
 
     def res(p):
-        r = (H - model_frf(p)[0]) / sd
+        r = (pts.H - model_frf(p)[0]) / pts.sd
         return np.concatenate([r.real, r.imag])
 
     def jac(p):
-        j = -model_frf(p)[1] / sd[:, None]
+        j = -model_frf(p)[1] / pts.sd[:, None]
         return np.concatenate([j.real, j.imag])
 
-    p0 = np.concatenate([np.log(theta).ravel(), np.zeros(nb), [np.log(m)] * n_m,
-                         np.zeros(nd)])
     sol = least_squares(res, p0, jac=jac, x_scale=0.05, max_nfev=400)
     if not sol.success:
         raise ModelError(f"impact_damping: the FRF fit did not converge ({sol.message})")
-    dof_res = max(2 * s.size - p0.size, 1)
+    return sol, model_frf(sol.x)[0]
+
+
+def _update(up: StandstillModel, frfs, theta, m, band, opts, model):
+    """The fit on every hit: the result (model-based covariance) and what the jackknife and
+    the lack-of-fit test need (the points, the log solution, the model's FRF there)."""
+    nd, nb = theta.shape
+    pts = fit_data(up, frfs, theta, m, band, opts, model)
+    n_m = 1 if up.tool_disk is not None else 0
+    names = _names(model, sorted(frfs), n_m)
+    if pts.s.size < (nd + 1) * nb + 2:
+        raise ModelError(f"impact_damping: {pts.s.size} coherent FRF points near the modes "
+                         f"{np.round(pts.modes, 1).tolist()} Hz; too few to fit")
+    p0 = np.concatenate([np.log(theta).ravel(), np.zeros(nb), [np.log(m)] * n_m,
+                         np.zeros(nd)])
+    sol, h = _least_squares(up, pts, nd, nb, p0)
+    dof_res = max(2 * pts.s.size - p0.size, 1)
     chi2 = float(2 * sol.cost / dof_res)
     try:
         cov = np.linalg.inv(sol.jac.T @ sol.jac) * max(chi2, 1.0)
     except np.linalg.LinAlgError as exc:
         raise ModelError("impact_damping: the FRF fit's information matrix is singular "
                          "(a parameter the modes in the band do not see)") from exc
+    k0 = nd * nb
     eta0 = np.array([b.law.damping_eta_s for b in model.geometry.bearings])
     par = np.exp(sol.x)
-    return ImpactDamping(tuple(model.theta_bearings), tuple(names), par, cov,
-                         eta0 * par[k0:k0 + nb], int(s.size), chi2, modes)
+    res = ImpactDamping(tuple(model.theta_bearings), tuple(names), par, cov,
+                        eta0 * par[k0:k0 + nb], int(pts.s.size), chi2, pts.modes)
+    return res, pts, sol.x, h
+
+
+def _at_least(model: np.ndarray, jk: np.ndarray) -> np.ndarray:
+    """The jackknife covariance with each variance raised to the model-based one where that is
+    larger (noise-free hits are identical: the jackknife sees no scatter, the model-based
+    covariance keeps H1's accuracy floor); the jackknife's correlations are kept."""
+    dj, dm = np.diag(jk), np.diag(model)
+    if not np.all(dj > 0):
+        return model
+    d = np.sqrt(np.maximum(dj, dm) / dj)
+    return jk * d[:, None] * d[None, :]
+
+
+def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOptions,
+              res: ImpactDamping, pts: FitPoints, x: np.ndarray, h: np.ndarray, theta, m,
+              band) -> ImpactDamping:
+    """``res`` with the delete-one-hit jackknife covariance of its log factors and the lack-of-
+    fit statistic against the jackknife variance of H1 (module docstring).
+
+    Replicate ``i`` leaves out the ``i``-th hit of every direction and is refitted from the
+    full fit's solution on the full fit's FRF bins (Efron & Tibshirani, *An Introduction to
+    the Bootstrap*, 1993, §11.2: ``(n − 1)/n Σ (x_i − x̄)(x_i − x̄)ᵀ``; each variance at
+    least the model-based one). The lack of fit is ``Σ 2|H − Ĥ|² / v / (2N − p)`` with ``v``
+    the jackknife variance of H1 at each point, averaged over ``smooth_bins`` bins and floored
+    at ``(lack_of_fit_floor |H|)²``. Fewer than ``MIN_HITS`` hits in a direction: ``res``
+    unchanged (model-based covariance, no test).
+    """
+    by_dir: dict[str, list[Record]] = {}
+    for r in records:
+        by_dir.setdefault(r.channel("hammer").location.direction, []).append(r)
+    n = min(len(v) for v in by_dir.values())
+    if n < MIN_HITS:
+        return res
+    dirs = sorted(by_dir)
+    nd, nb = theta.shape
+    bins = [pts.bins[pts.gi == di] for di in range(nd)]
+    xs, acc = [], []
+    for i in range(n):
+        sub = [r for d in dirs for k, r in enumerate(by_dir[d]) if k != i]
+        frfs = hit_frfs(sub, opts)
+        try:
+            sol, _ = _least_squares(up, fit_data(up, frfs, theta, m, band, opts, up.model,
+                                                 bins=bins), nd, nb, x)
+        except ModelError as exc:
+            warnings.warn(f"impact damping: jackknife replicate {i} (hit {i} of each direction "
+                          f"left out) did not fit ({exc}); the model-based covariance is kept "
+                          "and the lack of fit is not tested", UserWarning, stacklevel=3)
+            return res
+        xs.append(sol.x)
+        acc.append([accelerance(frfs[d]) for d in dirs])
+    xs = np.array(xs)
+    cov = _at_least(res.covariance,
+                    (n - 1) / n * (xs - xs.mean(0)).T @ (xs - xs.mean(0)))
+    A = np.array(acc)                                           # (n, nd, F)
+    var = (n - 1) / n * np.sum(np.abs(A - A.mean(0)) ** 2, axis=0)
+    var = uniform_filter1d(var, max(opts.smooth_bins, 1), axis=1, mode="nearest")
+    # floor: a misfit below lack_of_fit_floor of |H| is not called a model error (noise-free
+    # hits are identical: no scatter to refer to)
+    v = np.maximum(var[pts.gi, pts.bins], (opts.lack_of_fit_floor * np.abs(pts.H)) ** 2)
+    chi2 = float(np.sum(2 * np.abs(pts.H - h) ** 2 / v))
+    dof = max(2 * pts.s.size - x.size, 1)
+    lof = {"chi2_dof": chi2 / dof, "dof": dof, "threshold": opts.max_lack_of_fit,
+           "flagged": bool(chi2 / dof > opts.max_lack_of_fit), "hits": n}
+    return replace(res, covariance=cov, covariance_kind="jackknife",
+                   model_covariance=res.covariance, n_replicates=n, lack_of_fit=lof)
 
 
 __all__ = ["ImpactDamping", "ImpactOptions", "force_band_top", "impact_damping"]

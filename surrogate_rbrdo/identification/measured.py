@@ -50,8 +50,10 @@ from surrogate_rbrdo.identification.keyphasor import (
     pulse_template,
     refine_phase,
     sample_phase_gap,
+    template_crossing,
 )
 from surrogate_rbrdo.rig.demod import keyphasor_edges
+from surrogate_rbrdo.rig.keyphasor import polarity_of
 from surrogate_rbrdo.rig.records import Record, RecordError
 from surrogate_rbrdo.rig.store import Dataset, open_dataset, read_record
 
@@ -167,6 +169,7 @@ class _Demodulated:
     period: float
     gap: float
     counter: bool = False
+    polarity: str = "positive"
 
     def angles(self) -> np.ndarray:
         return TWO_PI * (self.kp_times - self.t0) / self.period
@@ -190,12 +193,14 @@ def _demodulate_one(rec: Record, channels: tuple[str, ...]) -> _Demodulated:
     dc, ds = np.cos(TWO_PI * delays / period), np.sin(TWO_PI * delays / period)
     X, res = _fit_1x_cs(Y, c0 * dc[:, None] - s0 * ds[:, None], c0 * ds[:, None] + s0 * dc[:, None])
     kp = rec.channel("keyphasor")
+    counter = "keyphasor" in rec.events
     return _Demodulated(60.0 / period, X, res * np.sqrt(2.0 / use.sum()),
                         dict(rec.provenance.get("test_setup", {})),
                         rec.values("keyphasor").astype(np.float32), rec.time_s + kp.delay_s,
                         float(t0), float(period),
                         sample_phase_gap(60.0 / period, rec.sample_rate_hz, edges.size - 1),
-                        "keyphasor" in rec.events)
+                        counter, "positive" if counter else polarity_of(
+                            rec.values("keyphasor"), kp.info.get("polarity")))
 
 
 def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | None = (
@@ -290,33 +295,56 @@ def _work(root: Path, files: list[str], channels: tuple[str, ...]) -> list[_Demo
     return [_demodulate_one(read_record(root / f), channels) for f in files]
 
 
-def _refine(out: list[_Demodulated], max_template_records: int = 100
-            ) -> tuple[np.ndarray, np.ndarray, str]:
+#: the pulse template and its records' phases are refolded until the phases move less than this
+SWEEP_TOL = 1e-9
+MAX_SWEEPS = 30
+
+
+def _refine(out: list[_Demodulated], max_template_records: int = 100,
+            max_sweeps: int = MAX_SWEEPS) -> tuple[np.ndarray, np.ndarray, str]:
     """Keyphasor phase refinement (:mod:`.keyphasor`) of every record whose edges come from
     the sampled keyphasor channel (counter-timed records keep their edges): shifts, standard
-    errors and a note for the provenance."""
+    errors and a note for the provenance.
+
+    The template is folded on the records' angles, those records refitted on it, and the
+    template folded again on the refitted angles until their phases change by less than
+    ``SWEEP_TOL`` (alternating least squares of the pulse shape and the records' phases; the
+    error falls ~3.5× per sweep): one fold on the edge angles alone kept their interpolation
+    errors, up to ~5e-4 rad at 23 000 rpm, which blurred the template and put 3–7e-5 rad into
+    records whose edges were exact to 1e-7 (c off by 1–5.5 % noise-free). The angle reference
+    is the converged template's mid-swing crossing on its leading edge — the keyphasor's own
+    definition of angle 0 — not the mean of the edges that built it. Then every record is
+    refitted on the converged template."""
     shift, sd = np.zeros(len(out)), np.zeros(len(out))
     sampled = [i for i, o in enumerate(out) if not o.counter]
     if not sampled:
         return shift, sd, "keyphasor edges from counter timestamps (phase not refined)"
-    good = [out[i] for i in sampled if out[i].gap <= MAX_GAP]
+    good = [i for i in sampled if out[i].gap <= MAX_GAP]
     if len(good) < 3:
         return shift, sd, (
             "keyphasor phase not refined: fewer than 3 records whose samples drift through "
             "the revolution to learn the pulse shape from")
     pick = good[:: max(1, len(good) // max_template_records)]
-    tpl = pulse_template([o.kp.astype(float) for o in pick], [o.angles() for o in pick])
+    fit = np.zeros((len(pick), 2))
+    for sweep in range(1, max_sweeps + 1):
+        tpl = pulse_template([out[i].kp.astype(float) for i in pick],
+                             [out[i].angles() + d + r * np.linspace(-1.0, 1.0, out[i].kp.size)
+                              for i, (d, r) in zip(pick, fit, strict=True)])
+        new = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl,
+                                     rate=True)[::2] for i in pick])
+        step = float(np.max(np.abs(new[:, 0] - fit[:, 0]))) if sweep > 1 else np.inf
+        fit = new
+        if step < SWEEP_TOL:
+            break
+    zero = template_crossing(tpl, out[pick[0]].polarity)
     res = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl,
                                  search_rad=SEARCH_RAD if out[i].gap > SEARCH_GAP else 0.0)
                     for i in sampled])
-    # anchor the template's angle frame to the edges of the records that built it (their
-    # edge interpolation errors average out; the folded template's own offset does not)
-    anchor = float(np.mean([d for (d, _), i in zip(res, sampled, strict=True)
-                            if out[i].gap <= MAX_GAP]))
-    shift[sampled], sd[sampled] = res[:, 0] - anchor, res[:, 1]
+    shift[sampled], sd[sampled] = res[:, 0] - zero, res[:, 1]
     n_counter = len(out) - len(sampled)
     return shift, sd, f"keyphasor phase of {len(sampled)} sampled-keyphasor records refined " \
-        f"on a pulse template from {len(pick)} records (frame anchored by {anchor:.2e} rad)" \
+        f"on a pulse template from {len(pick)} records ({sweep} sweeps, last change " \
+        f"{step:.1e} rad; angle 0 at its mid-swing crossing, {zero:.2e} rad)" \
         + (f"; {n_counter} counter-timed records not refined" if n_counter else "")
 
 

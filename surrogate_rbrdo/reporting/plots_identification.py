@@ -210,8 +210,8 @@ def write_identification_run(out: Any, p: IdentificationPlan, res: Any) -> dict[
 
 
 def impact_rows(damping: Mapping[str, Any] | None) -> list[dict[str, Any]]:
-    """One summary line per installation's impact fit: η̂, the tool mass factor and the fit's
-    χ²/ν — far above a few, the model cannot represent the FRFs (docs/identification.md §5b).
+    """One summary line per installation's impact fit: η̂, the tool mass factor, the fit's
+    χ²/ν and the lack-of-fit test against the hits' own scatter (docs/identification.md §5b).
 
     >>> impact_rows({"source": "response"})
     []
@@ -220,8 +220,18 @@ def impact_rows(damping: Mapping[str, Any] | None) -> list[dict[str, Any]]:
         return []
     return [{"impacts": key, "eta_s": [float(f"{e:.4g}") for e in inst["eta_s"]],
              "tool_mass": round(float(inst["parameters"].get("tool_mass", 1.0)), 4),
-             "chi2_dof": round(float(inst["chi2_dof"]), 2)}
+             "chi2_dof": round(float(inst["chi2_dof"]), 2)} | _lack_of_fit(inst)
             for key, inst in damping["installations"].items()]
+
+
+def _lack_of_fit(inst: Mapping[str, Any]) -> dict[str, Any]:
+    if "lack_of_fit" not in inst:                  # written before the test existed
+        return {}
+    lof = inst["lack_of_fit"]
+    if not lof:
+        return {"lack_of_fit": "not tested (fewer than 3 hits per direction)"}
+    return {"lack_of_fit": ("MODEL ERROR " if lof["flagged"] else "ok ")
+            + f"(chi2/dof {lof['chi2_dof']:.3g}, threshold {lof['threshold']:g})"}
 
 
 __all__ = ["campaign_convergence", "impact_rows", "plot_convergence", "plot_qq", "plot_trend",

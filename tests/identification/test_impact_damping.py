@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from surrogate_rbrdo.identification import IdentificationOptions, identify_records
 from surrogate_rbrdo.identification.experiment import check_source
@@ -30,11 +31,11 @@ def model():
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
     """The rig with its noise off, a random build (damping factors CoV 20 %), tool (mass 3 %)
-    and thermal states: 3 speeds × 2 runs with and without a trial mass, one hit per
-    direction at the tool."""
+    and thermal states: 3 speeds (22 000 rpm is 620 rpm from the condensed rotor's pole) × 2
+    runs with and without a trial mass, one hit per direction at the tool."""
     path = tmp_path_factory.mktemp("impact_rig")
     truth = reference_truth()
-    run_campaign(truth, CampaignOptions(speeds_rpm=(6000.0, 12000.0, 18000.0), repeats=2,
+    run_campaign(truth, CampaignOptions(speeds_rpm=(6000.0, 12000.0, 22000.0), repeats=2,
                                         runup=None, impacts_per_direction=1,
                                         trial_unbalance=TRIAL, sensors=SensorSet(noise=False)),
                  path, rng=np.random.default_rng(5))
@@ -45,12 +46,13 @@ def rig(tmp_path_factory):
 @pytest.mark.known_answer
 def test_noise_free_impacts_give_the_damping_of_an_identification_run(rig, model):
     """``damping = "impact"``, ``tool_mass = "impact"`` on the noise-free rig: η of both
-    bearings within 2 % (what is left is the rig's own FRF error above ~1.4 kHz, 0.3–1 %
-    against its truth's model), the standstill stiffness factors and the tool mass within
-    0.5 %; the reactions condensed with the weighed tool mass give k within 1e-4 at 6 000 and
-    12 000 rpm and 1e-3 at 18 000 (with the model's nominal tool mass the hidden 3 % scatter
-    costs up to 1e-2 there); every record's c = η̂ k̂ within 2 % of its true c; the
-    uncertainty model's provenance names the source and η̂ per installation."""
+    bearings within 0.5 % (the rig's FRF is within ~3e-4 of its truth's model since the
+    recorded force is the one the integrator applied), the standstill stiffness factors within
+    0.5 % and the tool mass within 2e-4; the reactions condensed with the weighed tool mass
+    give k within 1e-4 at every speed (with the model's nominal tool mass the hidden 3 %
+    scatter costs up to 1e-2); every record's c = η̂ k̂ within 1 % of its true c (the issue's
+    noise-free bound); the uncertainty model's provenance names the source and η̂ per
+    installation."""
     path, truth, ds, recs = rig
     run = identify_records(model, path, IdentificationOptions(
         damping="impact", tool_mass="impact", n_boot=20, max_rel_se=1e9),
@@ -60,23 +62,21 @@ def test_noise_free_impacts_give_the_damping_of_an_identification_run(rig, model
     got = dmp["installations"]["build=0|tool=0"]
     d = recs[0].provenance["truth_draws"]
     np.testing.assert_allclose(got["eta_s"], 4e-6 * np.array(d["build"]["damping_factor"]),
-                               rtol=0.02)
+                               rtol=5e-3)
     par = got["parameters"]
     for ax in ("x", "y"):            # the truth's bearings are isotropic here
         np.testing.assert_allclose([par[f"front_stiffness_{ax}"], par[f"rear_stiffness_{ax}"]],
                                    record_state(truth, recs[0].provenance).theta[0], rtol=5e-3)
-    assert par["tool_mass"] == pytest.approx(d["tool"]["mass_factor"], rel=5e-3)
+    assert par["tool_mass"] == pytest.approx(d["tool"]["mass_factor"], rel=2e-4)
     prov = {r["id"]: ds.load(r).provenance for r in ds.index}
     ids = [i.split("|")[1] for i in run.responses.record_ids]
     true = truth_coefficients(truth, [prov[i] for i in ids], run.responses.speed_rpm)
     c = [2, 3, 6, 7]
     est = run.campaign.identification.estimate
-    np.testing.assert_allclose(est[:, c], true[:, c], rtol=0.02)
-    k, sp = [0, 1, 4, 5], run.responses.speed_rpm
-    np.testing.assert_allclose(est[sp < 15000][:, k], true[sp < 15000][:, k], rtol=1e-4)
-    np.testing.assert_allclose(est[:, k], true[:, k], rtol=1e-3)
+    np.testing.assert_allclose(est[:, c], true[:, c], rtol=0.01)
+    np.testing.assert_allclose(est[:, [0, 1, 4, 5]], true[:, [0, 1, 4, 5]], rtol=1e-4)
     assert run.provenance["tool_mass_factor"]["factor"] == pytest.approx(
-        d["tool"]["mass_factor"], rel=5e-3)
+        d["tool"]["mass_factor"], rel=2e-4)
     np.testing.assert_allclose(run.campaign.table["front_c_yy"], est[:, 2])
     eta = np.array(got["eta_s"])
     np.testing.assert_allclose(est[:, c], est[:, [0, 1, 4, 5]] * eta[[0, 0, 1, 1]])
@@ -167,3 +167,56 @@ def test_anisotropic_bearings_are_updated_per_direction(tmp_path, model):
         np.testing.assert_allclose(got, theta * (1 + sign * s_an), rtol=5e-3)
     np.testing.assert_allclose(res.eta_s, 4e-6 * np.array(d["build"]["damping_factor"]),
                                rtol=0.02)
+
+
+def _impacts(path, truth, seed, hits, duration_s=1.0, sensors=None):
+    run_campaign(truth, CampaignOptions(speeds_rpm=(10000.0,), repeats=1, runup=None,
+                                        impacts_per_direction=hits,
+                                        impact_duration_s=duration_s,
+                                        sensors=sensors or SensorSet()), path,
+                 rng=np.random.default_rng(seed))
+    ds = open_dataset(path / "dataset")
+    return [ds.load(r) for r in ds.index if r["kind"] == "impact"]
+
+
+@pytest.mark.known_answer
+def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_path, model):
+    """At the rig's default noise with 3 hits of 0.5 s per direction: a truth the model can
+    represent (the default build, tool and thermal draws) passes the lack-of-fit test against
+    the hits' own scatter (χ²/ν 0.7–2.1 over 44 rigs with 5 hits of 1 s, 1.0–1.4 with these;
+    docs/identification.md §5b), and a truth with a
+    tool-interface compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad,
+    as ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model
+    error that made η̂ 21 % low on the shipped campaign without anything saying so; noise-free
+    hits (identical: the jackknife sees no scatter) are not flagged and keep an SE."""
+    ok = impact_damping(model, _impacts(tmp_path / "ok", reference_truth(), 2001, 3, 0.5))
+    assert ok.covariance_kind == "jackknife" and ok.n_replicates == 3
+    assert not ok.lack_of_fit["flagged"], ok.lack_of_fit
+    hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
+                                      "k_r_Nm_per_rad": 5e6}])
+    recs = _impacts(tmp_path / "bad", hidden, 2001, 3, 0.5)
+    with pytest.warns(UserWarning, match="lack of fit"):
+        bad = impact_damping(model, recs)
+    assert bad.lack_of_fit["flagged"] and bad.to_dict()["lack_of_fit"]["flagged"]
+    # noise-free hits are identical: no scatter to refer to, the model's accuracy floor holds
+    nf = impact_damping(model, _impacts(tmp_path / "nf", reference_truth(), 2001, 3, 0.5,
+                                        SensorSet(noise=False)))
+    assert not nf.lack_of_fit["flagged"] and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_jackknife_standard_error_of_eta_covers_over_seeds(tmp_path, model):
+    """The reported SE of η̂ (delete-one-hit jackknife, 5 hits per direction) against the
+    build's true η over 20 random rigs at the default noise: the 95 % t(4) interval covers
+    the truth in at least 70 % of them for each bearing (measured over 24 other seeds: 0.875
+    front, 0.96 rear — 14 or more of 20 at 0.875 has probability 0.99; the model-based SE from
+    H1's coherence covered 0.42 and 0.75)."""
+    z = []
+    for seed in range(20):
+        recs = _impacts(tmp_path / f"s{seed}", reference_truth(), 3000 + seed, 5)
+        res = impact_damping(model, recs)
+        eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
+        z.append(np.log(res.eta_s / eta) / res.eta_rel_se)
+    cover = np.mean(np.abs(z) <= stats.t.ppf(0.975, 4), axis=0)
+    assert np.all(cover >= 0.7), cover

@@ -257,8 +257,9 @@ def test_stiffness_block_from_python(ident_run):
 
 
 def test_impact_fit_lines_in_the_run_summary():
-    """With ``damping = "impact"`` the summary prints each installation's η̂, tool mass and
-    the fit's χ²/ν (the model-error diagnostic); with ``"response"`` nothing."""
+    """With ``damping = "impact"`` the summary prints each installation's η̂, tool mass, the
+    fit's χ²/ν and the lack-of-fit test (the model-error flag; files written before the test
+    existed print without it); with ``"response"`` nothing."""
     dmp = {"source": "impact", "installations": {"build=0|tool=0": {
         "eta_s": [4.47603e-06, 4.04102e-06], "chi2_dof": 311.7456,
         "parameters": {"tool_mass": 1.06843, "front_damping": 1.1}}}}
@@ -267,3 +268,9 @@ def test_impact_fit_lines_in_the_run_summary():
         "chi2_dof": 311.75}]
     rows = plots_identification.impact_rows
     assert rows({"source": "response"}) == [] and rows(None) == []
+    inst = dmp["installations"]["build=0|tool=0"]
+    inst["lack_of_fit"] = {"chi2_dof": 175.7, "dof": 917, "threshold": 3.0, "flagged": True,
+                           "hits": 5}
+    assert rows(dmp)[0]["lack_of_fit"] == "MODEL ERROR (chi2/dof 176, threshold 3)"
+    inst["lack_of_fit"] = None
+    assert rows(dmp)[0]["lack_of_fit"].startswith("not tested")
