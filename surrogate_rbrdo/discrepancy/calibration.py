@@ -107,8 +107,8 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     fc = np.zeros((0, f.shape[1]))
     if nrow:
         rb = par.rows(x[None])
-        rows = Rows(*(np.repeat(a, nrow, 0) for a in (rb.theta, rb.damping, rb.mass, rb.gain,
-                                                        rb.tau)), ex_rows)
+        rep = rb.repeat(nrow)
+        rows = Rows(rep.theta, rep.damping, rep.mass, rep.gain, rep.tau, ex_rows, rep.force)
         fc = np.hstack([problem.data_vector(rows, u), np.zeros((nrow, problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0

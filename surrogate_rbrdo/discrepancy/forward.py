@@ -91,9 +91,10 @@ class ForwardModel:
     planes_mm: tuple[float, ...]
     theta_bearings: tuple[str, ...] | None = None
     mass_disks: tuple[str, ...] = ()
-    cache_size: int = 64
+    cache_size: int = 256
     _models: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -168,6 +169,25 @@ class ForwardModel:
                 F[:, at[self.node(model, c.position_mm)] + c.dof_offset, j] = 1.0
         return dofs, out, np.concatenate(cpl), F
 
+    def _schur(self, model: SpindleModel, sweep: Sweep, dofs: np.ndarray) -> np.ndarray:
+        """The rotor condensed onto ``dofs`` at the sweep's points (memoised: tests that share
+        their points — hits in x and in y at one speed — share it)."""
+        h = hashlib.sha1()
+        spinning = bool(np.any(sweep.spin_rad_s != 0))  # at standstill G does not enter
+        for a in (model.M, model.K, model.G * model.gyro_scale * spinning, sweep.spin_rad_s,
+                  sweep.freq_rad_s, dofs):
+            h.update(np.ascontiguousarray(a).tobytes())
+        h.update(repr((model.alpha, model.beta)).encode())
+        key = h.hexdigest()
+        if key not in self._schurs:
+            self._schurs[key] = condensed_dynamic_stiffness(model, sweep.spin_rad_s,
+                                                            sweep.freq_rad_s, dofs)
+            if len(self._schurs) > self.cache_size:
+                self._schurs.popitem(last=False)
+        else:
+            self._schurs.move_to_end(key)
+        return self._schurs[key]
+
     def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
         h = hashlib.sha1()
         spinning = bool(np.any(sweep.spin_rad_s != 0))  # at standstill G does not enter
@@ -178,7 +198,7 @@ class ForwardModel:
         key = h.hexdigest()
         if key not in self._condensed:
             dofs, out, cpl, F = self.layout(model, sweep)
-            S = condensed_dynamic_stiffness(model, sweep.spin_rad_s, sweep.freq_rad_s, dofs)
+            S = self._schur(model, sweep, dofs)
             try:
                 HF = np.linalg.solve(S, F)
                 HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, cpl],
@@ -188,6 +208,8 @@ class ForwardModel:
             self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
+        else:
+            self._condensed.move_to_end(key)
         return self._condensed[key]
 
     @property

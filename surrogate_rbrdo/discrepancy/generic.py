@@ -129,6 +129,8 @@ def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
         D = np.stack([-np.einsum("xkc,xkl,xl->xc", zc[:, d], dA, q[:, d])
                       for d, dA in _perturbations(model, sw)], axis=-1)     # (X, C, P)
         chain = rows.gain[0, idx] / (1 + 1j * sw.freq_rad_s[:, None] * rows.tau[0, idx])
+        if sw.kind == "impact":
+            chain = chain * rows.force_chain(sw.freq_rad_s)[0][:, None]
         D = D * chain[..., None]
         cols.append(np.stack([D.real, D.imag], axis=2).reshape(-1, D.shape[-1]))
     G = np.concatenate(cols)

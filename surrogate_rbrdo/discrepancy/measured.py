@@ -136,10 +136,12 @@ def phasor_block(rows: Iterable[Mapping[str, Any]],
 
 def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.ndarray,
               n_averages: int, outputs: Sequence[Channel], excitation: Channel,
-              *, min_coherence: float = 0.9) -> ComplexBlock:
+              *, min_coherence: float = 0.9, speed_rpm: float = 0.0) -> ComplexBlock:
     """An impact block from averaged FRFs ``H`` (n_out, F) with coherence (n_out, F); lines
     where any output's coherence is below ``min_coherence`` are dropped (antiresonances,
-    noise floor: the variance formula is a small-error approximation)."""
+    noise floor: the variance formula is a small-error approximation). ``speed_rpm``: the
+    spin speed the hits were taken at (0: standstill) — an FRF at speed is a different
+    observable (gyroscopics, speed-dependent bearings), so it must be given."""
     H = np.asarray(H, dtype=complex)
     g2 = np.asarray(coherence, dtype=float)
     f = np.asarray(freq_hz, dtype=float)
@@ -152,6 +154,7 @@ def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.
     var = np.abs(H[:, keep]) ** 2 * (1 - g2[:, keep]) / (2 * n_averages * g2[:, keep])
     var = np.maximum(var, 1e-12 * np.abs(H[:, keep]) ** 2 + 1e-300)
     cov = var.T[..., None, None] * np.eye(2)
-    return ComplexBlock(name, Sweep.impact(f[keep], (excitation,)), tuple(outputs),
+    return ComplexBlock(name, Sweep.impact(f[keep], (excitation,), speed_rpm), tuple(outputs),
                         H[:, keep].T, cov, max(2 * n_averages - 2, 4),
-                        {"source": "H1 FRF", "n_averages": n_averages})
+                        {"source": "H1 FRF", "n_averages": n_averages,
+                         "speed_rpm": float(speed_rpm)})

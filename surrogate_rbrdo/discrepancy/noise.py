@@ -196,8 +196,8 @@ def run_offsets(problem: Problem, par: Parametrisation, x: np.ndarray,
             out.append(None)
             continue
         n = a.shape[0]
-        rep = Rows(rows.theta * np.exp(a), *(np.repeat(v, n, 0) for v in (
-            rows.damping, rows.mass, rows.gain, rows.tau)), rows.extras * n)
+        r = rows.repeat(n)
+        rep = Rows(rows.theta * np.exp(a), r.damping, r.mass, r.gain, r.tau, r.extras, r.force)
         out.append(problem.responses(rep)[i].mean(axis=0) - center[i][0])
     return out
 

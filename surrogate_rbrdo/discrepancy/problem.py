@@ -94,7 +94,8 @@ class Problem:
     def parametrisation(self) -> Parametrisation:
         """The nuisance-only parametrisation of this problem."""
         return Parametrisation(self.forward.theta_bearings, self.forward.bearing_names,
-                               self.nuisance, len(self.forward.channels))
+                               self.nuisance, len(self.forward.channels),
+                               impacts=any(b.sweep.kind == "impact" for b in self.blocks))
 
     @property
     def n_data(self) -> int:
@@ -130,6 +131,8 @@ class Problem:
                 G = G + off[None]
             w = b.sweep.freq_rad_s[None, :, None]
             chain = rows.gain[:, None, idx] / (1 + 1j * w * rows.tau[:, None, idx])
+            if b.sweep.kind == "impact":      # an FRF: response over the measured force
+                chain = chain * rows.force_chain(b.sweep.freq_rad_s)[..., None]
             out.append(G * chain[..., None])
         if self.identified is not None:
             ib = self.identified
