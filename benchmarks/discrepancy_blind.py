@@ -11,7 +11,7 @@ skew, 50 nm noise, 16-bit ADC, keyphasor phase errors) through its statistical f
 (the truth's effective bearing stiffness with 0.4 % error per record, the identification
 note's figure) for the sparse baseline. With ``--impacts`` (the default test plan,
 ``rig.impacts.ImpactPlan``): impact tests at the tool at standstill, 10 000 and 20 000 rpm, x
-and y, one hit per run (20 hits each, in the runs' own thermal states), all six probes, FRF
+and y, 20 hits each, all in one run after the 1x runs (its own thermal state), all six probes, FRF
 lines 50–1 500 Hz every 25 Hz through the rig's sensors (probe and hammer gain, driver,
 skew, noise, quantisation; ``rig.impacts.sample_frfs``); ``--impacts none``: the 1x campaign
 alone (the data before this test plan). ``synthetic`` — the phasor-level stand-in of
@@ -103,16 +103,15 @@ class RigSource:
 
     def _impact_blocks(self, truth, ss, sensors, inst, chans, pos, rng, expected=None,
                        noise=""):
-        """Impact blocks of the plan: per speed and direction the hits of every run (its own
-        thermal state), or with ``expected`` (a truth state) the noise-free FRFs with the
-        covariance of the means at ``noise``."""
+        """Impact blocks of the plan: per speed and direction the hits of the impact run (the
+        run after the 1x runs: its own thermal state), or with ``expected`` (a truth state) the
+        noise-free FRFs with the covariance of the means at ``noise``."""
         from surrogate_rbrdo.rig.impacts import expected_frfs, sample_frfs
         plan = self.impacts
         if plan is None:
             return ()
-        states = [] if expected is not None else [
-            truth.state(ss, build=0, tool=0, run=r) for r in range(self.repeats)]
-        models = [st.model() for st in states]
+        st = expected or truth.state(ss, build=0, tool=0, run=self.repeats)
+        model = st.model()
         out = []
         for s in plan.speeds_rpm:
             f = plan.lines(s)
@@ -121,19 +120,16 @@ class RigSource:
                 sweep = Sweep.impact(f, (exc,), s)
                 name = f"impact_tool_{d}_{s:.0f}rpm"
                 if expected is not None:
-                    H = expected_frfs(expected.model(), expected.theta, s, f, sensors, inst, d)
+                    H = expected_frfs(model, st.theta, s, f, sensors, inst, d)
                     out.append(ComplexBlock(name, sweep, chans, H,
                                             _noise_cov(self, noise, name),
                                             10**9))
                     continue
-                recs = np.concatenate([sample_frfs(mo, st.theta, s, f, sensors, inst, rng,
-                                                   direction=d, n_hits=plan.hits_per_run,
-                                                   duration_s=plan.duration_s)
-                                       for mo, st in zip(models, states, strict=True)])
+                recs = sample_frfs(model, st.theta, s, f, sensors, inst, rng, direction=d,
+                                   n_hits=plan.hits, duration_s=plan.duration_s)
                 out.append(ComplexBlock.from_repeats(
                     name, sweep, chans, recs, {"source": "virtual rig fast path (impacts)",
-                                               "speed_rpm": s},
-                    runs=plan.hits_per_run == 1))
+                                               "speed_rpm": s}, runs=False))
         return tuple(out)
 
     def expected(self, geometry, effects, noise) -> MeasuredData:

@@ -104,8 +104,8 @@ def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
     for b, idx in zip(problem.blocks, problem.channel_index, strict=True):
         sw = b.sweep
         Z = bearing_dynamic_stiffness(fm.geometry, fm.effects + extra, fm.theta_bearings,
-                                      sw.spin_rad_s, sw.freq_rad_s, rows.theta,
-                                      rows.damping)[0]
+                                      sw.spin_rad_s, sw.freq_rad_s,
+                                      rows.theta_for(sw.kind), rows.damping)[0]
         A = _system(model, Z, sw)
         if fm.disks:  # recalibrated disk masses
             Zd = fm.disk_impedance(sw, rows.mass, model)[0]

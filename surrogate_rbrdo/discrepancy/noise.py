@@ -33,11 +33,11 @@ runs' own states none of 30.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.nuisance import Parametrisation, Rows
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
 from surrogate_rbrdo.discrepancy.problem import Problem
 
 
@@ -197,7 +197,7 @@ def run_offsets(problem: Problem, par: Parametrisation, x: np.ndarray,
             continue
         n = a.shape[0]
         r = rows.repeat(n)
-        rep = Rows(rows.theta * np.exp(a), r.damping, r.mass, r.gain, r.tau, r.extras, r.force)
+        rep = replace(r, theta=rows.theta * np.exp(a))
         out.append(problem.responses(rep)[i].mean(axis=0) - center[i][0])
     return out
 

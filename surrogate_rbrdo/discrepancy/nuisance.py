@@ -16,7 +16,12 @@ exactly, recalibrated before any effect is tried:
   (or force sensor's) gain factor, prior SD ``force_gain_sd`` (its calibration certificate),
   and its unknown timing skew ``s_f`` (prior SD ``force_delay_sd_s``), so an FRF reads
   ``g/(1 + iωτ) / (g_f e^{iω s_f}) × H`` — one pair for all impact tests (one hammer, one
-  installation).
+  installation);
+* optionally the thermal state of the run the impact tests were taken in: a stiffness factor
+  per θ bearing on every impact test, relative to the 1x runs' mean state (prior SD
+  ``impact_theta_sd``). A run's preload, hence its bearing stiffness, scatters from run to run
+  (the rig's thermal state); hits taken in one run share it, so FRFs at several speeds of one
+  run keep the speed dependence of the bearings while their common level is free.
 
 Priors enter as pseudo-observations ``(p − μ)/σ`` appended to the residuals. The unbalance is
 not here: it is solved exactly inside (:mod:`.problem`).
@@ -61,6 +66,9 @@ class NuisanceOptions:
         Prior SD of the force channel's gain factor (impact tests; 0: known, no parameter).
     force_delay_sd_s : float
         Prior SD of the force channel's timing skew (s; 0: known, no parameter).
+    impact_theta_sd : float
+        Prior SD of the impact run's log stiffness factor per θ bearing (0: the impact tests
+        share the 1x runs' θ, no parameter).
     """
 
     theta_bounds: tuple[float, float] = (0.5, 1.5)
@@ -73,6 +81,7 @@ class NuisanceOptions:
     delay_sd_s: float = 0.0
     force_gain_sd: float = 0.0
     force_delay_sd_s: float = 0.0
+    impact_theta_sd: float = 0.0
 
     def __post_init__(self) -> None:
         check_choice("nuisance.damping", self.damping, ("common", "per_bearing", "fixed"))
@@ -86,6 +95,7 @@ class NuisanceOptions:
         check_positive("nuisance.delay_sd_s", self.delay_sd_s, allow_zero=True)
         check_range("nuisance.force_gain_sd", self.force_gain_sd, 0.0, 0.5)
         check_range("nuisance.force_delay_sd_s", self.force_delay_sd_s, 0.0, 1e-3)
+        check_range("nuisance.impact_theta_sd", self.impact_theta_sd, 0.0, 0.5)
         if self.bandwidth_hz is not None:
             check_positive("nuisance.bandwidth_hz", self.bandwidth_hz)
 
@@ -93,12 +103,14 @@ class NuisanceOptions:
     def probe_chain(cls, **kw) -> NuisanceOptions:
         """Eddy-current probe systems as ``docs/rig.md`` states them (API 670 class): gain SD
         2 %, 10 kHz first-order drivers with ±10 % bandwidth and 0.2 µs skew; the tool/holder's
-        mass re-clamped (3 %); for impact tests the hammer's calibration (1 %, its certificate)
-        and the force channel's skew (0.2 µs)."""
+        mass re-clamped (3 %); for impact tests the hammer's calibration (1 %, its certificate),
+        the force channel's skew (0.2 µs) and the impact run's thermal state (stiffness SD
+        10 %: weakly informative, several times the rig's run-to-run scatter)."""
         tau = 1.0 / (2 * np.pi * 1e4)
         return cls(**{"gain_sd": 0.02, "bandwidth_hz": 1e4,
                       "delay_sd_s": math.hypot(0.1 * tau, 0.2e-6),
                       "force_gain_sd": 0.01, "force_delay_sd_s": 0.2e-6,
+                      "impact_theta_sd": 0.1,
                       "mass_disks": ("tool_holder",), "mass_sd": 0.03, **kw})
 
     @property
@@ -141,6 +153,13 @@ class Rows:
     tau: np.ndarray                       # (B, C)
     extras: list[tuple[Effect, ...]]
     force: np.ndarray | None = None       # (B, 2): force channel's gain and skew (s)
+    theta_impact: np.ndarray | None = None  # (B, m): impact run's stiffness factors
+
+    def theta_for(self, kind: str) -> np.ndarray:
+        """The stiffness factors a test of ``kind`` sees (``(B, m)``)."""
+        if kind == "impact" and self.theta_impact is not None:
+            return self.theta * self.theta_impact
+        return self.theta
 
     def force_chain(self, freq_rad_s: np.ndarray) -> np.ndarray:
         """``1 / (g_f e^{iω s_f})`` per row and frequency, ``(B, X)``: what an FRF is
@@ -155,7 +174,8 @@ class Rows:
         rp = [np.repeat(a, n, 0) for a in (self.theta, self.damping, self.mass, self.gain,
                                              self.tau)]
         ex = [e for e in self.extras for _ in range(n)]
-        return Rows(*rp, ex, None if self.force is None else np.repeat(self.force, n, 0))
+        return Rows(*rp, ex, None if self.force is None else np.repeat(self.force, n, 0),
+                    None if self.theta_impact is None else np.repeat(self.theta_impact, n, 0))
 
     def physical(self) -> tuple[np.ndarray, np.ndarray, list, np.ndarray]:
         return self.theta, self.damping, self.extras, self.mass
@@ -183,7 +203,9 @@ class Parametrisation:
         if not self.impacts:
             return ()
         return (("log_force_gain",) if o.force_gain_sd > 0 else ()) + (
-            ("force_delay",) if o.force_delay_sd_s > 0 else ())
+            ("force_delay",) if o.force_delay_sd_s > 0 else ()) + (
+            tuple(f"log_theta_impact_{b}" for b in self.theta_bearings)
+            if o.impact_theta_sd > 0 else ())
 
     @property
     def sizes(self) -> tuple[int, int, int, int, int]:
@@ -216,7 +238,8 @@ class Parametrisation:
         """Means and SDs of the nuisance parameters (SD inf: no prior)."""
         nt, nd, nm, ng, nk = self.sizes
         o = self.nuisance
-        fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s}
+        fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s,
+               **{f"log_theta_impact_{b}": o.impact_theta_sd for b in self.theta_bearings}}
         mu = np.concatenate([np.zeros(nt + nd + nm + ng), np.full(nk, o.tau0),
                              np.zeros(len(self.force_names))])
         sd = np.concatenate([np.full(nt + nd, np.inf), np.full(nm, o.mass_sd),
@@ -262,8 +285,8 @@ class Parametrisation:
         o = self.nuisance
         out = [0.05] * nt + [0.3] * nd + [o.mass_sd] * nm + [o.gain_sd] * ng
         out += [max(o.delay_sd_s, 1e-9)] * nk
-        out += [o.force_gain_sd if n == "log_force_gain" else o.force_delay_sd_s
-                for n in self.force_names]
+        fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s}
+        out += [fsd.get(n, 0.05) for n in self.force_names]
         for s in self.slots:
             c = s.candidate
             for rec, a, b in zip(c.reciprocal, c.lower, c.upper, strict=True):
@@ -313,7 +336,7 @@ class Parametrisation:
         ds = np.ones((B, len(self.bearings))) * (np.exp(parts[1]) if nd else 1.0)
         gain = np.exp(parts[3]) if ng else np.ones((B, self.n_channels))
         tau = parts[4][:, :nk] if nk else np.full((B, self.n_channels), o.tau0)
-        force = None
+        force = theta_impact = None
         if self.force_names:
             f = parts[4][:, nk:]
             fn = self.force_names
@@ -321,7 +344,9 @@ class Parametrisation:
                 np.exp(f[:, fn.index("log_force_gain")]) if "log_force_gain" in fn
                 else np.ones(B),
                 f[:, fn.index("force_delay")] if "force_delay" in fn else np.zeros(B)])
+            ti = [i for i, n in enumerate(fn) if n.startswith("log_theta_impact_")]
+            theta_impact = np.exp(f[:, ti]) if ti else None
         extras = [tuple(s.candidate.effect(s.scope, v)
                         for s, v in zip(self.slots, self.slot_values(x), strict=True))
                   for x in X]
-        return Rows(theta, ds, np.exp(parts[2]), gain, tau, extras, force)
+        return Rows(theta, ds, np.exp(parts[2]), gain, tau, extras, force, theta_impact)

@@ -16,8 +16,11 @@ in the holder.
 :class:`ImpactPlan` states the test plan (speeds, lines, hits). Each hit is one record of
 ``duration_s`` without exponential window (the slowest mode of the reference spindle decays as
 ``e^{−7.7 t}``: 5e-4 of its amplitude is left after 1 s, so the rectangular window leaks
-nothing measurable), taken in a run (its thermal state) after the steady record at that
-speed; the synchronous response is subtracted with the keyphasor's 1x phasor, and lines within
+nothing measurable). All hits are taken in one run — one thermal state of the bearings (the
+rig draws the preload per run: 8 % CoV, a few percent of stiffness) — speed after speed, so
+the FRFs of the different speeds differ by what depends on speed and not by the run-to-run
+scatter, whose common level the workflow recalibrates (``impact_theta_sd``); the synchronous
+response is subtracted with the keyphasor's 1x phasor, and lines within
 ``exclude_hz`` of the running frequency are dropped (what is left there is the phasor's
 estimation error and, on a real machine, runout). What :func:`rig.frf.h1_frf` gives for one
 hit of the linear truth is
@@ -70,8 +73,9 @@ class ImpactPlan:
     directions : tuple of str
         Hit directions at the tool (every probe records every hit: the cross FRFs carry the
         gyroscopic and cross-coupled coupling).
-    hits_per_run : int
-        Hits per run, speed and direction (each run has its own thermal state).
+    hits : int
+        Hits per speed and direction (20: the per-line noise is estimated from them, and the
+        H1 average over 20 hits is the usual practice; all in the impact run).
     duration_s : float
         Record length of one hit.
     exclude_hz : float
@@ -81,7 +85,7 @@ class ImpactPlan:
     speeds_rpm: tuple[float, ...] = (0.0, 10_000.0, 20_000.0)
     freqs_hz: tuple[float, ...] = _default_lines()
     directions: tuple[str, ...] = DIRECTIONS
-    hits_per_run: int = 1
+    hits: int = 20
     duration_s: float = 1.0
     exclude_hz: float = 10.0
 
@@ -97,7 +101,7 @@ class ImpactPlan:
         for d in self.directions:
             if d not in DIRECTIONS:
                 raise ValueError(f"impacts.directions[] = {d!r} is not allowed: 'x' or 'y'")
-        check_int("impacts.hits_per_run", self.hits_per_run, minimum=1)
+        check_int("impacts.hits", self.hits, minimum=5)
         check_positive("impacts.duration_s", self.duration_s)
         check_positive("impacts.exclude_hz", self.exclude_hz, allow_zero=True)
 
