@@ -12,7 +12,7 @@ skew, 50 nm noise, 16-bit ADC, keyphasor phase errors) through its statistical f
 note's figure) for the sparse baseline. With ``--impacts`` (the default test plan,
 ``rig.impacts.ImpactPlan``): impact tests at the tool at standstill, 10 000 and 20 000 rpm, x
 and y, 20 hits each, all in one run after the 1x runs (its own thermal state), all six probes, FRF
-lines 50–1 500 Hz every 25 Hz through the rig's sensors (probe and hammer gain, driver,
+lines 40–1 480 Hz every 40 Hz through the rig's sensors (probe and hammer gain, driver,
 skew, noise, quantisation; ``rig.impacts.sample_frfs``); ``--impacts none``: the 1x campaign
 alone (the data before this test plan). ``synthetic`` — the phasor-level stand-in of
 ``discrepancy.synthetic`` (with impact FRFs). Noise levels scale the probe noise and the

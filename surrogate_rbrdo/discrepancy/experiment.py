@@ -40,6 +40,7 @@ from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.discrepancy.measured import (
     channel_positions,
     dataset_phasor_rows,
+    impact_blocks,
     phasor_block,
     read_phasor_table,
 )
@@ -152,14 +153,17 @@ def data_from_folder(path: str | Path) -> MeasuredData:
     (``{name: [position_mm, direction]}``) or else from the first native record of
     ``dataset/records``; or a dataset folder of ``docs/measured-data.md`` (``dataset.json``,
     ``index.jsonl``, ``records/``), whose steady records are demodulated
-    (:func:`~.measured.dataset_phasor_rows`)."""
+    (:func:`~.measured.dataset_phasor_rows`). Impact records of the dataset (a rig campaign's
+    ``dataset/``, or the dataset folder itself) become FRF blocks, one per speed and hit
+    direction (:func:`~.measured.impact_blocks`)."""
     root = Path(path)
     if not root.is_dir():
         raise ValueError(f"data folder {str(root)!r} is not allowed: it is not a folder")
     table = root / "phasors.csv"
     if not table.is_file() and (root / "index.jsonl").is_file():
         rows, pos = dataset_phasor_rows(root)
-        return MeasuredData((phasor_block(rows, pos),), provenance={"source": str(root)})
+        return MeasuredData((phasor_block(rows, pos),) + impact_blocks(root),
+                            provenance={"source": str(root)})
     if not table.is_file():
         raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table) "
                          "and no index.jsonl (a dataset folder)")
@@ -172,7 +176,9 @@ def data_from_folder(path: str | Path) -> MeasuredData:
             raise ValueError(f"data folder {str(root)!r}: neither channels.json nor "
                              "dataset/records/*.npz to read the channels' positions from")
         pos = channel_positions(recs[0])
-    return MeasuredData((phasor_block(read_phasor_table(table), pos),),
+    ds = root / "dataset"
+    imp = impact_blocks(ds) if (ds / "index.jsonl").is_file() else ()
+    return MeasuredData((phasor_block(read_phasor_table(table), pos),) + imp,
                         provenance={"source": str(root)})
 
 

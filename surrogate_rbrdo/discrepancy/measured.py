@@ -13,6 +13,13 @@
 * :func:`frf_block` turns averaged H1 FRFs with their coherence into an impact block; the
   variance of each line is Bendat & Piersol's (*Random Data*, 4th ed., eq. 9.90):
   ``var(Re H) = var(Im H) = |H|² (1 − γ²) / (2 n γ²)`` per component for ``n`` averages.
+* :func:`impact_blocks` makes such blocks from the impact records of a dataset folder: per
+  spin speed and hit direction, the H1 over the hits (``rig.frf.h1_frf``) at the FRF lines of
+  the test plan. An FRF taken on the running spindle is a different observable from one at
+  standstill, so each record must carry its ``speed_rpm`` (the format's field; 0 at
+  standstill), and the synchronous response must have been removed from records at speed
+  (subtract the 1x phasor demodulated against the keyphasor; lines near the running
+  frequency are dropped anyway).
 """
 
 from __future__ import annotations
@@ -29,6 +36,8 @@ import numpy as np
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.rig.demod import demodulate
+from surrogate_rbrdo.rig.frf import h1_frf
+from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.rig.store import open_dataset
 
 #: the phasor table's required columns
@@ -158,3 +167,41 @@ def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.
                         H[:, keep].T, cov, max(2 * n_averages - 2, 4),
                         {"source": "H1 FRF", "n_averages": n_averages,
                          "speed_rpm": float(speed_rpm)})
+
+
+def impact_blocks(root: str | Path, plan: ImpactPlan | None = None, *,
+                  min_coherence: float = 0.9) -> tuple[ComplexBlock, ...]:
+    """FRF blocks of every impact record of the dataset folder ``root``: per ``speed_rpm``
+    and hit direction (the force channel's location) the H1 over the hits, without
+    exponential window, at ``plan``'s lines for that speed (default
+    :class:`~surrogate_rbrdo.rig.impacts.ImpactPlan`), for the displacement channels whose
+    coherence is at least ``min_coherence`` on most lines (at standstill a hit in x leaves the
+    y probes at the noise floor). Empty if there are no impact records."""
+    plan = ImpactPlan() if plan is None else plan
+    ds = open_dataset(root)
+    groups: dict[tuple[float, str], list] = {}
+    for row in ds.select(kind="impact"):
+        rec = ds.load(row)
+        speed = 0.0 if not math.isfinite(rec.speed_rpm) else float(rec.speed_rpm)
+        force = next((c for c in rec.channels if c.quantity == "force"), None)
+        if force is None or force.location.direction not in ("x", "y"):
+            raise ValueError(f"{root}: impact record {rec.id!r} needs a force channel with a "
+                             "location direction x or y")
+        groups.setdefault((speed, force.location.direction), []).append(rec)
+    out = []
+    for (speed, d), recs in sorted(groups.items()):
+        force = next(c for c in recs[0].channels if c.quantity == "force")
+        probes = [c for c in recs[0].channels if c.quantity == "displacement"]
+        est = h1_frf(recs, [c.name for c in probes], force.name, exp_window_end=None)
+        f = plan.lines(speed)
+        idx = np.clip(np.searchsorted(est.freq_hz, f), 0, est.freq_hz.size - 1)
+        good = np.median(est.coherence[:, idx], axis=1) >= min_coherence
+        outputs = [Channel(c.name, float(c.location.position_mm), c.location.direction)
+                   for c, g in zip(probes, good, strict=True) if g]
+        if not outputs:
+            continue
+        exc = Channel(f"{force.location.target}_{d}", float(force.location.position_mm), d)
+        out.append(frf_block(f"impact_{d}_{speed:.0f}rpm", est.freq_hz[idx],
+                             est.H[good][:, idx], est.coherence[good][:, idx], len(recs),
+                             outputs, exc, min_coherence=min_coherence, speed_rpm=speed))
+    return tuple(out)

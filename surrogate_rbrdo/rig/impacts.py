@@ -55,7 +55,7 @@ DIRECTIONS = ("x", "y")
 
 
 def _default_lines() -> tuple[float, ...]:
-    return tuple(np.arange(50.0, 1501.0, 25.0).tolist())
+    return tuple(np.arange(40.0, 1481.0, 40.0).tolist())
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ class ImpactPlan:
         Spin speeds of the tests (0: standstill). Default standstill, 10 000 and 20 000 rpm:
         inside the 1x campaign's training speeds (the top 10 % are held out).
     freqs_hz : tuple of float
-        FRF lines kept (default 50–1 500 Hz every 25 Hz: both bending modes of the reference
+        FRF lines kept (default 40–1 480 Hz every 40 Hz: both bending modes of the reference
         spindle, ~360 and ~790 Hz, with their gyroscopic split).
     directions : tuple of str
         Hit directions at the tool (every probe records every hit: the cross FRFs carry the
