@@ -13,9 +13,11 @@
 * :func:`frf_block` turns averaged H1 FRFs with their coherence into an impact block; the
   variance of each line is Bendat & Piersol's (*Random Data*, 4th ed., eq. 9.90):
   ``var(Re H) = var(Im H) = |H|² (1 − γ²) / (2 n γ²)`` per component for ``n`` averages.
-* :func:`impact_blocks` makes such blocks from the impact records of a dataset folder: per
-  spin speed and hit direction, the H1 over the hits (``rig.frf.h1_frf``) at the FRF lines of
-  the test plan. An FRF taken on the running spindle is a different observable from one at
+* :func:`impact_blocks` makes impact blocks from the impact records of a dataset folder: per
+  spin speed and hit direction, each hit's FRF (``rig.frf.h1_frf`` of the one record: its
+  response over its force) at the FRF lines of the test plan, the mean and covariance from
+  the hits (as the 1x phasors from the repeats; no coherence threshold is needed, so the
+  bearing probes' noisier FRFs are kept with their own variance). An FRF taken on the running spindle is a different observable from one at
   standstill, so each record must carry its ``speed_rpm`` (the format's field; 0 at
   standstill), and the synchronous response must have been removed from records at speed
   (subtract the 1x phasor demodulated against the keyphasor; lines near the running
@@ -169,14 +171,13 @@ def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.
                          "speed_rpm": float(speed_rpm)})
 
 
-def impact_blocks(root: str | Path, plan: ImpactPlan | None = None, *,
-                  min_coherence: float = 0.9) -> tuple[ComplexBlock, ...]:
+def impact_blocks(root: str | Path, plan: ImpactPlan | None = None
+                  ) -> tuple[ComplexBlock, ...]:
     """FRF blocks of every impact record of the dataset folder ``root``: per ``speed_rpm``
-    and hit direction (the force channel's location) the H1 over the hits, without
-    exponential window, at ``plan``'s lines for that speed (default
-    :class:`~surrogate_rbrdo.rig.impacts.ImpactPlan`), for the displacement channels whose
-    coherence is at least ``min_coherence`` on most lines (at standstill a hit in x leaves the
-    y probes at the noise floor). Empty if there are no impact records."""
+    and hit direction (the force channel's location), the hits' FRFs of every displacement
+    channel (no exponential window) at ``plan``'s lines for that speed (default
+    :class:`~surrogate_rbrdo.rig.impacts.ImpactPlan`), averaged with their covariance from the
+    hits (at least 5). Empty if there are no impact records."""
     plan = ImpactPlan() if plan is None else plan
     ds = open_dataset(root)
     groups: dict[tuple[float, str], list] = {}
@@ -190,18 +191,22 @@ def impact_blocks(root: str | Path, plan: ImpactPlan | None = None, *,
         groups.setdefault((speed, force.location.direction), []).append(rec)
     out = []
     for (speed, d), recs in sorted(groups.items()):
+        if len(recs) < 5:
+            raise ValueError(f"{root}: {len(recs)} impact records at {speed:g} rpm in {d}: "
+                             "need at least 5 hits (the FRF noise is estimated from them)")
         force = next(c for c in recs[0].channels if c.quantity == "force")
         probes = [c for c in recs[0].channels if c.quantity == "displacement"]
-        est = h1_frf(recs, [c.name for c in probes], force.name, exp_window_end=None)
         f = plan.lines(speed)
-        idx = np.clip(np.searchsorted(est.freq_hz, f), 0, est.freq_hz.size - 1)
-        good = np.median(est.coherence[:, idx], axis=1) >= min_coherence
-        outputs = [Channel(c.name, float(c.location.position_mm), c.location.direction)
-                   for c, g in zip(probes, good, strict=True) if g]
-        if not outputs:
-            continue
+        hits = []
+        for rec in recs:
+            est = h1_frf([rec], [c.name for c in probes], force.name, exp_window_end=None)
+            idx = np.clip(np.searchsorted(est.freq_hz, f), 0, est.freq_hz.size - 1)
+            hits.append(est.H[:, idx].T)
+        outputs = tuple(Channel(c.name, float(c.location.position_mm), c.location.direction)
+                        for c in probes)
         exc = Channel(f"{force.location.target}_{d}", float(force.location.position_mm), d)
-        out.append(frf_block(f"impact_{d}_{speed:.0f}rpm", est.freq_hz[idx],
-                             est.H[good][:, idx], est.coherence[good][:, idx], len(recs),
-                             outputs, exc, min_coherence=min_coherence, speed_rpm=speed))
+        out.append(ComplexBlock.from_repeats(
+            f"impact_{d}_{speed:.0f}rpm", Sweep.impact(est.freq_hz[idx], (exc,), speed),
+            outputs, np.array(hits), {"source": "impact records", "n_hits": len(recs),
+                                      "speed_rpm": speed}, runs=False))
     return tuple(out)

@@ -77,7 +77,7 @@ def test_impact_records_at_speed_become_frf_blocks_with_their_speed(tmp_path):
     from surrogate_rbrdo.spindle import reference_spindle
 
     opts = CampaignOptions(speeds_rpm=tuple(np.linspace(2000, 20000, 8)), repeats=5,
-                           duration_s=0.2, runup=None, impacts_per_direction=4,
+                           duration_s=0.2, runup=None, impacts_per_direction=6,
                            impact_duration_s=0.5, impact_speeds_rpm=(0.0, 12000.0))
     run_campaign(reference_truth(variability=Variability.none()), opts, tmp_path,
                  rng=np.random.default_rng(1))
@@ -86,7 +86,8 @@ def test_impact_records_at_speed_become_frf_blocks_with_their_speed(tmp_path):
     assert names == ["unbalance_1x", "impact_x_0rpm", "impact_y_0rpm", "impact_x_12000rpm",
                      "impact_y_12000rpm"]
     b = data.block("impact_x_12000rpm")
-    assert b.sweep.speed_rpm == pytest.approx(12000.0) and b.meta["n_averages"] == 4
+    assert b.sweep.speed_rpm == pytest.approx(12000.0) and b.meta["n_hits"] == 6
+    assert len(b.channels) == 6 and b.dof == 5
     assert not np.any(np.abs(b.coord - 200.0) <= 10.0)        # the running frequency dropped
     sp = reference_spindle()
     g = sp.geometry_for(sp.baseline)
@@ -101,6 +102,6 @@ def test_impact_records_at_speed_become_frf_blocks_with_their_speed(tmp_path):
         w = np.einsum("xcij,xcj->xci", W, np.stack([r.real, r.imag], axis=-1))
         return float(np.sum(w**2) / w.size)
 
-    # the model at speed is off only by the probe's and the hammer's calibration (a few
+    # the model at speed is off only by the probes' and the hammer's calibration (a few
     # percent: the workflow recalibrates them); the standstill model is far off
     assert chi2_dof(still) > 10 * chi2_dof(at), (chi2_dof(still), chi2_dof(at))
