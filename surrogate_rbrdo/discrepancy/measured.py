@@ -17,11 +17,11 @@
   spin speed and hit direction, each hit's FRF (``rig.frf.h1_frf`` of the one record: its
   response over its force) at the FRF lines of the test plan, the mean and covariance from
   the hits (as the 1x phasors from the repeats; no coherence threshold is needed, so the
-  bearing probes' noisier FRFs are kept with their own variance). An FRF taken on the running spindle is a different observable from one at
-  standstill, so each record must carry its ``speed_rpm`` (the format's field; 0 at
-  standstill), and the synchronous response must have been removed from records at speed
-  (subtract the 1x phasor demodulated against the keyphasor; lines near the running
-  frequency are dropped anyway).
+  bearing probes' noisier FRFs are kept with their own variance). An FRF taken on the running
+  spindle is a different observable from one at standstill, so each record must carry its
+  ``speed_rpm`` (the format's field; 0 at standstill), and the synchronous response must have
+  been removed from records at speed (subtract the 1x phasor demodulated against the
+  keyphasor; lines near the running frequency are dropped anyway).
 """
 
 from __future__ import annotations
@@ -199,7 +199,8 @@ def impact_blocks(root: str | Path, plan: ImpactPlan | None = None
         f = plan.lines(speed)
         hits = []
         for rec in recs:
-            est = h1_frf([rec], [c.name for c in probes], force.name, exp_window_end=None)
+            with np.errstate(divide="ignore", invalid="ignore"):  # pyFRF's H2 of one hit
+                est = h1_frf([rec], [c.name for c in probes], force.name, exp_window_end=None)
             idx = np.clip(np.searchsorted(est.freq_hz, f), 0, est.freq_hz.size - 1)
             hits.append(est.H[:, idx].T)
         outputs = tuple(Channel(c.name, float(c.location.position_mm), c.location.direction)

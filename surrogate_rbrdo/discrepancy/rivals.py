@@ -103,6 +103,13 @@ RIVAL_SEPARATION = (
     "inertia equals minus a diametral inertia, a cross-coupled stiffness equals a damping ∝ "
     "1/Ω; off the synchronous line they part")
 
+#: what is left when the data already hold impact tests at speed
+RIVAL_SEPARATION_AT_SPEED = (
+    "a larger effect or impact tests at more speeds over a wider range: the data hold FRFs "
+    "off the synchronous line already, and the closest generic change differs from the "
+    "candidate only in its speed law (e.g. a constant stiffness in parallel with a bearing "
+    "whose stiffness already falls with speed, against a further Ω² softening)")
+
 #: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
 DAMPING_EXPONENT = (-1.0, 1.0)
 
