@@ -101,7 +101,7 @@ class Sweep:
         ``freqs_hz``, forces at ``excitations``.
 
         >>> sw = Sweep.impact([100.0, 200.0], (Channel("tool_x", 0.0, "x"),), 12000.0)
-        >>> sw.spin_rad_s.round(2).tolist(), sw.speed_rpm
+        >>> sw.spin_rad_s.round(2).tolist(), round(sw.speed_rpm, 6)
         ([1256.64, 1256.64], 12000.0)
         """
         check_finite("sweep.speed_rpm", speed_rpm)
