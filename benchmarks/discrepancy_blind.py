@@ -185,14 +185,20 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--impacts", choices=("plan", "none"), default="plan",
                     help="impact tests at speed (rig.impacts.ImpactPlan) or the 1x data alone")
+    ap.add_argument("--calibrate-on", choices=("same", "none"), default="same",
+                    help="strengths calibrated on the data the scenarios use (same) or on the "
+                         "1x data alone (none: the 1x grid's physical sizes, measured with the "
+                         "data of --impacts)")
     ap.add_argument("--classes", nargs="+", default=[],
-                    help="run only scenarios whose class/strength contains one of these "
-                         "(e.g. 'strong' 'sub-noise' 'nothing' 'outside')")
+                    help="run only scenarios whose class and strength contain every word of "
+                         "one of these (e.g. 'strong' 'sub-noise' 'nothing' 'single strong')")
     ap.add_argument("--base-seed", type=int, default=0,
                     help="root of the scenarios' seeds (another value: an independent sample)")
     ap.add_argument("--report", nargs="+", default=[],
                     help="only print the rates of earlier runs' --out CSVs, pooled")
     args = ap.parse_args()
+    if args.calibrate_on == "none" and args.source != "rig":
+        ap.error("--calibrate-on none is for --source rig (the 1x data without the impacts)")
     if args.report:
         rows = []
         for path in args.report:
@@ -218,7 +224,8 @@ def main() -> None:
     ctx = Context(g, sp.effects, source, DiscrepancyOptions(nuisance=nuis, n_draws=args.draws))
     noises = tuple(args.noise)
     names = tuple(n for n in HIDDEN if HIDDEN[n].truth_only or n in ctx.options.library)
-    cal = calibrate_grid(ctx, names, noises)
+    cal = calibrate_grid(ctx if args.calibrate_on == "same" else replace(
+        ctx, source=replace(source, impacts=None)), names, noises)
     c_cal = time.process_time() - c0
     print(f"calibration: {time.perf_counter() - t0:.0f} s ({c_cal:.0f} s CPU)")
     for k in sorted(cal.knob):
@@ -233,8 +240,8 @@ def main() -> None:
         pairs = []                    # not run: their strengths need not be calibrated
     grid = build_grid(ctx, cal, noises, args.seeds, pairs, base_seed=args.base_seed)
     if args.classes:
-        grid = [sc for sc in grid if any(c in f"{sc.label} {sc.strength}"
-                                         for c in args.classes)]
+        grid = [sc for sc in grid if any(all(w in f"{sc.label} {sc.strength}"
+                                             for w in c.split()) for c in args.classes)]
     print(f"{len(grid)} scenarios")
     # replicate k of every cell before replicate k + 1: a run stopped early is a balanced
     # sample; each row is written as it arrives
