@@ -9,7 +9,12 @@ mass 3 %; unbalance per ISO 21940 with random phases), its sensors (gain 2 %, 10
 skew, 50 nm noise, 16-bit ADC, keyphasor phase errors) through its statistical fast path
 ``rig.phasors.sample_phasors``, 20 runs × 50 speeds; identified stiffness is emulated per run
 (the truth's effective bearing stiffness with 0.4 % error per record, the identification
-note's figure) for the sparse baseline. ``synthetic`` — the phasor-level stand-in of
+note's figure) for the sparse baseline. With ``--impacts`` (the default test plan,
+``rig.impacts.ImpactPlan``): impact tests at the tool at standstill, 10 000 and 20 000 rpm, x
+and y, 20 hits each, all in one run after the 1x runs (its own thermal state), all six probes, FRF
+lines 40–1 480 Hz every 40 Hz through the rig's sensors (probe and hammer gain, driver,
+skew, noise, quantisation; ``rig.impacts.sample_frfs``); ``--impacts none``: the 1x campaign
+alone (the data before this test plan). ``synthetic`` — the phasor-level stand-in of
 ``discrepancy.synthetic`` (with impact FRFs). Noise levels scale the probe noise and the
 run-to-run thermal scatter (rig) or every noise component (synthetic) by 0.5, 1 and 3.
 
@@ -42,6 +47,7 @@ from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, 
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
+from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
@@ -56,6 +62,7 @@ class RigSource:
     repeats: int
     factor: dict[str, float]
     k_relative: float = 0.004
+    impacts: ImpactPlan | None = None
 
     def _parts(self, geometry, effects, noise):
         from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet  # the rig, if merged
@@ -91,7 +98,39 @@ class RigSource:
         ks = np.array(ks)
         ident = RealBlock("identified_k", sp, ("front", "rear"), ks.mean(0),
                           ks.std(0, ddof=1) / np.sqrt(self.repeats), self.repeats - 1)
-        return MeasuredData((blk,), ident, {"source": "virtual rig", "seed": seed})
+        blocks = (blk,) + self._impact_blocks(truth, ss, sensors, inst, chans, pos, rng)
+        return MeasuredData(blocks, ident, {"source": "virtual rig", "seed": seed})
+
+    def _impact_blocks(self, truth, ss, sensors, inst, chans, pos, rng, expected=None,
+                       noise=""):
+        """Impact blocks of the plan: per speed and direction the hits of the impact run (the
+        run after the 1x runs: its own thermal state), or with ``expected`` (a truth state) the
+        noise-free FRFs with the covariance of the means at ``noise``."""
+        from surrogate_rbrdo.rig.impacts import expected_frfs, sample_frfs
+        plan = self.impacts
+        if plan is None:
+            return ()
+        st = expected or truth.state(ss, build=0, tool=0, run=self.repeats)
+        model = st.model()
+        out = []
+        for s in plan.speeds_rpm:
+            f = plan.lines(s)
+            for d in plan.directions:
+                exc = Channel(f"tool_{d}", pos["tool"], d)
+                sweep = Sweep.impact(f, (exc,), s)
+                name = f"impact_tool_{d}_{s:.0f}rpm"
+                if expected is not None:
+                    H = expected_frfs(model, st.theta, s, f, sensors, inst, d)
+                    out.append(ComplexBlock(name, sweep, chans, H,
+                                            _noise_cov(self, noise, name),
+                                            10**9))
+                    continue
+                recs = sample_frfs(model, st.theta, s, f, sensors, inst, rng, direction=d,
+                                   n_hits=plan.hits, duration_s=plan.duration_s)
+                out.append(ComplexBlock.from_repeats(
+                    name, sweep, chans, recs, {"source": "virtual rig fast path (impacts)",
+                                               "speed_rpm": s}, runs=False))
+        return tuple(out)
 
     def expected(self, geometry, effects, noise) -> MeasuredData:
         """Noise-free means of the nominal build; the covariance of the means from 200
@@ -113,22 +152,27 @@ class RigSource:
         pos = ProbeLayout.of(st.model()).positions_mm
         chans = tuple(Channel(n, pos[n.split("_")[0]], n.split("_")[1])
                       for n in sensors.probe_channels)
-        cov = _noise_cov(self, noise)
-        return MeasuredData((ComplexBlock("unbalance_1x", Sweep.unbalance(sp), chans, y,
-                                          cov, 10**9),))
+        cov = _noise_cov(self, noise, "unbalance_1x")
+        blk = ComplexBlock("unbalance_1x", Sweep.unbalance(sp), chans, y, cov, 10**9)
+        imp = self._impact_blocks(truth, np.random.SeedSequence(0), ideal, inst, chans, pos,
+                                  None, expected=st, noise=noise)
+        return MeasuredData((blk,) + imp)
 
 
 _COV: dict = {}
 
 
-def _noise_cov(src: RigSource, noise: str) -> np.ndarray:
-    key = (src.speeds_rpm, src.repeats, src.factor[noise])
+def _noise_cov(src: RigSource, noise: str, block: str) -> np.ndarray:
+    """The covariance of a block's means at a noise level: the average of 10 noise-only data
+    sets' estimates (cached)."""
+    key = (src.speeds_rpm, src.repeats, src.factor[noise], src.impacts)
     if key not in _COV:
         g = reference_spindle().geometry_for(reference_spindle().baseline)
-        runs = [src.measure(g, reference_spindle().effects, noise, 10_000 + i).blocks[0]
+        runs = [src.measure(g, reference_spindle().effects, noise, 10_000 + i)
                 for i in range(10)]
-        _COV[key] = np.mean([b.cov for b in runs], axis=0)
-    return _COV[key]
+        _COV[key] = {b.name: np.mean([r.block(b.name).cov for r in runs], axis=0)
+                     for b in runs[0].blocks}
+    return _COV[key][block]
 
 
 def main() -> None:
@@ -139,11 +183,22 @@ def main() -> None:
     ap.add_argument("--noise", nargs="+", default=list(FACTORS))
     ap.add_argument("--out", default="")
     ap.add_argument("--draws", type=int, default=400)
+    ap.add_argument("--impacts", choices=("plan", "none"), default="plan",
+                    help="impact tests at speed (rig.impacts.ImpactPlan) or the 1x data alone")
+    ap.add_argument("--calibrate-on", choices=("same", "none"), default="same",
+                    help="strengths calibrated on the data the scenarios use (same) or on the "
+                         "1x data alone (none: the 1x grid's physical sizes, measured with the "
+                         "data of --impacts)")
+    ap.add_argument("--classes", nargs="+", default=[],
+                    help="run only scenarios whose class and strength contain every word of "
+                         "one of these (e.g. 'strong' 'sub-noise' 'nothing' 'single strong')")
     ap.add_argument("--base-seed", type=int, default=0,
                     help="root of the scenarios' seeds (another value: an independent sample)")
     ap.add_argument("--report", nargs="+", default=[],
                     help="only print the rates of earlier runs' --out CSVs, pooled")
     args = ap.parse_args()
+    if args.calibrate_on == "none" and args.source != "rig":
+        ap.error("--calibrate-on none is for --source rig (the 1x data without the impacts)")
     if args.report:
         rows = []
         for path in args.report:
@@ -157,7 +212,8 @@ def main() -> None:
     g = sp.geometry_for(sp.baseline)
     speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
     if args.source == "rig":
-        source = RigSource(speeds, 20, FACTORS)
+        source = RigSource(speeds, 20, FACTORS,
+                           impacts=ImpactPlan() if args.impacts == "plan" else None)
         nuis = NuisanceOptions.probe_chain()
     else:
         lv = NoiseLevel()
@@ -168,7 +224,8 @@ def main() -> None:
     ctx = Context(g, sp.effects, source, DiscrepancyOptions(nuisance=nuis, n_draws=args.draws))
     noises = tuple(args.noise)
     names = tuple(n for n in HIDDEN if HIDDEN[n].truth_only or n in ctx.options.library)
-    cal = calibrate_grid(ctx, names, noises)
+    cal = calibrate_grid(ctx if args.calibrate_on == "same" else replace(
+        ctx, source=replace(source, impacts=None)), names, noises)
     c_cal = time.process_time() - c0
     print(f"calibration: {time.perf_counter() - t0:.0f} s ({c_cal:.0f} s CPU)")
     for k in sorted(cal.knob):
@@ -179,7 +236,12 @@ def main() -> None:
     lib = {c.name: c.one_sided[0] for c in library(ctx.options.library, ("front", "rear"))}
     pairs = confounded_pairs(cn, cos, lib)
     print("confounded pairs:", pairs)
+    if args.classes and not any("confounded" in c for c in args.classes):
+        pairs = []                    # not run: their strengths need not be calibrated
     grid = build_grid(ctx, cal, noises, args.seeds, pairs, base_seed=args.base_seed)
+    if args.classes:
+        grid = [sc for sc in grid if any(all(w in f"{sc.label} {sc.strength}"
+                                             for w in c.split()) for c in args.classes)]
     print(f"{len(grid)} scenarios")
     # replicate k of every cell before replicate k + 1: a run stopped early is a balanced
     # sample; each row is written as it arrives

@@ -28,7 +28,7 @@ curvature error is far below the noise (checked by the null rates of the blind g
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.stats import chi2
@@ -39,7 +39,6 @@ from surrogate_rbrdo.discrepancy.fit import FD_STEP, Fit
 from surrogate_rbrdo.discrepancy.generic import generic_columns, generic_labels
 from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
 from surrogate_rbrdo.discrepancy.noise import NoiseModel
-from surrogate_rbrdo.discrepancy.nuisance import Rows
 from surrogate_rbrdo.discrepancy.problem import Problem
 
 #: GP length scales (fraction of the speed or frequency span) and variances of the structure test
@@ -107,8 +106,7 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     fc = np.zeros((0, f.shape[1]))
     if nrow:
         rb = par.rows(x[None])
-        rows = Rows(*(np.repeat(a, nrow, 0) for a in (rb.theta, rb.damping, rb.mass, rb.gain,
-                                                        rb.tau)), ex_rows)
+        rows = replace(rb.repeat(nrow), extras=ex_rows)
         fc = np.hstack([problem.data_vector(rows, u), np.zeros((nrow, problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0

@@ -40,6 +40,7 @@ from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.discrepancy.measured import (
     channel_positions,
     dataset_phasor_rows,
+    impact_blocks,
     phasor_block,
     read_phasor_table,
 )
@@ -73,6 +74,9 @@ class NuisanceTable:
     gain_sd: float | None = None
     bandwidth_hz: float | None = None
     delay_sd_s: float | None = None
+    force_gain_sd: float | None = None
+    force_delay_sd_s: float | None = None
+    impact_theta_sd: float | None = None
 
     def __post_init__(self) -> None:
         check_choice("preset", self.preset, PRESETS)
@@ -108,6 +112,7 @@ class DiscrepancyTable:
     confound_delta: float = _D.confound_delta
     holdout_tolerance: float = _D.holdout_tolerance
     use_identified: bool = _D.use_identified
+    use_impacts: bool = _D.use_impacts
     max_nfev: int = _D.max_nfev
 
     def __post_init__(self) -> None:
@@ -146,20 +151,24 @@ def data_files(path: str | Path) -> tuple[Path, ...]:
     return (table,) + tuple(sorted((root / "dataset" / "records").glob("*.npz"))[:1])
 
 
-def data_from_folder(path: str | Path) -> MeasuredData:
+def data_from_folder(path: str | Path, *, impacts: bool = False) -> MeasuredData:
     """Observables from a measured-data folder: ``phasors.csv`` (the rig campaign's 1x table,
     or a user's in the same columns) and the channels' positions from ``channels.json``
     (``{name: [position_mm, direction]}``) or else from the first native record of
     ``dataset/records``; or a dataset folder of ``docs/measured-data.md`` (``dataset.json``,
     ``index.jsonl``, ``records/``), whose steady records are demodulated
-    (:func:`~.measured.dataset_phasor_rows`)."""
+    (:func:`~.measured.dataset_phasor_rows`). With ``impacts``, the impact records of the
+    dataset (a rig campaign's ``dataset/``, or the dataset folder itself) become FRF blocks,
+    one per speed and hit direction (:func:`~.measured.impact_blocks`)."""
     root = Path(path)
     if not root.is_dir():
         raise ValueError(f"data folder {str(root)!r} is not allowed: it is not a folder")
     table = root / "phasors.csv"
     if not table.is_file() and (root / "index.jsonl").is_file():
         rows, pos = dataset_phasor_rows(root)
-        return MeasuredData((phasor_block(rows, pos),), provenance={"source": str(root)})
+        return MeasuredData((phasor_block(rows, pos),) + (impact_blocks(root) if impacts
+                                                           else ()),
+                            provenance={"source": str(root)})
     if not table.is_file():
         raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table) "
                          "and no index.jsonl (a dataset folder)")
@@ -172,7 +181,9 @@ def data_from_folder(path: str | Path) -> MeasuredData:
             raise ValueError(f"data folder {str(root)!r}: neither channels.json nor "
                              "dataset/records/*.npz to read the channels' positions from")
         pos = channel_positions(recs[0])
-    return MeasuredData((phasor_block(read_phasor_table(table), pos),),
+    ds = root / "dataset"
+    imp = impact_blocks(ds) if impacts and (ds / "index.jsonl").is_file() else ()
+    return MeasuredData((phasor_block(read_phasor_table(table), pos),) + imp,
                         provenance={"source": str(root)})
 
 

@@ -91,9 +91,11 @@ class ForwardModel:
     planes_mm: tuple[float, ...]
     theta_bearings: tuple[str, ...] | None = None
     mass_disks: tuple[str, ...] = ()
-    cache_size: int = 64
+    cache_size: int = 256
     _models: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _prints: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -168,17 +170,50 @@ class ForwardModel:
                 F[:, at[self.node(model, c.position_mm)] + c.dof_offset, j] = 1.0
         return dofs, out, np.concatenate(cpl), F
 
-    def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
+    def _fingerprint(self, model: SpindleModel) -> tuple[str, str]:
+        """Digests of the rotor's matrices without and with its gyroscopic matrix (computed
+        once per model object: models with equal matrices share condensed rotors)."""
+        hit = self._prints.get(id(model))
+        if hit is None or hit[0] is not model:
+            h = hashlib.sha1()
+            for a in (model.M, model.K):
+                h.update(np.ascontiguousarray(a).tobytes())
+            h.update(repr((model.alpha, model.beta)).encode())
+            still = h.hexdigest()
+            h.update(np.ascontiguousarray(model.G * model.gyro_scale).tobytes())
+            hit = (model, (still, h.hexdigest()))
+            self._prints[id(model)] = hit
+            if len(self._prints) > self.cache_size:
+                self._prints.pop(next(iter(self._prints)))
+        return hit[1]
+
+    def _key(self, model: SpindleModel, sweep: Sweep, *extra: object) -> str:
+        """Cache key of a rotor at a sweep's points (at standstill G does not enter)."""
         h = hashlib.sha1()
-        spinning = bool(np.any(sweep.spin_rad_s != 0))  # at standstill G does not enter
-        for a in (model.M, model.K, model.G * model.gyro_scale * spinning, sweep.spin_rad_s,
-                  sweep.freq_rad_s):
+        h.update(self._fingerprint(model)[int(bool(np.any(sweep.spin_rad_s != 0)))].encode())
+        for a in (sweep.spin_rad_s, sweep.freq_rad_s):
             h.update(np.ascontiguousarray(a).tobytes())
-        h.update(repr((model.alpha, model.beta, sweep.kind, sweep.excitations)).encode())
-        key = h.hexdigest()
+        h.update(repr(extra).encode())
+        return h.hexdigest()
+
+    def _schur(self, model: SpindleModel, sweep: Sweep, dofs: np.ndarray) -> np.ndarray:
+        """The rotor condensed onto ``dofs`` at the sweep's points (memoised: tests that share
+        their points — hits in x and in y at one speed — share it)."""
+        key = self._key(model, sweep, dofs.tobytes())
+        if key not in self._schurs:
+            self._schurs[key] = condensed_dynamic_stiffness(model, sweep.spin_rad_s,
+                                                            sweep.freq_rad_s, dofs)
+            if len(self._schurs) > self.cache_size:
+                self._schurs.popitem(last=False)
+        else:
+            self._schurs.move_to_end(key)
+        return self._schurs[key]
+
+    def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
+        key = self._key(model, sweep, sweep.kind, sweep.excitations)
         if key not in self._condensed:
             dofs, out, cpl, F = self.layout(model, sweep)
-            S = condensed_dynamic_stiffness(model, sweep.spin_rad_s, sweep.freq_rad_s, dofs)
+            S = self._schur(model, sweep, dofs)
             try:
                 HF = np.linalg.solve(S, F)
                 HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, cpl],
@@ -188,6 +223,8 @@ class ForwardModel:
             self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
+        else:
+            self._condensed.move_to_end(key)
         return self._condensed[key]
 
     @property

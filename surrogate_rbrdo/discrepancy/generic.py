@@ -104,8 +104,8 @@ def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
     for b, idx in zip(problem.blocks, problem.channel_index, strict=True):
         sw = b.sweep
         Z = bearing_dynamic_stiffness(fm.geometry, fm.effects + extra, fm.theta_bearings,
-                                      sw.spin_rad_s, sw.freq_rad_s, rows.theta,
-                                      rows.damping)[0]
+                                      sw.spin_rad_s, sw.freq_rad_s,
+                                      rows.theta_for(sw.kind), rows.damping)[0]
         A = _system(model, Z, sw)
         if fm.disks:  # recalibrated disk masses
             Zd = fm.disk_impedance(sw, rows.mass, model)[0]
@@ -129,6 +129,8 @@ def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:
         D = np.stack([-np.einsum("xkc,xkl,xl->xc", zc[:, d], dA, q[:, d])
                       for d, dA in _perturbations(model, sw)], axis=-1)     # (X, C, P)
         chain = rows.gain[0, idx] / (1 + 1j * sw.freq_rad_s[:, None] * rows.tau[0, idx])
+        if sw.kind == "impact":
+            chain = chain * rows.force_chain(sw.freq_rad_s)[0][:, None]
         D = D * chain[..., None]
         cols.append(np.stack([D.real, D.imag], axis=2).reshape(-1, D.shape[-1]))
     G = np.concatenate(cols)

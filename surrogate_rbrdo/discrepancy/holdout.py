@@ -2,8 +2,11 @@
 
 Speeds are split *before* anything is fitted: the top ``extrapolate_fraction`` of the 1x
 speeds are held out for extrapolation, and every ``every``-th of the rest (starting in the
-middle of the first stride) for interpolation; everything else trains. Impact tests train in
-full (they have no speeds). The gap is measured on held-out 1x speeds with the unbalance and
+middle of the first stride) for interpolation; everything else trains. Of an impact test (an
+FRF at one speed) every ``every``-th line is held out the same way, for interpolation in
+frequency: an effect the FRFs show more clearly than the 1x response (a small anisotropy, a
+polar-inertia error) must then predict FRF lines it was not fitted to, as a 1x effect must
+predict held-out speeds. The gap is measured on held-out 1x speeds with the unbalance and
 parameters fitted on training speeds only: RMSE and largest modulus of the complex residual
 (µm), and the whitened χ² per real observable.
 """
@@ -28,6 +31,7 @@ class Split:
     train: np.ndarray
     interleaved: np.ndarray
     extrapolated: np.ndarray
+    every: int = 5
 
     def to_dict(self, speeds_rpm: np.ndarray) -> dict:
         return {k: np.asarray(speeds_rpm)[getattr(self, k)].round(1).tolist()
@@ -50,17 +54,21 @@ def split_speeds(n: int, every: int = 5, extrapolate_fraction: float = 0.1) -> S
     ex[n - n_ex:] = True
     inter = np.zeros(n, dtype=bool)
     inter[every // 2:n - n_ex:every] = True
-    return Split(~(ex | inter), inter, ex)
+    return Split(~(ex | inter), inter, ex, every)
 
 
 def masks_for(data: MeasuredData, split: Split, which: str) -> dict[str, np.ndarray]:
     """Per-block masks selecting ``which`` (``train``, ``interleaved``, ``extrapolated``,
-    ``held_out``) of every 1x block; impact blocks are training only."""
+    ``held_out``) of every 1x block; of an impact block every ``split.every``-th line is
+    interleaved (held out), the rest trains."""
     out = {}
     for b in data.blocks:
         n = b.mean.shape[0]
         if b.sweep.kind != "unbalance_1x":
-            out[b.name] = np.full(n, which == "train")
+            inter = np.zeros(n, dtype=bool)
+            inter[split.every // 2::split.every] = True
+            out[b.name] = {"train": ~inter, "interleaved": inter, "held_out": inter,
+                           "extrapolated": np.zeros(n, dtype=bool)}[which]
             continue
         if n != split.train.size:
             raise ValueError(f"block {b.name!r} has {n} speeds, the split {split.train.size}: "

@@ -13,6 +13,15 @@
 * :func:`frf_block` turns averaged H1 FRFs with their coherence into an impact block; the
   variance of each line is Bendat & Piersol's (*Random Data*, 4th ed., eq. 9.90):
   ``var(Re H) = var(Im H) = |H|² (1 − γ²) / (2 n γ²)`` per component for ``n`` averages.
+* :func:`impact_blocks` makes impact blocks from the impact records of a dataset folder: per
+  spin speed and hit direction, each hit's FRF (``rig.frf.h1_frf`` of the one record: its
+  response over its force) at the FRF lines of the test plan, the mean and covariance from
+  the hits (as the 1x phasors from the repeats; no coherence threshold is needed, so the
+  bearing probes' noisier FRFs are kept with their own variance). An FRF taken on the running
+  spindle is a different observable from one at standstill, so each record must carry its
+  ``speed_rpm`` (the format's field; 0 at standstill), and the synchronous response must have
+  been removed from records at speed (subtract the 1x phasor demodulated against the
+  keyphasor; lines near the running frequency are dropped anyway).
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ import numpy as np
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.rig.demod import demodulate
+from surrogate_rbrdo.rig.frf import h1_frf
+from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.rig.store import open_dataset
 
 #: the phasor table's required columns
@@ -136,10 +147,12 @@ def phasor_block(rows: Iterable[Mapping[str, Any]],
 
 def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.ndarray,
               n_averages: int, outputs: Sequence[Channel], excitation: Channel,
-              *, min_coherence: float = 0.9) -> ComplexBlock:
+              *, min_coherence: float = 0.9, speed_rpm: float = 0.0) -> ComplexBlock:
     """An impact block from averaged FRFs ``H`` (n_out, F) with coherence (n_out, F); lines
     where any output's coherence is below ``min_coherence`` are dropped (antiresonances,
-    noise floor: the variance formula is a small-error approximation)."""
+    noise floor: the variance formula is a small-error approximation). ``speed_rpm``: the
+    spin speed the hits were taken at (0: standstill) — an FRF at speed is a different
+    observable (gyroscopics, speed-dependent bearings), so it must be given."""
     H = np.asarray(H, dtype=complex)
     g2 = np.asarray(coherence, dtype=float)
     f = np.asarray(freq_hz, dtype=float)
@@ -152,6 +165,49 @@ def frf_block(name: str, freq_hz: Sequence[float], H: np.ndarray, coherence: np.
     var = np.abs(H[:, keep]) ** 2 * (1 - g2[:, keep]) / (2 * n_averages * g2[:, keep])
     var = np.maximum(var, 1e-12 * np.abs(H[:, keep]) ** 2 + 1e-300)
     cov = var.T[..., None, None] * np.eye(2)
-    return ComplexBlock(name, Sweep.impact(f[keep], (excitation,)), tuple(outputs),
+    return ComplexBlock(name, Sweep.impact(f[keep], (excitation,), speed_rpm), tuple(outputs),
                         H[:, keep].T, cov, max(2 * n_averages - 2, 4),
-                        {"source": "H1 FRF", "n_averages": n_averages})
+                        {"source": "H1 FRF", "n_averages": n_averages,
+                         "speed_rpm": float(speed_rpm)})
+
+
+def impact_blocks(root: str | Path, plan: ImpactPlan | None = None
+                  ) -> tuple[ComplexBlock, ...]:
+    """FRF blocks of every impact record of the dataset folder ``root``: per ``speed_rpm``
+    and hit direction (the force channel's location), the hits' FRFs of every displacement
+    channel (no exponential window) at ``plan``'s lines for that speed (default
+    :class:`~surrogate_rbrdo.rig.impacts.ImpactPlan`), averaged with their covariance from the
+    hits (at least 5). Empty if there are no impact records."""
+    plan = ImpactPlan() if plan is None else plan
+    ds = open_dataset(root)
+    groups: dict[tuple[float, str], list] = {}
+    for row in ds.select(kind="impact"):
+        rec = ds.load(row)
+        speed = 0.0 if not math.isfinite(rec.speed_rpm) else float(rec.speed_rpm)
+        force = next((c for c in rec.channels if c.quantity == "force"), None)
+        if force is None or force.location.direction not in ("x", "y"):
+            raise ValueError(f"{root}: impact record {rec.id!r} needs a force channel with a "
+                             "location direction x or y")
+        groups.setdefault((speed, force.location.direction), []).append(rec)
+    out = []
+    for (speed, d), recs in sorted(groups.items()):
+        if len(recs) < 5:
+            raise ValueError(f"{root}: {len(recs)} impact records at {speed:g} rpm in {d}: "
+                             "need at least 5 hits (the FRF noise is estimated from them)")
+        force = next(c for c in recs[0].channels if c.quantity == "force")
+        probes = [c for c in recs[0].channels if c.quantity == "displacement"]
+        f = plan.lines(speed)
+        hits = []
+        for rec in recs:
+            with np.errstate(divide="ignore", invalid="ignore"):  # pyFRF's H2 of one hit
+                est = h1_frf([rec], [c.name for c in probes], force.name, exp_window_end=None)
+            idx = np.clip(np.searchsorted(est.freq_hz, f), 0, est.freq_hz.size - 1)
+            hits.append(est.H[:, idx].T)
+        outputs = tuple(Channel(c.name, float(c.location.position_mm), c.location.direction)
+                        for c in probes)
+        exc = Channel(f"{force.location.target}_{d}", float(force.location.position_mm), d)
+        out.append(ComplexBlock.from_repeats(
+            f"impact_{d}_{speed:.0f}rpm", Sweep.impact(est.freq_hz[idx], (exc,), speed),
+            outputs, np.array(hits), {"source": "impact records", "n_hits": len(recs),
+                                      "speed_rpm": speed}, runs=False))
+    return tuple(out)

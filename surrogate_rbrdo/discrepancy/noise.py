@@ -33,11 +33,11 @@ runs' own states none of 30.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.nuisance import Parametrisation, Rows
+from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
 from surrogate_rbrdo.discrepancy.problem import Problem
 
 
@@ -196,8 +196,8 @@ def run_offsets(problem: Problem, par: Parametrisation, x: np.ndarray,
             out.append(None)
             continue
         n = a.shape[0]
-        rep = Rows(rows.theta * np.exp(a), *(np.repeat(v, n, 0) for v in (
-            rows.damping, rows.mass, rows.gain, rows.tau)), rows.extras * n)
+        r = rows.repeat(n)
+        rep = replace(r, theta=rows.theta * np.exp(a))
         out.append(problem.responses(rep)[i].mean(axis=0) - center[i][0])
     return out
 

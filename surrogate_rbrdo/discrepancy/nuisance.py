@@ -11,7 +11,17 @@ exactly, recalibrated before any effect is tried:
   SD ``gain_sd``) and a first-order low-pass time constant ``τ = 1/(2π f_c)`` around the
   drivers' nominal bandwidth (prior SD ``delay_sd_s``, which also takes an unknown timing
   skew: ``e^{iωs}/(1 + iωτ) ≈ 1/(1 + iω(τ − s))``), so the model's channel reads
-  ``g/(1 + iωτ) × response``.
+  ``g/(1 + iωτ) × response``;
+* optionally the force channel of impact tests (an FRF is response over force): the hammer's
+  (or force sensor's) gain factor, prior SD ``force_gain_sd`` (its calibration certificate),
+  and its unknown timing skew ``s_f`` (prior SD ``force_delay_sd_s``), so an FRF reads
+  ``g/(1 + iωτ) / (g_f e^{iω s_f}) × H`` — one pair for all impact tests (one hammer, one
+  installation);
+* optionally the thermal state of the run the impact tests were taken in: a stiffness factor
+  per θ bearing on every impact test, relative to the 1x runs' mean state (prior SD
+  ``impact_theta_sd``). A run's preload, hence its bearing stiffness, scatters from run to run
+  (the rig's thermal state); hits taken in one run share it, so FRFs at several speeds of one
+  run keep the speed dependence of the bearings while their common level is free.
 
 Priors enter as pseudo-observations ``(p − μ)/σ`` appended to the residuals. The unbalance is
 not here: it is solved exactly inside (:mod:`.problem`).
@@ -52,6 +62,13 @@ class NuisanceOptions:
         Nominal first-order bandwidth of the probe drivers (None: an ideal chain).
     delay_sd_s : float
         Prior SD of each channel's time constant (0: known, no parameter).
+    force_gain_sd : float
+        Prior SD of the force channel's gain factor (impact tests; 0: known, no parameter).
+    force_delay_sd_s : float
+        Prior SD of the force channel's timing skew (s; 0: known, no parameter).
+    impact_theta_sd : float
+        Prior SD of the impact run's log stiffness factor per θ bearing (0: the impact tests
+        share the 1x runs' θ, no parameter).
     """
 
     theta_bounds: tuple[float, float] = (0.5, 1.5)
@@ -62,6 +79,9 @@ class NuisanceOptions:
     gain_sd: float = 0.0
     bandwidth_hz: float | None = None
     delay_sd_s: float = 0.0
+    force_gain_sd: float = 0.0
+    force_delay_sd_s: float = 0.0
+    impact_theta_sd: float = 0.0
 
     def __post_init__(self) -> None:
         check_choice("nuisance.damping", self.damping, ("common", "per_bearing", "fixed"))
@@ -73,6 +93,9 @@ class NuisanceOptions:
         check_range("nuisance.mass_sd", self.mass_sd, 1e-6, 0.5)
         check_range("nuisance.gain_sd", self.gain_sd, 0.0, 0.5)
         check_positive("nuisance.delay_sd_s", self.delay_sd_s, allow_zero=True)
+        check_range("nuisance.force_gain_sd", self.force_gain_sd, 0.0, 0.5)
+        check_range("nuisance.force_delay_sd_s", self.force_delay_sd_s, 0.0, 1e-3)
+        check_range("nuisance.impact_theta_sd", self.impact_theta_sd, 0.0, 0.5)
         if self.bandwidth_hz is not None:
             check_positive("nuisance.bandwidth_hz", self.bandwidth_hz)
 
@@ -80,10 +103,14 @@ class NuisanceOptions:
     def probe_chain(cls, **kw) -> NuisanceOptions:
         """Eddy-current probe systems as ``docs/rig.md`` states them (API 670 class): gain SD
         2 %, 10 kHz first-order drivers with ±10 % bandwidth and 0.2 µs skew; the tool/holder's
-        mass re-clamped (3 %)."""
+        mass re-clamped (3 %); for impact tests the hammer's calibration (1 %, its certificate),
+        the force channel's skew (0.2 µs) and the impact run's thermal state (stiffness SD
+        10 %: weakly informative, several times the rig's run-to-run scatter)."""
         tau = 1.0 / (2 * np.pi * 1e4)
         return cls(**{"gain_sd": 0.02, "bandwidth_hz": 1e4,
                       "delay_sd_s": math.hypot(0.1 * tau, 0.2e-6),
+                      "force_gain_sd": 0.01, "force_delay_sd_s": 0.2e-6,
+                      "impact_theta_sd": 0.1,
                       "mass_disks": ("tool_holder",), "mass_sd": 0.03, **kw})
 
     @property
@@ -125,6 +152,30 @@ class Rows:
     gain: np.ndarray                      # (B, C)
     tau: np.ndarray                       # (B, C)
     extras: list[tuple[Effect, ...]]
+    force: np.ndarray | None = None       # (B, 2): force channel's gain and skew (s)
+    theta_impact: np.ndarray | None = None  # (B, m): impact run's stiffness factors
+
+    def theta_for(self, kind: str) -> np.ndarray:
+        """The stiffness factors a test of ``kind`` sees (``(B, m)``)."""
+        if kind == "impact" and self.theta_impact is not None:
+            return self.theta * self.theta_impact
+        return self.theta
+
+    def force_chain(self, freq_rad_s: np.ndarray) -> np.ndarray:
+        """``1 / (g_f e^{iω s_f})`` per row and frequency, ``(B, X)``: what an FRF is
+        multiplied by (ones without force parameters)."""
+        w = np.asarray(freq_rad_s, dtype=float)[None, :]
+        if self.force is None:
+            return np.ones((self.theta.shape[0], w.shape[1]), dtype=complex)
+        return np.exp(-1j * w * self.force[:, 1:2]) / self.force[:, :1]
+
+    def repeat(self, n: int) -> Rows:
+        """Every row repeated ``n`` times (``np.repeat`` order)."""
+        rp = [np.repeat(a, n, 0) for a in (self.theta, self.damping, self.mass, self.gain,
+                                             self.tau)]
+        ex = [e for e in self.extras for _ in range(n)]
+        return Rows(*rp, ex, None if self.force is None else np.repeat(self.force, n, 0),
+                    None if self.theta_impact is None else np.repeat(self.theta_impact, n, 0))
 
     def physical(self) -> tuple[np.ndarray, np.ndarray, list, np.ndarray]:
         return self.theta, self.damping, self.extras, self.mass
@@ -139,10 +190,22 @@ class Parametrisation:
     nuisance: NuisanceOptions
     n_channels: int = 0
     slots: tuple[Slot, ...] = ()
+    impacts: bool = False
 
     def with_slots(self, slots: tuple[Slot, ...]) -> Parametrisation:
         return Parametrisation(self.theta_bearings, self.bearings, self.nuisance,
-                               self.n_channels, slots)
+                               self.n_channels, slots, self.impacts)
+
+    @property
+    def force_names(self) -> tuple[str, ...]:
+        """The force channel's parameters (only with impact tests in the data)."""
+        o = self.nuisance
+        if not self.impacts:
+            return ()
+        return (("log_force_gain",) if o.force_gain_sd > 0 else ()) + (
+            ("force_delay",) if o.force_delay_sd_s > 0 else ()) + (
+            tuple(f"log_theta_impact_{b}" for b in self.theta_bearings)
+            if o.impact_theta_sd > 0 else ())
 
     @property
     def sizes(self) -> tuple[int, int, int, int, int]:
@@ -155,7 +218,7 @@ class Parametrisation:
 
     @property
     def n_nuisance(self) -> int:
-        return sum(self.sizes)
+        return sum(self.sizes) + len(self.force_names)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -166,6 +229,7 @@ class Parametrisation:
             self.nuisance.damping]
         out += [f"log_mass_{d}" for d in self.nuisance.mass_disks]
         out += [f"log_gain_{c}" for c in range(ng)] + [f"tau_{c}" for c in range(nk)]
+        out += list(self.force_names)
         for s in self.slots:
             out += [f"{s.label}.{p}" for p in s.free]
         return tuple(out)
@@ -174,9 +238,13 @@ class Parametrisation:
         """Means and SDs of the nuisance parameters (SD inf: no prior)."""
         nt, nd, nm, ng, nk = self.sizes
         o = self.nuisance
-        mu = np.concatenate([np.zeros(nt + nd + nm + ng), np.full(nk, o.tau0)])
+        fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s,
+               **{f"log_theta_impact_{b}": o.impact_theta_sd for b in self.theta_bearings}}
+        mu = np.concatenate([np.zeros(nt + nd + nm + ng), np.full(nk, o.tau0),
+                             np.zeros(len(self.force_names))])
         sd = np.concatenate([np.full(nt + nd, np.inf), np.full(nm, o.mass_sd),
-                             np.full(ng, o.gain_sd), np.full(nk, o.delay_sd_s)])
+                             np.full(ng, o.gain_sd), np.full(nk, o.delay_sd_s),
+                             [fsd[n] for n in self.force_names]])
         return mu, sd
 
     @property
@@ -217,6 +285,8 @@ class Parametrisation:
         o = self.nuisance
         out = [0.05] * nt + [0.3] * nd + [o.mass_sd] * nm + [o.gain_sd] * ng
         out += [max(o.delay_sd_s, 1e-9)] * nk
+        fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s}
+        out += [fsd.get(n, 0.05) for n in self.force_names]
         for s in self.slots:
             c = s.candidate
             for rec, a, b in zip(c.reciprocal, c.lower, c.upper, strict=True):
@@ -265,8 +335,18 @@ class Parametrisation:
         theta = np.exp(parts[0])
         ds = np.ones((B, len(self.bearings))) * (np.exp(parts[1]) if nd else 1.0)
         gain = np.exp(parts[3]) if ng else np.ones((B, self.n_channels))
-        tau = parts[4] if nk else np.full((B, self.n_channels), o.tau0)
+        tau = parts[4][:, :nk] if nk else np.full((B, self.n_channels), o.tau0)
+        force = theta_impact = None
+        if self.force_names:
+            f = parts[4][:, nk:]
+            fn = self.force_names
+            force = np.column_stack([
+                np.exp(f[:, fn.index("log_force_gain")]) if "log_force_gain" in fn
+                else np.ones(B),
+                f[:, fn.index("force_delay")] if "force_delay" in fn else np.zeros(B)])
+            ti = [i for i, n in enumerate(fn) if n.startswith("log_theta_impact_")]
+            theta_impact = np.exp(f[:, ti]) if ti else None
         extras = [tuple(s.candidate.effect(s.scope, v)
                         for s, v in zip(self.slots, self.slot_values(x), strict=True))
                   for x in X]
-        return Rows(theta, ds, np.exp(parts[2]), gain, tau, extras)
+        return Rows(theta, ds, np.exp(parts[2]), gain, tau, extras, force, theta_impact)

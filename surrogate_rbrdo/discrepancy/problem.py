@@ -94,7 +94,8 @@ class Problem:
     def parametrisation(self) -> Parametrisation:
         """The nuisance-only parametrisation of this problem."""
         return Parametrisation(self.forward.theta_bearings, self.forward.bearing_names,
-                               self.nuisance, len(self.forward.channels))
+                               self.nuisance, len(self.forward.channels),
+                               impacts=any(b.sweep.kind == "impact" for b in self.blocks))
 
     @property
     def n_data(self) -> int:
@@ -115,25 +116,28 @@ class Problem:
         """Model responses per block through the measurement chain: complex unit-load
         responses ``(B, X, C, L)`` per complex block, then identified stiffness
         ``(B, X, nb, 2)``. Rows equal in their physical parameters are solved once."""
-        theta, ds, extras, mass = rows.physical()
-        keys = [(theta[i].tobytes(), ds[i].tobytes(), mass[i].tobytes(), extras[i])
-                for i in range(theta.shape[0])]
-        uniq = list(dict.fromkeys(keys))
-        at = {k: i for i, k in enumerate(uniq)}
-        u = np.array([keys.index(k) for k in uniq])
-        inv = np.array([at[k] for k in keys])
+        _, ds, extras, mass = rows.physical()
         out = []
         for b, idx, off in zip(self.blocks, self.channel_index, self.run_offset, strict=True):
+            theta = rows.theta_for(b.sweep.kind)
+            keys = [(theta[i].tobytes(), ds[i].tobytes(), mass[i].tobytes(), extras[i])
+                    for i in range(theta.shape[0])]
+            uniq = list(dict.fromkeys(keys))
+            at = {k: i for i, k in enumerate(uniq)}
+            u = np.array([keys.index(k) for k in uniq])
+            inv = np.array([at[k] for k in keys])
             G = self.forward.response(b.sweep, theta[u], ds[u], [extras[i] for i in u],
                                       mass[u])[inv][:, :, idx]
             if off is not None:
                 G = G + off[None]
             w = b.sweep.freq_rad_s[None, :, None]
             chain = rows.gain[:, None, idx] / (1 + 1j * w * rows.tau[:, None, idx])
+            if b.sweep.kind == "impact":      # an FRF: response over the measured force
+                chain = chain * rows.force_chain(b.sweep.freq_rad_s)[..., None]
             out.append(G * chain[..., None])
         if self.identified is not None:
             ib = self.identified
-            Z = self.forward.bearing_impedance(ib.sweep, theta, ds, extras)
+            Z = self.forward.bearing_impedance(ib.sweep, rows.theta, ds, extras)
             names = self.forward.bearing_names
             j = [names.index(n) for n in ib.bearings]
             out.append(np.stack([Z[:, :, j, 0, 0].real, Z[:, :, j, 1, 1].real], axis=-1))

@@ -103,6 +103,13 @@ RIVAL_SEPARATION = (
     "inertia equals minus a diametral inertia, a cross-coupled stiffness equals a damping ∝ "
     "1/Ω; off the synchronous line they part")
 
+#: what is left when the data already hold impact tests at speed
+RIVAL_SEPARATION_AT_SPEED = (
+    "a larger effect or impact tests at more speeds over a wider range: the data hold FRFs "
+    "off the synchronous line already, and the closest generic change differs from the "
+    "candidate only in its speed law (e.g. a constant stiffness in parallel with a bearing "
+    "whose stiffness already falls with speed, against a further Ω² softening)")
+
 #: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
 DAMPING_EXPONENT = (-1.0, 1.0)
 
@@ -114,13 +121,17 @@ def damping_law_columns(problem: Problem, lin: Linearisation, names: tuple[str, 
     their labels and plausible ranges (:data:`DAMPING_EXPONENT`)."""
     idx = [i for i, n in enumerate(names) if n.startswith("log_damping")]
     scale = np.zeros(problem.n_obs)
+    # one reference speed for every test (the 1x speeds' geometric mean): an impact test at
+    # speed sees the damping at its own speed; at standstill the law does not apply (0)
+    spins = np.concatenate([b.sweep.spin_rad_s for b in problem.blocks
+                            if b.sweep.kind == "unbalance_1x"] or [np.ones(1)])
+    ref = np.exp(np.mean(np.log(spins[spins > 0]))) if np.any(spins > 0) else 1.0
     off = 0
     for b in problem.blocks:
         X, C = b.mean.shape
         spin = np.asarray(b.sweep.spin_rad_s, dtype=float)
-        if np.all(spin > 0):
-            ln = np.log(spin / np.exp(np.mean(np.log(spin))))
-            scale[off:off + 2 * X * C] = np.repeat(ln, 2 * C)
+        ln = np.log(np.where(spin > 0, spin, ref) / ref)
+        scale[off:off + 2 * X * C] = np.repeat(ln, 2 * C)
         off += 2 * X * C
     cols = lin.nuisance[:, idx] * scale[:, None]
     labels = tuple(f"speed law of damping ({names[i].removeprefix('log_damping_')})"

@@ -2,8 +2,11 @@
 operating points (spin speed and response frequency) with their unit loads.
 
 A *sweep* is a list of operating points, each a spin speed ``Ω`` and a response frequency
-``ω``: the steady 1x unbalance response has ``ω = Ω`` at every measured speed, an impact test at
-standstill has ``Ω = 0`` and ``ω`` on the FRF's frequency lines.
+``ω``: the steady 1x unbalance response has ``ω = Ω`` at every measured speed, an impact test has
+``ω`` on the FRF's frequency lines and ``Ω`` the speed it was taken at (0 at standstill). Off
+the synchronous line (``ω ≠ Ω``) a bearing stiffness that varies with speed, the gyroscopic
+coupling and a cross-coupled stiffness leave signatures that no mass, inertia or damping
+change can copy — which the 1x response alone (``ω = Ω``) cannot tell apart.
 """
 
 from __future__ import annotations
@@ -49,7 +52,8 @@ class Sweep:
     ----------
     kind : str
         ``"unbalance_1x"`` (``ω = Ω``; one unit unbalance per plane) or ``"impact"``
-        (``Ω = 0``; one unit force per excitation channel).
+        (``ω`` the FRF lines at one spin speed ``Ω``, 0 at standstill; one unit force per
+        excitation channel).
     spin_rad_s, freq_rad_s : ndarray (X,)
         Spin speed and response frequency of every point.
     excitations : tuple of Channel
@@ -71,6 +75,9 @@ class Sweep:
         if not (np.all(np.isfinite(s)) and np.all(np.isfinite(w)) and np.all(w > 0)
                 and np.all(s >= 0)):
             raise ValueError("sweep.freq_rad_s must be finite and > 0, spin_rad_s finite >= 0")
+        if self.kind == "impact" and np.ptp(s) > 0:
+            raise ValueError(f"sweep.spin_rad_s of an impact test spans {s.min()}..{s.max()}: "
+                             "an FRF is taken at one spin speed (one block per speed)")
         if self.kind == "impact" and not self.excitations:
             raise ValueError("sweep.excitations = () is not allowed for an impact test: give "
                              "at least one excitation channel")
@@ -88,10 +95,27 @@ class Sweep:
         return cls("unbalance_1x", w, w)
 
     @classmethod
-    def impact(cls, freqs_hz: Sequence[float], excitations: Sequence[Channel]) -> Sweep:
-        """Impact test at standstill, FRF lines ``freqs_hz``, forces at ``excitations``."""
+    def impact(cls, freqs_hz: Sequence[float], excitations: Sequence[Channel],
+               speed_rpm: float = 0.0) -> Sweep:
+        """Impact test at spin speed ``speed_rpm`` (default standstill), FRF lines
+        ``freqs_hz``, forces at ``excitations``.
+
+        >>> sw = Sweep.impact([100.0, 200.0], (Channel("tool_x", 0.0, "x"),), 12000.0)
+        >>> sw.spin_rad_s.round(2).tolist(), round(sw.speed_rpm, 6)
+        ([1256.64, 1256.64], 12000.0)
+        """
+        check_finite("sweep.speed_rpm", speed_rpm)
+        if speed_rpm < 0:
+            raise ValueError(f"sweep.speed_rpm = {speed_rpm} is not allowed: must be >= 0")
         w = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
-        return cls("impact", np.zeros_like(w), w, tuple(excitations))
+        return cls("impact", np.full_like(w, float(speed_rpm) * RPM), w, tuple(excitations))
+
+    @property
+    def speed_rpm(self) -> float:
+        """The spin speed (rpm) of an impact test (its points share one); NaN for a 1x sweep."""
+        if self.kind != "impact":
+            return float("nan")
+        return float(self.spin_rad_s[0] / RPM)
 
 
 def with_nodes_at(geometry: SpindleGeometry, positions_mm: Sequence[float]) -> SpindleGeometry:

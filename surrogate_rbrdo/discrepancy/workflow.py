@@ -50,7 +50,7 @@ from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jac
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.rivals import RIVAL_SEPARATION
+from surrogate_rbrdo.discrepancy.rivals import RIVAL_SEPARATION, RIVAL_SEPARATION_AT_SPEED
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
@@ -86,6 +86,13 @@ class DiscrepancyOptions:
     use_identified : bool
         Add identified bearing stiffness to the observables (off by default: it is identified
         from the same records as the 1x phasors, so it would count them twice).
+    use_impacts : bool
+        Whether a measured-data folder's (or a rig campaign's) impact records become FRF
+        blocks, one per spin speed and hit direction (``experiment.data_from_folder``; the
+        impact test plan of ``rig.impacts.ImpactPlan``). Off by default: for gross effects
+        whose modes move far, the candidate search (local, from screened starts) can stop in a
+        local minimum once FRFs are in the data (``docs/discrepancy.md``). Blocks passed to
+        :func:`find_discrepancy` directly are used as given.
     max_nfev : int
         Residual evaluations per candidate fit.
     """
@@ -101,6 +108,7 @@ class DiscrepancyOptions:
     confound_delta: float = 6.63
     holdout_tolerance: float = 10.83
     use_identified: bool = False
+    use_impacts: bool = False
     max_nfev: int = 150
 
     def __post_init__(self) -> None:
@@ -343,5 +351,12 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
         np.asarray(speeds), partial, separating_test(list(conf)) if conf
-        else (RIVAL_SEPARATION if withheld else ""), seconds,
+        else (_rival_separation(data) if withheld else ""), seconds,
         options)
+
+
+def _rival_separation(data: MeasuredData) -> str:
+    """The experiment that would separate a withheld name: off-synchronous data if the data
+    have none (impact tests at speed), else a larger effect or more speeds."""
+    at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
+    return RIVAL_SEPARATION_AT_SPEED if at_speed else RIVAL_SEPARATION

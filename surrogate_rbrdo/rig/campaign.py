@@ -86,7 +86,9 @@ class CampaignOptions:
     ``speeds_rpm``: the steady-state speeds, a list or a :class:`SpeedGrid`; ``runup``:
     ``(start_rpm, end_rpm, duration_s)`` of the run-up (and the reverse run-down if
     ``rundown``), ``None`` or ``()`` (``runup = []`` in a config) for none; impacts: hits per
-    direction (x, y) at the tool tip.
+    direction (x, y) at the tool tip, at each of ``impact_speeds_rpm`` (default standstill
+    only; a speed > 0 is an impact test on the running spindle, ``rig.impacts``), all in the
+    tool's first run.
     ``trial_unbalance``: ``(position_mm, magnitude_kgm, phase_deg)`` of a known trial mass;
     every run then measures each speed twice, without and with it (record ids ``..._trial``,
     label ``trial = 1``, the mass in the record's ``provenance["test_setup"]``): the
@@ -102,6 +104,7 @@ class CampaignOptions:
     rundown: bool = True
     impacts_per_direction: int = 5
     impact_duration_s: float = 1.0
+    impact_speeds_rpm: tuple[float, ...] = (0.0,)
     sensors: SensorSet = SensorSet()
     trial_unbalance: tuple[float, float, float] | None = None
 
@@ -116,6 +119,11 @@ class CampaignOptions:
         for n in ("repeats", "builds", "tools_per_build"):
             check_int(n, getattr(self, n), minimum=1)
         check_int("impacts_per_direction", self.impacts_per_direction, minimum=0)
+        isp = tuple(float(s) for s in self.impact_speeds_rpm)
+        if not isp or len(set(isp)) != len(isp) or min(isp) < 0:
+            raise ValueError(f"impact_speeds_rpm = {list(self.impact_speeds_rpm)} is not "
+                             "allowed: distinct speeds >= 0 rpm (0: standstill), at least one")
+        object.__setattr__(self, "impact_speeds_rpm", isp)
         check_positive("duration_s", self.duration_s)
         check_positive("impact_duration_s", self.impact_duration_s)
         if self.runup == ():
@@ -276,7 +284,7 @@ def _check_run(st, o: CampaignOptions, red: Reduction, b: int, tl: int, r: int) 
 
 def stability_speeds(o: CampaignOptions) -> np.ndarray:
     """Speeds at which the truth must be stable: the campaign's speeds and the ramp's range."""
-    sp = list(o.speeds_rpm)
+    sp = list(o.speeds_rpm) + [s for s in o.impact_speeds_rpm if s > 0]
     if o.runup is not None:
         sp += np.linspace(o.runup[0], o.runup[1], 12).tolist()
     return np.unique(sp)
@@ -318,7 +326,7 @@ def footprint(options: CampaignOptions) -> Footprint:
     per_tool = o.builds * o.tools_per_build
     steady = per_tool * o.repeats * len(o.speeds_rpm) * (1 + (o.trial_unbalance is not None))
     ramps = per_tool * (0 if o.runup is None else 1 + o.rundown)
-    hits = per_tool * 2 * o.impacts_per_direction
+    hits = per_tool * 2 * o.impacts_per_direction * len(o.impact_speeds_rpm)
     meta = 24e3
     disk = (steady * (n_ch * n_s * item + meta + 160.0 * (n_ch - 1))
             + ramps * (n_ch * n_r * item + meta) + hits * (n_ch * n_i * item + meta))
@@ -329,7 +337,8 @@ def footprint(options: CampaignOptions) -> Footprint:
 
 
 def _n_extra(o: CampaignOptions) -> int:
-    per_tool = (0 if o.runup is None else 1 + o.rundown) + 2 * o.impacts_per_direction
+    per_tool = (0 if o.runup is None else 1 + o.rundown) + (
+        2 * o.impacts_per_direction * len(o.impact_speeds_rpm))
     return o.builds * o.tools_per_build * per_tool
 
 
@@ -378,14 +387,20 @@ def _extras(truth, st, options, inst, root_ss, b, tl):
                 model, st.theta, SpeedProfile.ramp(s0, s1, d), options.sensors, inst,
                 np.random.default_rng(_child(root_ss, 4, b, tl, k)), rid=rid,
                 provenance={**base, "seed_key": [4, b, tl, k]})))
-    for di, direction in enumerate(("x", "y")):
-        for h in range(options.impacts_per_direction):
-            rid = f"b{b}_t{tl}_hit_{direction}{h}"
-            out.append((rid, lambda rid=rid, h=h, di=di, direction=direction: impact_record(
-                model, st.theta, options.sensors, inst,
-                np.random.default_rng(_child(root_ss, 5, b, tl, di, h)), rid=rid,
-                provenance={**base, "seed_key": [5, b, tl, di, h]}, direction=direction,
-                duration_s=options.impact_duration_s)))
+    for k, speed in enumerate(options.impact_speeds_rpm):
+        # standstill hits keep their ids and seeds; hits at speed are named by it
+        tag, key = ("", ()) if speed == 0 else (f"_{speed:.0f}rpm", (k,))
+        for di, direction in enumerate(("x", "y")):
+            for h in range(options.impacts_per_direction):
+                rid = f"b{b}_t{tl}_hit_{direction}{h}{tag}"
+                sk = (5, b, tl, di, h) + key
+                out.append((rid, lambda rid=rid, sk=sk, direction=direction, speed=speed:
+                            impact_record(model, st.theta, options.sensors, inst,
+                                          np.random.default_rng(_child(root_ss, *sk)), rid=rid,
+                                          provenance={**base, "seed_key": list(sk)},
+                                          direction=direction,
+                                          duration_s=options.impact_duration_s,
+                                          speed_rpm=speed)))
     return out
 
 

@@ -130,6 +130,9 @@ def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
     for i, v in enumerate(options.speeds_rpm):
         if v > top:
             raise ValueError(f"campaign.speeds_rpm[{i}] = {v:g} is not allowed: {why}")
+    for i, v in enumerate(options.impact_speeds_rpm):
+        if v > top:
+            raise ValueError(f"campaign.impact_speeds_rpm[{i}] = {v:g} is not allowed: {why}")
     if options.runup is not None and options.runup[1] > top:
         raise ValueError(f"campaign.runup = {list(options.runup)} is not allowed: end_rpm {why}")
 

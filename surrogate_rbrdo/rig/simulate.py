@@ -8,7 +8,9 @@
   (slowest σ = ζω ≈ 7.7 1/s for the reference spindle: 2e-17 after 5 s) and is not added.
 * :func:`runup_record` — a speed ramp integrated by ``rig.integrate`` (frozen-matrix segments),
   started from rest 5 s before the ramp at the start speed (the exact jump makes the wait free).
-* :func:`impact_record` — a hammer hit at standstill, integrated exactly at ``oversample`` × the
+* :func:`impact_record` — a hammer hit at the tool, at standstill or at a constant speed (then
+  the record holds the response to the hit only: the synchronous response, which the
+  keyphasor's 1x phasor removes, is left out), integrated exactly at ``oversample`` × the
   sample rate and decimated through a linear-phase anti-aliasing filter.
 
 Each channel then goes through its sensor (gain, driver low-pass, gap), the ADC's timing (known
@@ -237,9 +239,11 @@ def held_force(f: np.ndarray, fs_hz: float) -> np.ndarray:
 def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
                   inst: Installation, rng: np.random.Generator, *, rid: str,
                   provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
-                  t_hit_s: float = 0.05, oversample: int = 4) -> Record:
-    """A hammer hit at the tool tip in ``direction`` at standstill: all probes, the tool's
-    accelerometers and the force."""
+                  t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0) -> Record:
+    """A hammer hit at the tool tip in ``direction`` at ``speed_rpm`` (default standstill):
+    all probes, the tool's accelerometers and the force. At speed the gyroscopic coupling and
+    the bearings at that speed act; the synchronous response is not in the record (module
+    doc)."""
     layout = ProbeLayout.of(model)
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
@@ -250,7 +254,8 @@ def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
     tool = 4 * layout.nodes["tool"]
     fdof = np.array([tool + (direction == "y")])
     acc_dofs = np.array([tool, tool + 1])[:len(sensors.accel_channels)]
-    sim = simulate(model, SpeedProfile.constant(0.0), tf, layout.dofs(sensors), theta=theta,
+    sim = simulate(model, SpeedProfile.constant(speed_rpm), tf, layout.dofs(sensors),
+                   theta=theta,
                    unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs)
     # anti-aliasing: linear-phase FIR, zero phase (the delay is compensated, as in DSA boards)
     # the force the integrator applied is the first-order hold of the fine samples; the
@@ -275,7 +280,7 @@ def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
     specs = sensors.channel_specs("impact", layout.positions_mm)
     specs = specs[:-1] + (_hammer_dir(specs[-1], direction),)
     return Record(rid, "impact", fs, specs, sensors.digitise(np.vstack([volts, av, fv])),
-                  speed_rpm=0.0, provenance={**provenance, "peak_N": peak,
+                  speed_rpm=float(speed_rpm), provenance={**provenance, "peak_N": peak,
                                              "direction": direction})
 
 

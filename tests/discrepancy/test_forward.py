@@ -71,6 +71,29 @@ def test_impact_frf_equals_dense_solve_at_standstill(spindle):
         assert np.allclose(H[i], ref, rtol=0, atol=1e-10 * np.abs(Q).max())
 
 
+@pytest.mark.known_answer
+@pytest.mark.parametrize("rpm", [9000.0, 21000.0])
+def test_impact_frf_equals_dense_solve_at_speed(spindle, rpm):
+    """An impact at spin Ω (ω ≠ Ω): the condensed, Woodbury-coupled FRF equals the dense
+    solve of ``K(Ω) + iω (C(Ω) + Ω G) − ω² M`` with housing, cross-coupling and gyroscopics."""
+    sp, g = spindle
+    fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0))
+    freqs = np.linspace(50.0, 2000.0, 7)
+    th, ds = np.array([[1.05, 0.9]]), np.array([[0.8, 1.3]])
+    H = fm.response(Sweep.impact(freqs, (CHANNELS[1],), rpm), th, ds, [EXTRA])[0, :, :, 0]
+    m = _dense_model(fm, EXTRA, ds[0])
+    M, C, K = m.system_matrices(rpm * RPM, th)
+    for i, f in enumerate(freqs):
+        w = 2 * np.pi * f
+        F = np.zeros(M.shape[0], complex)
+        F[1] = 1.0                                        # tool tip, y
+        Q = np.linalg.solve(K - w**2 * M + 1j * w * C, F)
+        ref = np.array([_at(m, Q, c) for c in CHANNELS])
+        assert np.allclose(H[i], ref, rtol=0, atol=1e-10 * np.abs(Q).max())
+    # at speed the gyroscopic and cross-coupled terms couple x to a y hit
+    assert np.max(np.abs(H[:, 0])) > 1e-3 * np.max(np.abs(H[:, 1]))
+
+
 def test_rows_with_other_effects_are_solved_apart(spindle):
     sp, g = spindle
     fm = ForwardModel(g, sp.effects, CHANNELS[:2], (0.0, 350.0))
@@ -100,6 +123,10 @@ def test_bad_input_names_the_field(spindle):
         Channel("p", 0.0, "z")
     with pytest.raises(ValueError, match="channels"):
         ForwardModel(g, sp.effects, (), (0.0,))
+    with pytest.raises(ValueError, match="speed_rpm"):
+        Sweep.impact([10.0], CHANNELS[:1], -5.0)
+    with pytest.raises(ValueError, match="one spin speed"):
+        Sweep("impact", np.array([0.0, 1.0]), np.array([5.0, 6.0]), CHANNELS[:1])
     fm = ForwardModel(g, sp.effects, CHANNELS[:1], (0.0,))
     with pytest.raises(ValueError, match="damping_scale"):
         fm.response(Sweep.unbalance([1000.0]), np.ones((2, 2)), np.ones((1, 2)))

@@ -61,3 +61,28 @@ def test_bad_input_names_the_block():
         RealBlock("k", np.array([1e3]), ("front",), np.ones((1, 2, 2)), np.ones((1, 1, 2)))
     with pytest.raises(ValueError, match="at least one test"):
         MeasuredData(())
+
+
+def test_held_out_split_interleaves_frf_lines_and_speeds():
+    """Every 5th speed (from the middle of the first stride) and every 5th FRF line are held
+    out for interpolation, the top speeds for extrapolation; impact lines never extrapolate."""
+    from surrogate_rbrdo.discrepancy.holdout import masks_for, split_speeds
+
+    rng = np.random.default_rng(0)
+    ch = (Channel("p", 0.0, "x"),)
+
+    def rec(n):
+        return 1 + 0.1 * (rng.normal(size=(6, n, 1)) + 1j * rng.normal(size=(6, n, 1)))
+
+    one = ComplexBlock.from_repeats("unbalance_1x", Sweep.unbalance(np.arange(1, 21) * 1e3),
+                                    ch, rec(20))
+    hit = ComplexBlock.from_repeats("hit", Sweep.impact(np.arange(1, 13) * 50.0, ch, 9e3), ch,
+                                    rec(12), runs=False)
+    data = MeasuredData((one, hit))
+    split = split_speeds(20)
+    inter = masks_for(data, split, "interleaved")
+    assert np.flatnonzero(inter["hit"]).tolist() == [2, 7]
+    assert np.flatnonzero(inter["unbalance_1x"]).tolist() == [2, 7, 12, 17]
+    assert not masks_for(data, split, "extrapolated")["hit"].any()
+    train = masks_for(data, split, "train")
+    assert np.array_equal(train["hit"], ~inter["hit"])

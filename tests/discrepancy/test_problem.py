@@ -78,3 +78,38 @@ def test_model_vector_and_residuals_agree(model):
     r = np.einsum("nij,nj->ni", W, (y - m[:y.size]).reshape(-1, 2)).reshape(-1)
     assert np.allclose(r, ev.residuals[0, :y.size])
     assert np.allclose(ev.residuals[0, y.size:], -m[y.size:])   # priors: (μ − p)/σ
+
+
+@pytest.mark.known_answer
+def test_impact_run_state_and_hammer_calibration_come_back(model):
+    """1x data at θ and FRFs at standstill and 12 000 rpm from another run (θ e^a) through a
+    hammer with gain 1.01 and skew 0.3 µs: the fit returns θ, the impact run's factors and the
+    hammer's gain and skew (its prior is weak against noise-free data)."""
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 12))
+    theta, run = np.array([0.93, 1.04]), np.array([1.02, 0.985])
+    blocks = list(_data(model, sw, theta).blocks)
+    tool = model.channels[0]
+    rng = np.random.default_rng(3)
+    for rpm in (0.0, 12000.0):
+        si = Sweep.impact(np.linspace(100.0, 1400.0, 14), (tool,), rpm)
+        H = model.response(si, (theta * run)[None], np.ones((1, 2)))[0][..., 0]
+        H = H / (1.01 * np.exp(1j * si.freq_rad_s * 0.3e-6))[:, None]
+        rec = H[None] + 1e-7 * np.abs(H).max() * (rng.normal(size=(8,) + H.shape)
+                                                   + 1j * rng.normal(size=(8,) + H.shape))
+        blocks.append(ComplexBlock.from_repeats(f"impact_{rpm:.0f}", si, model.channels, rec,
+                                                runs=False))
+    data = MeasuredData(tuple(blocks))
+    opts = NuisanceOptions(force_gain_sd=0.01, force_delay_sd_s=0.2e-6, impact_theta_sd=0.1)
+    prob = Problem(model, data, nuisance=opts)
+    par = prob.parametrisation()
+    assert par.force_names == ("log_force_gain", "force_delay", "log_theta_impact_front",
+                               "log_theta_impact_rear")
+    f = fit(prob, par, par.x0(), max_nfev=200)
+    rows = par.rows(f.x[None])
+    assert np.allclose(rows.theta[0], theta, rtol=1e-5)
+    assert np.allclose(rows.theta_impact[0], run, rtol=1e-5)
+    assert rows.force[0, 0] == pytest.approx(1.01, rel=1e-5)
+    assert rows.force[0, 1] == pytest.approx(0.3e-6, rel=1e-3)
+    # without impact tests there are no force parameters
+    assert Problem(model, _data(model, sw, theta), nuisance=opts).parametrisation(
+    ).force_names == ()

@@ -82,3 +82,24 @@ def test_a_rival_needing_an_implausible_size_is_held_to_its_range():
     expected = float((r0 - u) @ (r0 - u)) - float(r1 @ r1)
     assert t.rival == "g1" and t.statistic == pytest.approx(expected, rel=1e-9)
     assert t.passed
+
+
+@pytest.mark.known_answer
+def test_damping_speed_law_refers_every_test_to_one_speed():
+    """``c ∝ (Ω/Ω_ref)^p``: ∂/∂p at p = 0 is ``ln(Ω/Ω_ref)`` times the damping factor's column,
+    with Ω_ref the 1x speeds' geometric mean for every test — an impact block at speed sees the
+    damping at its own speed, at standstill the law does not act."""
+    from surrogate_rbrdo.discrepancy.rivals import damping_law_columns
+    from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+
+    ch = (Channel("t", 0.0, "x"),)
+    one_x = Sweep.unbalance([1000.0, 4000.0])                 # geometric mean 2000 rpm
+    blocks = [SimpleNamespace(mean=np.zeros((2, 1)), sweep=one_x),
+              SimpleNamespace(mean=np.zeros((3, 1)), sweep=Sweep.impact([50, 60, 70], ch, 8000)),
+              SimpleNamespace(mean=np.zeros((1, 1)), sweep=Sweep.impact([50], ch))]
+    prob = SimpleNamespace(blocks=blocks, n_obs=2 * 6 + 1)
+    lin = SimpleNamespace(nuisance=np.ones((13, 2)))
+    cols, labels, ranges = damping_law_columns(prob, lin, ("log_theta_front", "log_damping_f"))
+    expect = np.r_[np.repeat(np.log([0.5, 2.0]), 2), np.full(6, np.log(4.0)), 0, 0, 0]
+    assert np.allclose(cols[:, 0], expect)
+    assert labels == ("speed law of damping (f)",) and ranges.tolist() == [[-1.0, 1.0]]

@@ -155,10 +155,20 @@ def test_the_shipped_configs_build(name):
     assert hidden == ([] if "null" in name else ["housing"])
 
 
+def test_the_impact_config_states_the_test_plan():
+    prep = prepare(ROOT / "experiments" / "discrepancy_impacts.toml")
+    assert prep.plan.options.use_impacts and prep.plan.options.nuisance.force_gain_sd == 0.01
+    camp = prep.plan.rig.rig.options
+    assert camp.impact_speeds_rpm == (0.0, 10000.0, 20000.0)
+    assert camp.impacts_per_direction == 20
+    assert [e.name for e in prep.plan.rig.rig.truth.hidden] == ["cross_coupling"]
+
+
 @pytest.mark.slow
 @pytest.mark.known_answer
 @pytest.mark.parametrize(("name", "first"), [("discrepancy.toml", "housing"),
-                                             ("discrepancy_null.toml", None)])
+                                             ("discrepancy_null.toml", None),
+                                             ("discrepancy_impacts.toml", "cross_coupling")])
 def test_the_shipped_configs_find_what_is_hidden(tmp_path, name, first):
     """The hidden housing stage is named first, the null case says nothing is missing (about
     40 s each). The housing config also names cross_coupling second (docs/discrepancy.md: a

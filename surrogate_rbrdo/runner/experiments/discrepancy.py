@@ -34,7 +34,8 @@ def _campaign(p: DiscrepancyPlan, done: Mapping[str, Any], ctx: StageContext
 
 def analyse(p: DiscrepancyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
     src = done["campaign"]
-    data = data_from_folder(src if isinstance(src, Path) else src.root)
+    data = data_from_folder(src if isinstance(src, Path) else src.root,
+                            impacts=p.options.use_impacts)
     sp = p.spindle
     with ctx.bar("discrepancy: recalibrate, fit the candidates, test", "step") as progress:
         progress(0, 1, f"{len(p.options.library)} candidates")
