@@ -25,6 +25,8 @@ STAGE2_DEFENSIVE = 0.2
 DISCOVERY_TRIES = 2
 #: a tail sample failing deeper than every tangent plane by this distance is unexplained
 LIN_TOL = 0.05
+#: a design point found after sampling is reported when Φ(−β) ≥ LATE_RELEVANCE · P̂
+LATE_RELEVANCE = 0.01
 
 
 class Stages:
@@ -105,6 +107,27 @@ class Stages:
                 pts.append(mirror)
         return pts
 
+    def _late(self, s2: dict, pts: list) -> float:
+        """``β`` of a relevant design point found *after* sampling, NaN if none: one search on
+        the deflected function from the second-stage sample nearest the failure domain among
+        those below every tangent plane (:func:`unexplained`), run only where there is one.
+        The density did not include it, so ``P_f`` may be low by up to ``Φ(−β)``: the caller
+        warns (a branch hidden behind a known one that no first-stage sample revealed)."""
+        if self.dp.status != "converged" or self.dp.beta < 0:
+            return np.nan
+        v, g = s2["v"], s2["g"]
+        deep = unexplained(v, g, pts)
+        if not deep.any():
+            return np.nan
+        j = np.flatnonzero(deep)[np.argmin(g[deep])]
+        dp = design_point_from(self.G, v.shape[1], pts, self.est.form, v[j])
+        if dp is None:
+            return np.nan
+        beta = float(np.linalg.norm(dp.u_star))
+        p = max(float(s2["r"].p), 1e-300)          # of the sampled tail, as Φ(−β)
+        relevant = special.log_ndtr(-beta) >= np.log(LATE_RELEVANCE * p)
+        return beta if relevant else np.nan
+
     def run(self, out: Collect, i: int) -> None:
         """Fill row ``i`` of ``out``."""
         n_out0 = self.G.n_outside
@@ -127,6 +150,7 @@ class Stages:
 
             stages.append(self._stage(v2, logq2, pts))
             khat = pareto_khat(stages[1]["wt"])
+            out.diag["late_beta"][i] = self._late(stages[1], pts)
         # the estimate is the last stage's: given the first stage, the second is a plain IS
         # run from a fixed density (an inverse-variance combination would favour the runs
         # that land low, whose reported errors are small too)
@@ -223,7 +247,7 @@ class Collect:
 
     def __init__(self, p: int, m: int, k: int) -> None:
         self.pf, self.se, self.beta = nan_p(p), nan_p(p), nan_p(p)
-        self.diag = {key: nan_p(p) for key in ("ess", "pareto_k", "other_share",
+        self.diag = {key: nan_p(p) for key in ("ess", "pareto_k", "other_share", "late_beta",
                                                "shell_share", "n_mc_strata")}
         self.nfail, self.ndis, self.nout = (np.zeros(p, int) for _ in range(3))
         self.n_other, self.n_dp = np.zeros(p, int), np.zeros(p, int)

@@ -14,7 +14,9 @@ from scipy import stats
 
 from surrogate_rbrdo.estimators._ce_probe import coverage_ratio, half_space_share
 from surrogate_rbrdo.estimators._gmm import GaussianMixture
+from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.coverage import coverage
+from surrogate_rbrdo.estimators.importance import ImportanceSampling
 from surrogate_rbrdo.estimators.problems import OBLIQUE_NORMALS, series_oblique
 
 pytestmark = pytest.mark.known_answer
@@ -75,3 +77,16 @@ def test_ais_does_not_lose_the_overlapping_branch(dim):
     """ais, 40 seeds: no silent miss (before: 3 of 40 in 15-D)."""
     row = coverage(series_oblique(dim=dim), "ais", {}, n_seeds=40)
     assert row.silent_misses == 0, row
+
+
+def test_is_says_so_when_a_weak_hidden_branch_is_missed():
+    """Branch 2 at β = 3.9 (3 % of P_f): few first-stage samples reveal it, and IS missed it
+    silently in 3 of 40 runs (z ≈ −3) before the check after sampling. Now a run that misses it
+    finds its design point from the second stage and warns: no silent miss in 40."""
+    prob = series_oblique(dim=6, beta=(3.0, 3.9, 3.8))
+    row = coverage(prob, "is", {}, n_seeds=40)
+    assert row.silent_misses == 0 and row.warned >= 1, row
+    with pytest.warns(EstimatorWarning, match="found after sampling"):
+        for seed in range(40):
+            ImportanceSampling().estimate(prob.response, prob.inputs, prob.limit, prob.x,
+                                          rng=np.random.default_rng(seed))
