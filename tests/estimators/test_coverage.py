@@ -4,7 +4,7 @@ exact P_f in at least 95 % of the runs; where it warns, the warnings are counted
 Default suite: 10 seeds on the cheapest problems, among them the ones the review of issue 13
 found silently wrong (two design points in 5-D and 10-D, a failure domain that bends back):
 no silent miss allowed beyond one in ten, and ``is`` must not warn where it finds every design
-point. ``-m slow``: the full table of ``benchmarks/bench_coverage.py`` (19 problems x 40 seeds).
+point. ``-m slow``: the full table of ``benchmarks/bench_coverage.py`` (21 problems x 40 seeds).
 """
 
 import numpy as np
