@@ -191,17 +191,17 @@ def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_pat
     hits (identical: the jackknife sees no scatter) are not flagged and keep an SE."""
     ok = impact_damping(model, _impacts(tmp_path / "ok", reference_truth(), 2001, 3, 0.5))
     assert ok.covariance_kind == "jackknife" and ok.n_replicates == 3
-    assert not ok.lack_of_fit["flagged"], ok.lack_of_fit
+    assert not ok.lack_of_fit.flagged, ok.lack_of_fit
     hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
                                       "k_r_Nm_per_rad": 5e6}])
     recs = _impacts(tmp_path / "bad", hidden, 2001, 3, 0.5)
     with pytest.warns(UserWarning, match="lack of fit"):
         bad = impact_damping(model, recs)
-    assert bad.lack_of_fit["flagged"] and bad.to_dict()["lack_of_fit"]["flagged"]
+    assert bad.lack_of_fit.flagged and bad.to_dict()["lack_of_fit"]["flagged"]
     # noise-free hits are identical: no scatter to refer to, the model's accuracy floor holds
     nf = impact_damping(model, _impacts(tmp_path / "nf", reference_truth(), 2001, 3, 0.5,
                                         SensorSet(noise=False)))
-    assert not nf.lack_of_fit["flagged"] and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
+    assert not nf.lack_of_fit.flagged and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
 
 
 @pytest.mark.slow
