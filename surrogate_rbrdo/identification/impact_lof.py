@@ -2,8 +2,9 @@
 scatter and its threshold, and the jackknife covariance's floor
 (:func:`~surrogate_rbrdo.identification.impact.jackknife` computes them).
 
->>> ImpactLackOfFit(1.2, 500, 4, 13.3, 0.01, False, 3).to_dict()["flagged"]
-False
+>>> lof = ImpactLackOfFit(1.2, 500, 4, 15.0, 0.01, (3e-7, -2e-7), 1.5, 10.6, False, 3)
+>>> lof.to_dict()["delays_s"], lof.flagged
+([3e-07, -2e-07], False)
 """
 
 from __future__ import annotations
@@ -29,20 +30,51 @@ def _at_least(model: np.ndarray, jk: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ImpactLackOfFit:
-    """The lack-of-fit test of an impact fit: ``chi2_dof`` against ``threshold`` (the
-    ``1 − level`` quantile of ``F(dof, variance_dof)``, or a fixed one), ``hits`` the
-    jackknife's replicates."""
+    """The model-error tests of an impact fit (:func:`~surrogate_rbrdo.identification.impact.
+    jackknife`).
+
+    ``chi2_dof`` of the FRF residuals against H1's jackknife variance, tested against
+    ``threshold`` (the ``1 − level/2`` quantile of ``F(dof, variance_dof)``, or a fixed one);
+    ``delay_chi2``: the fitted delays' Mahalanobis distance from 0 against the acquisition's
+    stated skew (each channel's SD ``σ_skew``; a delay is the difference of two channels'
+    skews: :func:`delay_test`), tested against ``delay_threshold`` (the ``1 − level/2`` quantile of
+    ``χ²`` with one dof per direction; NaN when not tested) — a gain or delay far outside the
+    chain's specification is the model error absorbed by the nuisance. ``flagged``: either
+    test; ``hits``: the jackknife's replicates.
+    """
 
     chi2_dof: float
     dof: int
     variance_dof: int
     threshold: float
     level: float | None
+    delays_s: tuple[float, ...]
+    delay_chi2: float
+    delay_threshold: float
     flagged: bool
     hits: int
 
     def to_dict(self) -> dict:
-        return dict(vars(self))
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(self).items()}
+
+
+def delay_test(delay_us: np.ndarray, cov_us2: np.ndarray, skew_sd_s: float | None,
+               level: float) -> tuple[float, float]:
+    """``(τ̂ᵀ (Σ_skew + Σ_fit)⁻¹ τ̂, its 1 − level quantile under χ²_nd)`` for the fitted delays
+    ``τ̂`` (µs) of ``nd`` directions with their covariance ``Σ_fit`` (µs²); ``(nan, nan)``
+    without a stated skew. Each direction's delay is its accelerometer channel's skew minus
+    the hammer channel's, one hammer for all directions: ``Σ_skew = σ² (I + 1 1ᵀ)``.
+
+    >>> stat, thr = delay_test(np.array([0.3, -0.2]), np.diag([0.01, 0.01]), 0.2e-6, 0.005)
+    >>> round(stat, 2), round(thr, 2)
+    (3.26, 10.6)
+    """
+    if skew_sd_s is None:
+        return float("nan"), float("nan")
+    nd = delay_us.size
+    sig = (skew_sd_s * 1e6) ** 2 * (np.eye(nd) + np.ones((nd, nd))) + cov_us2
+    stat = float(delay_us @ np.linalg.solve(sig, delay_us))
+    return stat, float(stats.chi2.ppf(1.0 - level, nd))
 
 
 def lack_of_fit_threshold(dof: int, n_hits: int, level: float) -> float:
@@ -60,4 +92,4 @@ def lack_of_fit_threshold(dof: int, n_hits: int, level: float) -> float:
     return float(stats.f.ppf(1.0 - level, dof, 2 * (n_hits - 1)))
 
 
-__all__ = ["ImpactLackOfFit", "lack_of_fit_threshold"]
+__all__ = ["ImpactLackOfFit", "delay_test", "lack_of_fit_threshold"]
