@@ -382,7 +382,7 @@ def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOption
     dof = max(2 * pts.s.size - x.size, 1)
     fixed, level = opts.max_lack_of_fit, opts.lack_of_fit_level / 2   # two tests: Bonferroni
     thr = lack_of_fit_threshold(dof, n, level) if fixed is None else fixed
-    d_stat, d_thr = delay_test(x[-nd:], cov[-nd:, -nd:], opts.skew_sd_s, level)
+    d_stat, d_thr = delay_test(x[-nd:], cov[-nd:, -nd:], opts.skew_sd_s, level, n)
     lof = ImpactLackOfFit(chi2 / dof, dof, 2 * (n - 1), thr, None if fixed else level * 2,
                           tuple((x[-nd:] * DELAY_UNIT_S).tolist()), d_stat, d_thr,
                           bool(chi2 / dof > thr or d_stat > d_thr), n)

