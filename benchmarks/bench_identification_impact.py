@@ -58,9 +58,9 @@ def one_seed(out: Path, seed: int, model) -> dict:
             "c_imp_err": c_imp / true[:, C_COLS] - 1, "c_resp_err": est[:, C_COLS]
             / true[:, C_COLS] - 1, "tool": imp.factor("tool_mass") / float(
                 impacts[0].provenance["truth_draws"]["tool"]["mass_factor"]) - 1,
-            "fit_s": t_fit, "chi2": imp.chi2_dof, "lof": imp.lack_of_fit["chi2_dof"],
-            "flagged": imp.lack_of_fit["flagged"], "n_rep": imp.n_replicates,
-            "threshold": imp.lack_of_fit["threshold"],
+            "fit_s": t_fit, "chi2": imp.chi2_dof, "lof": imp.lack_of_fit.chi2_dof,
+            "flagged": imp.lack_of_fit.flagged, "n_rep": imp.n_replicates,
+            "threshold": imp.lack_of_fit.threshold,
             "eta_se_model": np.sqrt(np.diag(imp.model_covariance))[
                 [imp.names.index(f"{b}_damping") for b in imp.bearings]]}
 

@@ -117,7 +117,7 @@ def with_impact_damping(model: SpindleModel, camp: CampaignResult, keys: Sequenc
                   outside_box=outside)
     prov = {"source": "impact", "installations": {k: d.to_dict() for k, d in dampings.items()},
             "lack_of_fit": sorted(k for k, d in dampings.items()
-                                  if d.lack_of_fit and d.lack_of_fit["flagged"])}
+                                  if d.lack_of_fit and d.lack_of_fit.flagged)}
     u = replace(camp.uncertainty, provenance={**camp.uncertainty.provenance, "damping": prov})
     return replace(camp, identification=new, uncertainty=u,
                    table=campaign_table(new, camp.table["speed_rpm"], camp.table["repeat"],

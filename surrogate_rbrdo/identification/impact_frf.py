@@ -54,9 +54,20 @@ class ImpactOptions:
     covariance : {"jackknife", "model"}
         The factors' covariance: delete-one-hit jackknife (default; at least 3 hits per
         direction, else the model-based one) or ``(JᵀJ)⁻¹ max(χ²/ν, 1)`` from H1's coherence.
-    max_lack_of_fit : float
-        χ²/ν of the fit against the jackknife variance of H1 above which the installation is
-        flagged (a model error), calibrated over rig truths (docs/identification.md §5b).
+    lack_of_fit_level : float
+        False-alarm probability of the model-error tests on a right model (half to each):
+        the threshold of χ²/ν is the ``1 − level/2`` quantile of ``F(ν, 2(n − 1))`` (the
+        fit's residual dof ``ν``
+        over the dof of a complex variance estimated from ``n`` hits: Bartlett's reference for
+        a χ² against an estimated variance, taken as one common estimate — the conservative
+        case; :func:`~surrogate_rbrdo.identification.impact.lack_of_fit_threshold`).
+    max_lack_of_fit : float or None
+        A fixed threshold of χ²/ν instead (``None``, default: from ``lack_of_fit_level``).
+    skew_sd_s : float or None
+        SD of each channel's unknown timing skew as the acquisition states it (the rig's DAQ:
+        0.2 µs, :class:`~surrogate_rbrdo.rig.sensors.DAQModel`): the fitted delays are tested
+        against it (a delay far beyond it is model error the nuisance absorbed); ``None``: not
+        tested. The lack-of-fit and the delay test share ``lack_of_fit_level`` (half each).
     lack_of_fit_floor : float
         Relative FRF misfit never called a model error (an accelerometer's frequency
         response is known to ~0.1 %): floor of the lack-of-fit variance, ``(floor |H|)²``.
@@ -73,7 +84,9 @@ class ImpactOptions:
     exp_window_end: float | None = 0.01
     smooth_bins: int = 21
     covariance: str = "jackknife"
-    max_lack_of_fit: float = 5.0
+    lack_of_fit_level: float = 0.01
+    max_lack_of_fit: float | None = None
+    skew_sd_s: float | None = 0.2e-6
     lack_of_fit_floor: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -89,8 +102,12 @@ class ImpactOptions:
         check_positive("rel_floor", self.rel_floor)
         check_int("smooth_bins", self.smooth_bins, minimum=1)
         check_choice("covariance", self.covariance, ("jackknife", "model"))
-        check_positive("max_lack_of_fit", self.max_lack_of_fit)
+        check_range("lack_of_fit_level", self.lack_of_fit_level, 1e-9, 0.5)
+        if self.max_lack_of_fit is not None:
+            check_positive("max_lack_of_fit", self.max_lack_of_fit)
         check_positive("lack_of_fit_floor", self.lack_of_fit_floor)
+        if self.skew_sd_s is not None:
+            check_positive("skew_sd_s", self.skew_sd_s)
         if self.exp_window_end is not None:
             check_range("exp_window_end", self.exp_window_end, 1e-6, 1.0)
 

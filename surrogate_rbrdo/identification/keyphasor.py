@@ -21,9 +21,12 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+
+from surrogate_rbrdo.rig.records import RecordError
 
 TWO_PI = 2.0 * np.pi
 #: records whose sample positions leave a gap wider than this (in samples) within the sample
@@ -115,9 +118,17 @@ def _dilate(mask_bytes: bytes, k: int) -> np.ndarray:
     return out
 
 
+class PhaseFit(NamedTuple):
+    """A record's refined phase: the offset ``Δ`` (rad), its standard error and the fitted
+    rate ``ρ`` (rad over the half record)."""
+
+    offset: float
+    se: float
+    rate: float
+
+
 def refine_phase(v: np.ndarray, phi: np.ndarray, template: PulseTemplate, *,
-                 search_rad: float = 0.0, iterations: int = 8, rate: bool = False
-                 ) -> tuple[float, float] | tuple[float, float, float]:
+                 search_rad: float = 0.0, iterations: int = 8) -> PhaseFit:
     """Offset ``Δ`` (rad) at the record's middle with ``v ≈ P(φ + Δ + ρ τ)`` (``τ`` the
     normalised time from the middle, ``ρ`` a small rate: the edge-based speed can be off too)
     and its standard error: the true angle is ``φ + Δ`` there, so a phasor demodulated on
@@ -128,7 +139,6 @@ def refine_phase(v: np.ndarray, phi: np.ndarray, template: PulseTemplate, *,
     least-squares objective of a sharp pulse sampled a few times per edge has local minima),
     then Gauss–Newton with steps limited to the scan's resolution. A record whose samples miss
     the pulse's edges gets an infinite standard error (its phase is not determined).
-    ``rate=True`` also returns the fitted rate ``ρ`` (rad over the half record).
     """
     tau = np.linspace(-1.0, 1.0, phi.size)
     near = template.near_pulse(phi, search_rad + 0.02)
@@ -153,7 +163,7 @@ def refine_phase(v: np.ndarray, phi: np.ndarray, template: PulseTemplate, *,
         J = np.column_stack([dP, dP * tau])
         JJ = J.T @ J
         if v.size < 3 or np.linalg.cond(JJ) > 1e12:
-            return (float(p[0]), np.inf, float(p[1])) if rate else (float(p[0]), np.inf)
+            return PhaseFit(float(p[0]), np.inf, float(p[1]))
         step = np.linalg.solve(JJ, J.T @ r)
         p += np.clip(step, -5e-4, 5e-4) if search_rad > 0 else step
         if np.all(np.abs(step) < 1e-9):
@@ -162,16 +172,21 @@ def refine_phase(v: np.ndarray, phi: np.ndarray, template: PulseTemplate, *,
     sigma2 = float(r @ r) / max(v.size - 2, 1)
     cov = sigma2 * np.linalg.inv(JJ)
     se = max(float(np.sqrt(max(cov[0, 0], 0.0))), sd_scan)
-    return (float(p[0]), se, float(p[1])) if rate else (float(p[0]), se)
+    return PhaseFit(float(p[0]), se, float(p[1]))
 
 
-def template_crossing(template: PulseTemplate, polarity: str) -> float:
+def template_crossing(template: PulseTemplate, polarity: str,
+                      source: str = "the records") -> float:
     """Angle (rad, in ``(−π, π]``) where the template's leading edge crosses mid-swing — the
     keyphasor's angular reference (threshold half-way between the 1st and 99th percentiles,
     as :func:`~surrogate_rbrdo.rig.keyphasor.edges_of` takes it): the rising edge of a
     positive pulse, the falling edge of a negative one. Refined on the spline by Newton.
+    A template that does not cross once raises :class:`~surrogate_rbrdo.rig.records.RecordError`
+    naming ``source`` (the records it was folded from).
 
     >>> from scipy.interpolate import CubicSpline
+
+from surrogate_rbrdo.rig.records import RecordError
     >>> x = np.linspace(0.0, TWO_PI, 4097)
     >>> v = 0.5 * (1 + np.tanh(20 * np.sin(x - 0.3)))            # rises through 0.5 at 0.3
     >>> tpl = PulseTemplate(CubicSpline(x, v, bc_type="periodic"), 0, np.zeros(0),
@@ -187,8 +202,9 @@ def template_crossing(template: PulseTemplate, polarity: str) -> float:
     thr = 0.5 * (lo + hi)
     k = np.flatnonzero((v < thr) & (np.roll(v, -1) >= thr))
     if k.size != 1:
-        raise ValueError(f"the pulse template crosses mid-swing upwards {k.size} times per "
-                         "revolution: not one keyphasor pulse")
+        raise RecordError(f"keyphasor pulse template of {source}", "keyphasor",
+                          f"the folded pulse crosses mid-swing upwards {k.size} times per "
+                          "revolution: not one keyphasor pulse")
     sign = -1.0 if polarity == "negative" else 1.0
     x = a[k[0]] + TWO_PI / 65536 * (thr - v[k[0]]) / (v[(k[0] + 1) % 65536] - v[k[0]])
     for _ in range(4):
@@ -196,5 +212,5 @@ def template_crossing(template: PulseTemplate, polarity: str) -> float:
     return float(np.angle(np.exp(1j * x)))
 
 
-__all__ = ["MAX_GAP", "SEARCH_GAP", "SEARCH_RAD", "PulseTemplate", "pulse_template", "refine_phase",
-           "sample_phase_gap", "template_crossing"]
+__all__ = ["MAX_GAP", "SEARCH_GAP", "SEARCH_RAD", "PhaseFit", "PulseTemplate", "pulse_template",
+           "refine_phase", "sample_phase_gap", "template_crossing"]

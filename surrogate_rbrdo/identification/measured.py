@@ -34,6 +34,7 @@ Which excitation the phasors answer (trial-weight differences or a stated unbala
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -241,7 +242,7 @@ def measured_phasors(source: str | Path | Dataset, *, targets: Sequence[str] | N
                           "unknown probe position: identification needs each probe's axial "
                           "position")
     out = _run(ds, rows, channels, n_jobs)
-    shift, phase_sd, note = _refine(out) if refine_keyphasor else (
+    shift, phase_sd, note = _refine(out, [r["file"] for r in rows]) if refine_keyphasor else (
         np.zeros(len(out)), np.zeros(len(out)), "keyphasor phase not refined")
     speed = np.array([float(r["speed_rpm"]) for r in rows])
     X = np.stack([o.X for o in out]) * np.exp(-1j * shift)[:, None]
@@ -300,7 +301,7 @@ SWEEP_TOL = 1e-9
 MAX_SWEEPS = 30
 
 
-def _refine(out: list[_Demodulated], max_template_records: int = 100,
+def _refine(out: list[_Demodulated], files: Sequence[str], max_template_records: int = 100,
             max_sweeps: int = MAX_SWEEPS) -> tuple[np.ndarray, np.ndarray, str]:
     """Keyphasor phase refinement (:mod:`.keyphasor`) of every record whose edges come from
     the sampled keyphasor channel (counter-timed records keep their edges): shifts, standard
@@ -315,6 +316,7 @@ def _refine(out: list[_Demodulated], max_template_records: int = 100,
     is the converged template's mid-swing crossing on its leading edge — the keyphasor's own
     definition of angle 0 — not the mean of the edges that built it. Then every record is
     refitted on the converged template."""
+    check_int("max_sweeps", max_sweeps, minimum=1)
     shift, sd = np.zeros(len(out)), np.zeros(len(out))
     sampled = [i for i, o in enumerate(out) if not o.counter]
     if not sampled:
@@ -330,15 +332,20 @@ def _refine(out: list[_Demodulated], max_template_records: int = 100,
         tpl = pulse_template([out[i].kp.astype(float) for i in pick],
                              [out[i].angles() + d + r * np.linspace(-1.0, 1.0, out[i].kp.size)
                               for i, (d, r) in zip(pick, fit, strict=True)])
-        new = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl,
-                                     rate=True)[::2] for i in pick])
+        new = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl)[::2]
+                        for i in pick])                          # (offset, rate)
         step = float(np.max(np.abs(new[:, 0] - fit[:, 0]))) if sweep > 1 else np.inf
         fit = new
         if step < SWEEP_TOL:
             break
-    zero = template_crossing(tpl, out[pick[0]].polarity)
+    else:
+        warnings.warn(f"keyphasor phase refinement: not converged after max_sweeps = "
+                      f"{max_sweeps} sweeps (last change {step:.1e} rad, tolerance "
+                      f"{SWEEP_TOL:g})", UserWarning, stacklevel=3)
+    zero = template_crossing(tpl, out[pick[0]].polarity,
+                             f"{len(pick)} records ({files[pick[0]]}, …)")
     res = np.array([refine_phase(out[i].kp.astype(float), out[i].angles(), tpl,
-                                 search_rad=SEARCH_RAD if out[i].gap > SEARCH_GAP else 0.0)
+                                 search_rad=SEARCH_RAD if out[i].gap > SEARCH_GAP else 0.0)[:2]
                     for i in sampled])
     shift[sampled], sd[sampled] = res[:, 0] - zero, res[:, 1]
     n_counter = len(out) - len(sampled)

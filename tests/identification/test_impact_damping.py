@@ -5,6 +5,8 @@ build's damping factors, the tool change's mass factor, the run's bearing stiffn
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -16,7 +18,7 @@ from surrogate_rbrdo.identification.rigtruth import record_state, truth_coeffici
 from surrogate_rbrdo.identification.updating import StandstillModel
 from surrogate_rbrdo.rig import CampaignOptions, open_dataset, reference_truth, run_campaign
 from surrogate_rbrdo.rig.records import RecordError
-from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.sensors import AccelerometerModel, HammerModel, SensorSet
 from surrogate_rbrdo.spindle import reference_spindle
 
 TRIAL = (0.0, 5e-5, 0.0)
@@ -179,44 +181,93 @@ def _impacts(path, truth, seed, hits, duration_s=1.0, sensors=None):
     return [ds.load(r) for r in ds.index if r["kind"] == "impact"]
 
 
+def _scaled(scale):
+    """The rig's sensors with the hammer's and the accelerometer's noise scaled by ``scale``
+    (skews, gains and quantisation as by default)."""
+    return SensorSet(hammer=HammerModel(noise_N=0.2 * scale),
+                     accelerometer=AccelerometerModel(noise_rms_ms2=0.00015 * 9.80665 * scale))
+
+
+@pytest.mark.known_answer
+def test_fitted_delays_are_the_rigs_channel_skews_at_low_noise(tmp_path, model):
+    """At 0.03× the rig's hammer and accelerometer noise (3 hits of 0.5 s), where a gain-only
+    fit read the DAQ's unknown per-channel timing skew (0.2 µs) as model error (χ²/ν up to 21)
+    and biased the rear η by −6.5 %: each direction's fitted delay is the truth's skew of the
+    hammer channel minus the accelerometer's (``sensor_installation``) within 0.1 µs, the right
+    model is not flagged, and η is within 3 % (front 0.5 %)."""
+    recs = _impacts(tmp_path, reference_truth(), 6001, 3, 0.5, _scaled(0.03))
+    res = impact_damping(model, recs)
+    skew = recs[0].provenance["sensor_installation"]["skew_s"]
+    for d in ("x", "y"):
+        assert abs(res.factor(f"delay_{d}") - (skew["hammer"] - skew[f"tool_a{d}"])) < 1e-7
+    assert not res.lack_of_fit.flagged, res.lack_of_fit
+    eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
+    assert np.all(np.abs(res.eta_s / eta - 1) < [5e-3, 0.03]), res.eta_s / eta - 1
+
+
 @pytest.mark.known_answer
 def test_lack_of_fit_flags_a_hidden_tool_interface_and_not_a_right_model(tmp_path, model):
-    """At the rig's default noise with 3 hits of 0.5 s per direction: a truth the model can
-    represent (the default build, tool and thermal draws) passes the lack-of-fit test against
-    the hits' own scatter (χ²/ν 0.7–2.1 over 44 rigs with 5 hits of 1 s, 1.0–1.4 with these;
-    docs/identification.md §5b), and a truth with a
-    tool-interface compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad,
-    as ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model
-    error that made η̂ 21 % low on the shipped campaign without anything saying so; noise-free
+    """3 hits of 0.5 s per direction, tests at a 1 % false-alarm level
+    (``lack_of_fit_level``): at the rig's default noise a truth the model can represent (the
+    default build, tool and thermal draws) passes, and a truth with a tool-interface
+    compliance the experimenter's model lacks (k_t = 3e8 N/m, k_r = 5e6 N m/rad, as
+    ``experiments/rig_campaign_trial.toml`` hides) is flagged with a warning — the model error
+    that made η̂ 21 % low on the shipped campaign without anything saying so; noise-free
     hits (identical: the jackknife sees no scatter) are not flagged and keep an SE."""
     ok = impact_damping(model, _impacts(tmp_path / "ok", reference_truth(), 2001, 3, 0.5))
     assert ok.covariance_kind == "jackknife" and ok.n_replicates == 3
-    assert not ok.lack_of_fit["flagged"], ok.lack_of_fit
+    assert not ok.lack_of_fit.flagged, ok.lack_of_fit
     hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
                                       "k_r_Nm_per_rad": 5e6}])
     recs = _impacts(tmp_path / "bad", hidden, 2001, 3, 0.5)
     with pytest.warns(UserWarning, match="lack of fit"):
         bad = impact_damping(model, recs)
-    assert bad.lack_of_fit["flagged"] and bad.to_dict()["lack_of_fit"]["flagged"]
+    assert bad.lack_of_fit.flagged and bad.to_dict()["lack_of_fit"]["flagged"]
     # noise-free hits are identical: no scatter to refer to, the model's accuracy floor holds
     nf = impact_damping(model, _impacts(tmp_path / "nf", reference_truth(), 2001, 3, 0.5,
                                         SensorSet(noise=False)))
-    assert not nf.lack_of_fit["flagged"] and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
+    assert not nf.lack_of_fit.flagged and np.all(nf.eta_rel_se > 0), nf.lack_of_fit
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_model_error_tests_false_alarms_and_power_over_noise_levels(tmp_path, model):
+    """Over 10 rigs (3 hits of 0.5 s) at 0.03×, 1× and 10× the rig's hammer and
+    accelerometer noise: right models are flagged no more often than a 1 % false-alarm level
+    allows (at most 1 of 10 at each level: 2 or more has probability 0.004), and the hidden
+    tool interface is flagged in at least 8 of 10 at the default noise (measured on seeds
+    4001–4012: 12 of 12). At 10× nothing is asserted: neither test has power there (measured
+    1 of 12; docs/identification.md §5b)."""
+    hidden = reference_truth(hidden=[{"name": "tool_interface", "k_t_N_per_m": 3e8,
+                                      "k_r_Nm_per_rad": 5e6}])
+    for label, truth, scale, bound in (("ok", reference_truth(), 0.03, 1),
+                                       ("ok", reference_truth(), 1.0, 1),
+                                       ("ok", reference_truth(), 10.0, 1),
+                                       ("bad", hidden, 1.0, 8)):
+        flags = []
+        for seed in range(7001, 7011):
+            recs = _impacts(tmp_path / f"{label}{scale}_{seed}", truth, seed, 3, 0.5,
+                            _scaled(scale))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                flags.append(impact_damping(model, recs).lack_of_fit.flagged)
+        n = int(np.sum(flags))
+        assert (n <= bound) if label == "ok" else (n >= bound), (label, scale, flags)
 
 
 @pytest.mark.slow
 @pytest.mark.known_answer
 def test_jackknife_standard_error_of_eta_covers_over_seeds(tmp_path, model):
     """The reported SE of η̂ (delete-one-hit jackknife, 5 hits per direction) against the
-    build's true η over 20 random rigs at the default noise: the 95 % t(4) interval covers
-    the truth in at least 70 % of them for each bearing (measured over 24 other seeds: 0.875
-    front, 0.96 rear — 14 or more of 20 at 0.875 has probability 0.99; the model-based SE from
-    H1's coherence covered 0.42 and 0.75)."""
+    build's true η over 20 random rigs at the default noise: the number of rigs whose 95 %
+    t(4) interval covers the truth is not below what a true 95 % coverage gives with
+    probability 1 % (binomial: at least 16 of 20; the model-based SE from H1's coherence
+    covered 0.42 and 0.75 before the delay was fitted)."""
     z = []
     for seed in range(20):
         recs = _impacts(tmp_path / f"s{seed}", reference_truth(), 3000 + seed, 5)
         res = impact_damping(model, recs)
         eta = 4e-6 * np.array(recs[0].provenance["truth_draws"]["build"]["damping_factor"])
         z.append(np.log(res.eta_s / eta) / res.eta_rel_se)
-    cover = np.mean(np.abs(z) <= stats.t.ppf(0.975, 4), axis=0)
-    assert np.all(cover >= 0.7), cover
+    covered = np.sum(np.abs(z) <= stats.t.ppf(0.975, 4), axis=0)
+    assert np.all(stats.binom.cdf(covered, 20, 0.95) >= 0.01), covered
