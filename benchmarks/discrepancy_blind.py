@@ -47,7 +47,11 @@ from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, 
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
-from surrogate_rbrdo.rig.impacts import ImpactPlan
+from surrogate_rbrdo.rig.impacts import ImpactPlan, expected_frfs, sample_frfs
+from surrogate_rbrdo.rig.phasors import expected_phasors, sample_phasors
+from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
+from surrogate_rbrdo.rig.simulate import ProbeLayout
+from surrogate_rbrdo.rig.truth import Truth, Variability
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
@@ -65,8 +69,6 @@ class RigSource:
     impacts: ImpactPlan | None = None
 
     def _parts(self, geometry, effects, noise):
-        from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet  # the rig, if merged
-        from surrogate_rbrdo.rig.truth import Truth, Variability
         f = self.factor[noise]
         var = Variability(thermal_preload_cov=0.08 * f)
         tb = tuple(b.name for b in geometry.bearings if b.name != "magnetic_pull")
@@ -75,8 +77,6 @@ class RigSource:
         return truth, SensorSet(probe=ProbeModel(noise_rms_m=50e-9 * f))
 
     def measure(self, geometry, effects, noise, seed) -> MeasuredData:
-        from surrogate_rbrdo.rig.phasors import sample_phasors
-        from surrogate_rbrdo.rig.simulate import ProbeLayout
         truth, sensors = self._parts(geometry, effects, noise)
         ss = np.random.SeedSequence(seed)
         rng = np.random.default_rng(ss.spawn(1)[0])
@@ -106,7 +106,6 @@ class RigSource:
         """Impact blocks of the plan: per speed and direction the hits of the impact run (the
         run after the 1x runs: its own thermal state), or with ``expected`` (a truth state) the
         noise-free FRFs with the covariance of the means at ``noise``."""
-        from surrogate_rbrdo.rig.impacts import expected_frfs, sample_frfs
         plan = self.impacts
         if plan is None:
             return ()
@@ -135,8 +134,6 @@ class RigSource:
     def expected(self, geometry, effects, noise) -> MeasuredData:
         """Noise-free means of the nominal build; the covariance of the means from 200
         noise-only runs of the nominal truth at this noise level (cached per level)."""
-        from surrogate_rbrdo.rig.phasors import expected_phasors
-        from surrogate_rbrdo.rig.simulate import ProbeLayout
         truth, sensors = self._parts(geometry, effects, noise)
         b = truth.draw_build(np.random.SeedSequence(0))
         b = {**b, "k_factor": [1.0] * len(b["k_factor"]),
