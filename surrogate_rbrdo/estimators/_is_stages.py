@@ -75,8 +75,8 @@ class Stages:
         accounts for: tail samples outside every known half-space (found there by the shell),
         the heaviest first; then samples, failing or not, whose ``G`` lies deeper than every
         design point's tangent plane predicts (:func:`unexplained`: a branch of a series system
-        that overlaps a known one and that no sample reached), the nearest the failure domain
-        first. A search on the deflected function from such a sample, then from the mirror
+        that overlaps a known one and that no sample reached), the most deeply failing (lowest
+        ``G``) first. A search on the deflected function from such a sample, then from the mirror
         image of what it found, while any remain (at most ``DISCOVERY_TRIES`` searches from
         samples: on a failure domain that bends back every search ends in a bulge)."""
         pts = list(self.pts)
@@ -93,7 +93,7 @@ class Stages:
             deep = unexplained(v, g, pts) & ~tried
             if left.any():
                 j = np.flatnonzero(left)[np.argmax(wt[left])]
-            elif deep.any():        # nearest the failure domain first
+            elif deep.any():        # the most deeply failing (lowest G) first
                 j = np.flatnonzero(deep)[np.argmin(g[deep])]
             else:
                 break
@@ -109,8 +109,8 @@ class Stages:
 
     def _late(self, s2: dict, pts: list) -> float:
         """``β`` of a relevant design point found *after* sampling, NaN if none: one search on
-        the deflected function from the second-stage sample nearest the failure domain among
-        those below every tangent plane (:func:`unexplained`), run only where there is one.
+        the deflected function from the most deeply failing (lowest ``G``) second-stage sample
+        among those below every tangent plane (:func:`unexplained`), run only where there is one.
         The density did not include it, so ``P_f`` may be low by up to ``Φ(−β)``: the caller
         warns (a branch hidden behind a known one that no first-stage sample revealed)."""
         if self.dp.status != "converged" or self.dp.beta < 0:

@@ -260,7 +260,20 @@ def union_of_half_spaces(normals: np.ndarray, offsets: np.ndarray) -> float:
     >>> bool(np.isclose(p, 1 - (1 - special.ndtr(-3.0)) ** 2, rtol=1e-9))
     True
     """
+    normals = np.atleast_2d(np.asarray(normals, dtype=float))
+    offsets = np.atleast_1d(np.asarray(offsets, dtype=float))
     n = offsets.size
+    if normals.shape[0] != n:
+        raise ValueError(f"normals has {normals.shape[0]} rows and offsets {n} entries: "
+                         "need one unit normal per offset")
+    norms = np.linalg.norm(normals, axis=1)
+    if not np.allclose(norms, 1.0, atol=1e-9):
+        raise ValueError(f"normals have lengths {np.round(norms, 6).tolist()}: unit normals "
+                         "are required (divide each row by its norm)")
+    gram = normals @ normals.T
+    if n > 1 and np.max(np.abs(gram[np.triu_indices(n, 1)])) > 1.0 - 1e-9:
+        raise ValueError("normals contains parallel or opposite rows: their orthant "
+                         "probabilities are degenerate; merge or split them by hand")
     total = 0.0
     for k in range(1, n + 1):
         for sub in itertools.combinations(range(n), k):

@@ -10,14 +10,18 @@ runs (6-D), and the ais probe judged the found branch 2 covered in 15-D (3 silen
 
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import integrate, stats
 
 from surrogate_rbrdo.estimators._ce_probe import coverage_ratio, half_space_share
 from surrogate_rbrdo.estimators._gmm import GaussianMixture
 from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.coverage import coverage
 from surrogate_rbrdo.estimators.importance import ImportanceSampling
-from surrogate_rbrdo.estimators.problems import OBLIQUE_NORMALS, series_oblique
+from surrogate_rbrdo.estimators.problems import (
+    OBLIQUE_NORMALS,
+    series_oblique,
+    union_of_half_spaces,
+)
 
 pytestmark = pytest.mark.known_answer
 BETA = np.array([3.0, 3.4, 3.8])
@@ -33,7 +37,28 @@ def test_exact_value_by_an_independent_formula():
     u = np.random.default_rng(2).standard_normal((400_000, 6))
     mc = np.mean(prob.response(prob.x, u)[0] > 0.0)
     assert abs(mc - prob.pf_exact[0]) < 4.5 * np.sqrt(prob.pf_exact[0] / 4e5)
-    assert series_oblique(dim=15).pf_exact[0] == pytest.approx(prob.pf_exact[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("dim", [6, 15])
+def test_exact_value_by_one_dimensional_quadrature(dim):
+    """Given ``u₁`` the three branches are independent: branch 1 is ``u₁ > 3``, branch 2
+    ``u₂ > 3.4·√1.25 − 0.5 u₁``, branch 3 ``u₃ + u₄ + u₅ > 7.6 + u₁`` with ``u₃ + u₄ + u₅ ~
+    N(0, 3)``, so ``1 − P_f = ∫_{−∞}^{3} φ(u₁) Φ(3.4√1.25 − 0.5 u₁) Φ((7.6 + u₁)/√3) du₁`` —
+    a formula that shares nothing with the package's inclusion–exclusion."""
+    def safe(u1):
+        return (stats.norm.pdf(u1) * stats.norm.cdf(3.4 * np.sqrt(1.25) - 0.5 * u1)
+                * stats.norm.cdf((7.6 + u1) / np.sqrt(3.0)))
+    ps, _ = integrate.quad(safe, -12.0, 3.0, epsabs=1e-14, epsrel=1e-12)
+    np.testing.assert_allclose(series_oblique(dim=dim).pf_exact[0], 1.0 - ps, rtol=1e-7)
+
+
+def test_union_of_half_spaces_refuses_bad_normals():
+    with pytest.raises(ValueError, match="unit normals"):
+        union_of_half_spaces(2.0 * np.eye(2), np.array([3.0, 3.0]))
+    with pytest.raises(ValueError, match="parallel or opposite"):
+        union_of_half_spaces(np.array([[1.0, 0.0], [-1.0, 0.0]]), np.array([3.0, 3.0]))
+    with pytest.raises(ValueError, match="one unit normal per offset"):
+        union_of_half_spaces(np.eye(2), np.array([3.0, 3.0, 3.0]))
 
 
 @pytest.mark.parametrize("dim", [6, 15])
