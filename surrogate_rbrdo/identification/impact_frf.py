@@ -65,9 +65,11 @@ class ImpactOptions:
         A fixed threshold of χ²/ν instead (``None``, default: from ``lack_of_fit_level``).
     skew_sd_s : float or None
         SD of each channel's unknown timing skew as the acquisition states it (the rig's DAQ:
-        0.2 µs, :class:`~surrogate_rbrdo.rig.sensors.DAQModel`): the fitted delays are tested
-        against it (a delay far beyond it is model error the nuisance absorbed); ``None``: not
-        tested. The lack-of-fit and the delay test share ``lack_of_fit_level`` (half each).
+        0.2 µs, :class:`~surrogate_rbrdo.rig.sensors.DAQModel`; the default is that value: on
+        measured data take it from the DAQ's datasheet or set ``None``): the fitted delays are
+        tested against it (a delay far beyond it is model error the nuisance absorbed);
+        ``None``: not tested. The lack-of-fit and the delay test share ``lack_of_fit_level``
+        (half each).
     lack_of_fit_floor : float
         Relative FRF misfit never called a model error (an accelerometer's frequency
         response is known to ~0.1 %): floor of the lack-of-fit variance, ``(floor |H|)²``.
