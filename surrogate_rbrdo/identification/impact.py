@@ -77,6 +77,7 @@ from surrogate_rbrdo.identification.impact_frf import (
     fit_data,
     force_band_top,
     hit_frfs,
+    hit_groups,
     measured_peaks,
 )
 from surrogate_rbrdo.identification.impact_lof import (
@@ -326,13 +327,6 @@ def _update(up: StandstillModel, frfs, theta, m, band, opts, model):
     return res, pts, sol.x, h
 
 
-def _hit_groups(records: Sequence[Record]) -> tuple[dict[str, list[Record]], int]:
-    by_dir: dict[str, list[Record]] = {}
-    for r in records:
-        by_dir.setdefault(r.channel("hammer").location.direction, []).append(r)
-    return by_dir, min(len(v) for v in by_dir.values())
-
-
 def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOptions,
               res: ImpactDamping, pts: FitPoints, x: np.ndarray, h: np.ndarray, theta, m,
               band) -> ImpactDamping:
@@ -349,7 +343,7 @@ def jackknife(up: StandstillModel, records: Sequence[Record], opts: ImpactOption
     tested against :func:`lack_of_fit_threshold`. Fewer than ``MIN_HITS`` hits in a direction:
     ``res`` unchanged (model-based covariance, no test).
     """
-    by_dir, n = _hit_groups(records)
+    by_dir, n = hit_groups(records)
     if n < MIN_HITS:
         return res
     dirs = sorted(by_dir)

@@ -114,15 +114,23 @@ class ImpactOptions:
             check_range("exp_window_end", self.exp_window_end, 1e-6, 1.0)
 
 
+def hit_groups(records: Sequence[Record]) -> tuple[dict[str, list[Record]], int]:
+    """The impact records by hit direction (the hammer channel's), and the fewest hits of a
+    direction."""
+    by_dir: dict[str, list[Record]] = {}
+    for r in records:
+        by_dir.setdefault(r.channel("hammer").location.direction, []).append(r)
+    return by_dir, min(len(v) for v in by_dir.values())
+
+
 def hit_frfs(records: Sequence[Record], opts: ImpactOptions) -> dict[str, FRFEstimate]:
     """H1 per hit direction, response at the tool in that direction (accelerometer, else a
     displacement probe)."""
-    by_dir: dict[str, list[Record]] = {}
     for r in records:
         if r.kind != "impact" or "hammer" not in r.channel_names:
             raise RecordError(f"record {r.id!r}", "kind/channels",
                               "an impact record with a 'hammer' channel is needed")
-        by_dir.setdefault(r.channel("hammer").location.direction, []).append(r)
+    by_dir, _ = hit_groups(records)
     out = {}
     for d, recs in sorted(by_dir.items()):
         chans = [c for c in recs[0].channels if c.location.target == "tool"
@@ -211,12 +219,12 @@ def fit_data(up: StandstillModel, frfs, theta, m, band, opts, model, bins=None) 
     lo, hi = band
     data, all_modes = [], []
     for di, d in enumerate(sorted(frfs)):
-        modes = up.natural_hz(theta[di], m)
-        modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
-        all_modes.append(modes)
         est = frfs[d]
         f = est.freq_hz
-        if bins is None:
+        if bins is None:            # a replicate's given bins need no modes (no eigensolve)
+            modes = up.natural_hz(theta[di], m)
+            modes = np.unique(np.round(modes[(modes >= lo) & (modes <= hi)], 3))
+            all_modes.append(modes)
             near = np.any(np.abs(f[:, None] / modes[None, :] - 1) <= opts.half_width, axis=1)
             g = np.flatnonzero(near & (est.coherence[0] >= opts.min_coherence) & (f > 0))
         else:
@@ -227,7 +235,7 @@ def fit_data(up: StandstillModel, frfs, theta, m, band, opts, model, bins=None) 
         data.append((2j * np.pi * f[g] + est.exp_decay_per_s, H_all[g], sd[g],
                      np.full(g.size, dof), np.full(g.size, di), g))
     cat = [np.concatenate([x[k] for x in data]) for k in range(6)]
-    return FitPoints(*cat, np.unique(np.concatenate(all_modes)))
+    return FitPoints(*cat, np.unique(np.concatenate(all_modes)) if all_modes else np.empty(0))
 
 
 def frf_sd(H: np.ndarray, coh: np.ndarray, n_avg: int, opts: ImpactOptions) -> np.ndarray:

@@ -48,6 +48,5 @@ def test_impact_at_speed_peaks_at_forward_and_backward_whirl(rpm):
     ft = np.sqrt(2 * K_B / m) / (2 * np.pi)        # cylindrical: the same at every speed
     peak, df = _peak_hz(fm, rpm, 0.97 * ft, 1.03 * ft)
     assert peak == pytest.approx(ft, abs=2 * df)
-    if rpm > 0:   # the split is J_p Ω / J_t, and it is resolved by the FRF lines
-        assert (wf - wb) / (2 * np.pi) == pytest.approx(Jp * Om / Jt / (2 * np.pi), rel=1e-12)
+    if rpm > 0:   # precondition: the split J_p Ω / J_t is resolved by the FRF lines
         assert (wf - wb) / (2 * np.pi) > 50 * df
