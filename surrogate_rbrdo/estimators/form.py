@@ -182,14 +182,8 @@ class FORM:
         """iHL-RF with these options on a limit-state function ``G(u (n, m)) -> (n,)`` that
         counts its calls in ``G.calls`` (``start``, ``stop``: see :func:`ihlrf`), then the
         ``fallback`` where it failed (not for searches with a ``stop`` rule)."""
-        fall = self.fallback == "sqp" and stop is None
         n_iter = self.max_iter if max_iter is None else max_iter
-        dp = ihlrf(G, m, max_iter=min(n_iter, IHLRF_ITER) if fall else n_iter,
-                   tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
-                   fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop,
-                   max_stalls=3 if fall else None)
-        if fall and dp.status == "failed" and np.all(np.isfinite(dp.u_star)):
-            dp = self._fallback(G, m, dp)
+        dp = self._search_once(G, m, n_iter, start, stop)
         if self.check_minimum and stop is None and dp.status == "converged":
             dp = self._descend(G, m, dp, n_iter)
         return dp
@@ -208,22 +202,24 @@ class FORM:
                 return replace(dp, calls=G.calls, message=dp.message + note)
             if k == MAX_RESTARTS:
                 break
-            new = self._restart(G, m, p, dp, n_iter)
+            new = self._search_once(G, m, n_iter, start=(p, dp.g_origin))
             if new.status != "converged" or abs(new.beta) >= abs(dp.beta):
                 break
             dp = new
         return self._not_minimum(G, m, dp, p, sign0)
 
-    def _restart(self, G: Any, m: int, p: np.ndarray, dp: DesignPoint, n_iter: int
-                 ) -> DesignPoint:
-        fall = self.fallback == "sqp"
-        new = ihlrf(G, m, max_iter=min(n_iter, IHLRF_ITER) if fall else n_iter,
-                    tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
-                    fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=(p, dp.g_origin),
-                    max_stalls=3 if fall else None)
-        if fall and new.status == "failed" and np.all(np.isfinite(new.u_star)):
-            new = self._fallback(G, m, new)
-        return new
+    def _search_once(self, G: Any, m: int, n_iter: int,
+                     start: tuple[np.ndarray, float] | None = None,
+                     stop: Callable[[np.ndarray], bool] | None = None) -> DesignPoint:
+        """One iHL-RF search, then the ``fallback`` where it failed (not with a ``stop``)."""
+        fall = self.fallback == "sqp" and stop is None
+        dp = ihlrf(G, m, max_iter=min(n_iter, IHLRF_ITER) if fall else n_iter,
+                   tol_g=self.tol_g, tol_u=self.tol_u, fd_step=self.fd_step,
+                   fd_scheme=self.fd_scheme, beta_max=self.beta_max, start=start, stop=stop,
+                   max_stalls=3 if fall else None)
+        if fall and dp.status == "failed" and np.all(np.isfinite(dp.u_star)):
+            dp = self._fallback(G, m, dp)
+        return dp
 
     def _not_minimum(self, G: Any, m: int, dp: DesignPoint, p: np.ndarray,
                      sign0: float) -> DesignPoint:
