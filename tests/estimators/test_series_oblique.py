@@ -14,9 +14,7 @@ from scipy import integrate, stats
 
 from surrogate_rbrdo.estimators._ce_probe import coverage_ratio, half_space_share
 from surrogate_rbrdo.estimators._gmm import GaussianMixture
-from surrogate_rbrdo.estimators._tail import EstimatorWarning
 from surrogate_rbrdo.estimators.coverage import coverage
-from surrogate_rbrdo.estimators.importance import ImportanceSampling
 from surrogate_rbrdo.estimators.problems import (
     OBLIQUE_NORMALS,
     series_oblique,
@@ -111,7 +109,4 @@ def test_is_says_so_when_a_weak_hidden_branch_is_missed():
     prob = series_oblique(dim=6, beta=(3.0, 3.9, 3.8))
     row = coverage(prob, "is", {}, n_seeds=40)
     assert row.silent_misses == 0 and row.warned >= 1, row
-    with pytest.warns(EstimatorWarning, match="found after sampling"):
-        for seed in range(40):
-            ImportanceSampling().estimate(prob.response, prob.inputs, prob.limit, prob.x,
-                                          rng=np.random.default_rng(seed))
+    assert any("found after sampling" in m for m in row.messages), row.messages
