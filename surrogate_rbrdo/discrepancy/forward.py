@@ -237,12 +237,15 @@ class ForwardModel:
         """Dynamic stiffness of each recalibrated disk's change ``(B, X, nd, 4, 4)``: mass and
         inertias scaled by ``mass`` (B, nd) factors (mass-proportional damping and gyroscopics
         included)."""
-        w = sweep.freq_rad_s[None, :, None]
-        s = sweep.spin_rad_s[None, :, None]
+        return self._disk_impedance(sweep.spin_rad_s, sweep.freq_rad_s, mass, model)
+
+    def _disk_impedance(self, spin: np.ndarray, freq: np.ndarray, mass: np.ndarray,
+                        model: SpindleModel) -> np.ndarray:
+        w = freq[None, :, None]
+        s = spin[None, :, None]
         dm = (mass - 1.0)[:, None, :]                                  # (B, 1, nd)
         a_m = -(w**2) + 1j * w * model.alpha
-        Z = np.zeros(mass.shape[:1] + (sweep.freq_rad_s.size, len(self._disks), 4, 4),
-                     dtype=complex)
+        Z = np.zeros(mass.shape[:1] + (freq.size, len(self._disks), 4, 4), dtype=complex)
         for k, d in enumerate(self._disks):
             m, jd = d.mass_kg * dm[..., k], d.diametral_inertia_kgm2 * dm[..., k]
             jp = d.polar_inertia_kgm2 * dm[..., k] * model.gyro_scale
@@ -269,30 +272,75 @@ class ForwardModel:
         mass : ndarray (B, n_mass), optional
             Factors on the mass and inertias of ``mass_disks`` (default 1).
         """
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        return self.responses((sweep,), (theta,), damping_scale, extras, mass)[0]
+
+    def responses(self, sweeps: Sequence[Sweep], theta: Sequence[np.ndarray],
+                  damping_scale: np.ndarray,
+                  extras: Sequence[tuple[Effect, ...]] | None = None,
+                  mass: np.ndarray | None = None) -> list[np.ndarray]:
+        """:meth:`response` of several sweeps at once, each with its own stiffness factors
+        ``theta[k]`` (B, m) (an impact run's thermal state) and the rows' other parameters in
+        common: per sweep ``(B, X_k, n_channels, n_loads_k)``.
+
+        The same numbers as one :meth:`response` per sweep, computed in one pass: rows that
+        share a rotor are coupled in one batched solve over every sweep's points, and each
+        distinct row effect's bearing impedance is evaluated once per set of stiffness factors
+        over those points (the cost per row is Python's, not arithmetic).
+        """
+        theta = [np.atleast_2d(np.asarray(t, dtype=float)) for t in theta]
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
-        B = theta.shape[0]
+        B = theta[0].shape[0]
         extras = [()] * B if extras is None else [tuple(e) for e in extras]
         mass = np.ones((B, len(self._disks))) if mass is None else np.atleast_2d(mass)
-        if ds.shape != (B, self.n_bearings) or len(extras) != B or mass.shape != (
-                B, len(self._disks)):
-            raise ValueError(f"damping_scale {ds.shape}, extras {len(extras)} rows and mass "
-                             f"{mass.shape}: must be ({B}, {self.n_bearings}), {B} rows and "
+        if len(theta) != len(sweeps) or not sweeps:
+            raise ValueError(f"{len(theta)} theta arrays for {len(sweeps)} sweeps: give one "
+                             "per sweep (at least one sweep)")
+        if any(t.shape[0] != B for t in theta) or ds.shape != (B, self.n_bearings) or len(
+                extras) != B or mass.shape != (B, len(self._disks)):
+            raise ValueError(f"theta {[t.shape for t in theta]}, damping_scale {ds.shape}, "
+                             f"extras {len(extras)} rows and mass {mass.shape}: must have "
+                             f"{B} rows, ({B}, {self.n_bearings}), {B} rows and "
                              f"({B}, {len(self._disks)})")
-        n_load = len(self.planes_mm) if sweep.kind == "unbalance_1x" else len(sweep.excitations)
-        out = np.zeros((B, sweep.freq_rad_s.size, len(self.channels), n_load), dtype=complex)
-        groups: dict[tuple[Effect, ...], list[int]] = {}
+        # sweeps sharing one theta array share its bearing-impedance evaluation
+        kinds: dict[int, list[int]] = {}
+        for k, t in enumerate(theta):
+            kinds.setdefault(id(t), []).append(k)
+        sizes = [s.freq_rad_s.size for s in sweeps]
+        starts = np.concatenate([[0], np.cumsum(sizes)])
+        spin = np.concatenate([s.spin_rad_s for s in sweeps])
+        freq = np.concatenate([s.freq_rad_s for s in sweeps])
+        n_load = [len(self.planes_mm) if s.kind == "unbalance_1x" else len(s.excitations)
+                  for s in sweeps]
+        out = [np.zeros((B, n, len(self.channels), nl), dtype=complex)
+               for n, nl in zip(sizes, n_load, strict=True)]
+        rotors: dict[tuple[Effect, ...], list[int]] = {}
         for i, e in enumerate(extras):
-            groups.setdefault(e, []).append(i)
-        for extra, rows in groups.items():
-            model = self.model(tuple(e for e in extra if acts_on_rotor(e)))
-            cond = self._rotor(model, sweep)
-            Z = bearing_dynamic_stiffness(self.geometry, self.effects + extra,
-                                          self.theta_bearings, sweep.spin_rad_s,
-                                          sweep.freq_rad_s, theta[rows], ds[rows])
-            Zd = self.disk_impedance(sweep, mass[rows], model) if self._disks else None
-            out[rows] = _couple(cond, Z, Zd)
-        if not np.all(np.isfinite(out)):
+            rotors.setdefault(tuple(x for x in e if acts_on_rotor(x)), []).append(i)
+        for rotor, rows in rotors.items():
+            model = self.model(rotor)
+            conds = [self._rotor(model, s) for s in sweeps]
+            Z = np.zeros((len(rows), spin.size, self.n_bearings, 2, 2), dtype=complex)
+            groups: dict[tuple[Effect, ...], list[int]] = {}
+            for j, i in enumerate(rows):
+                groups.setdefault(extras[i], []).append(j)
+            for extra, sub in groups.items():
+                at = np.asarray(rows)[sub]
+                for ks in kinds.values():
+                    pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
+                    Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+                        self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
+                        freq[pts], theta[ks[0]][at], ds[at])
+            Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
+            # one coupled solve per number of loads (the same BLAS calls as sweep by sweep)
+            for nl in sorted(set(n_load)):
+                ks = [k for k in range(len(sweeps)) if n_load[k] == nl]
+                pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
+                q = _couple(_stack([conds[k] for k in ks]), Z[:, pts],
+                            None if Zd is None else Zd[:, pts])
+                at = np.concatenate([[0], np.cumsum([sizes[k] for k in ks])])
+                for j, k in enumerate(ks):
+                    out[k][rows] = q[:, at[j]:at[j + 1]]
+        if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
 
@@ -306,6 +354,15 @@ class ForwardModel:
         return np.stack([bearing_dynamic_stiffness(
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
             sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0] for i, extra in enumerate(extras)])
+
+
+def _stack(conds: list[_Condensed]) -> _Condensed:
+    """Condensed rotors of several sweeps (with equal numbers of loads) as one, along the
+    points."""
+    if len(conds) == 1:
+        return conds[0]
+    return _Condensed(*(np.concatenate([getattr(c, f) for c in conds])
+                        for f in ("H_OF", "H_OP", "H_PP", "H_PF")))
 
 
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:

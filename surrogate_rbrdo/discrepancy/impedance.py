@@ -14,6 +14,7 @@ at standstill needs them apart.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cache
 
 import numpy as np
 
@@ -30,21 +31,24 @@ _NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off"})
 
 def acts_on_rotor(effect: Effect) -> bool:
     """Whether ``effect`` overrides a hook other than the bearing-level ones (then the rotor
-    must be reassembled with it; otherwise the base rotor is reused).
+    must be reassembled with it; otherwise the base rotor is reused). A property of the
+    effect's class, so it is looked up once per class.
 
     >>> from surrogate_rbrdo.spindle.effects import Gyroscopics, SpeedSoftening
     >>> acts_on_rotor(SpeedSoftening(a=0.1)), acts_on_rotor(Gyroscopics(g=0.1))
     (False, True)
     """
+    return _class_acts_on_rotor(type(effect))
+
+
+@cache
+def _class_acts_on_rotor(cls: type) -> bool:
     for name in dir(Effect):
         if name.startswith("_") or name in _NOT_HOOKS or name in BEARING_HOOKS:
             continue
-        if callable(getattr(Effect, name)) and getattr(type(effect), name) is not getattr(
-                Effect, name):
+        if callable(getattr(Effect, name)) and getattr(cls, name) is not getattr(Effect, name):
             return True
     return False
-
-
 
 
 def condensed_dynamic_stiffness(model: SpindleModel, spin: np.ndarray, freq: np.ndarray,

@@ -117,17 +117,23 @@ class Problem:
         responses ``(B, X, C, L)`` per complex block, then identified stiffness
         ``(B, X, nb, 2)``. Rows equal in their physical parameters are solved once."""
         _, ds, extras, mass = rows.physical()
-        out = []
-        for b, idx, off in zip(self.blocks, self.channel_index, self.run_offset, strict=True):
-            theta = rows.theta_for(b.sweep.kind)
-            keys = [(theta[i].tobytes(), ds[i].tobytes(), mass[i].tobytes(), extras[i])
-                    for i in range(theta.shape[0])]
-            uniq = list(dict.fromkeys(keys))
-            at = {k: i for i, k in enumerate(uniq)}
-            u = np.array([keys.index(k) for k in uniq])
-            inv = np.array([at[k] for k in keys])
-            G = self.forward.response(b.sweep, theta[u], ds[u], [extras[i] for i in u],
-                                      mass[u])[inv][:, :, idx]
+        out: list[np.ndarray] = []
+        G_all: list[np.ndarray] = []
+        if self.blocks:
+            # one pass over every block; rows equal in what the blocks see are solved once
+            thetas = {k: rows.theta_for(k) for k in {b.sweep.kind for b in self.blocks}}
+            keys = [(*(t[i].tobytes() for t in thetas.values()), ds[i].tobytes(),
+                     mass[i].tobytes(), extras[i]) for i in range(ds.shape[0])]
+            at: dict = {}
+            inv = np.array([at.setdefault(k, len(at)) for k in keys])
+            u = np.unique(inv, return_index=True)[1]
+            th_u = {k: t[u] for k, t in thetas.items()}
+            G_all = self.forward.responses([b.sweep for b in self.blocks],
+                                           [th_u[b.sweep.kind] for b in self.blocks],
+                                           ds[u], [extras[i] for i in u], mass[u])
+        for b, idx, off, G in zip(self.blocks, self.channel_index, self.run_offset,
+                                  G_all, strict=True):
+            G = G[inv][:, :, idx]
             if off is not None:
                 G = G + off[None]
             w = b.sweep.freq_rad_s[None, :, None]

@@ -130,3 +130,30 @@ def test_bad_input_names_the_field(spindle):
     fm = ForwardModel(g, sp.effects, CHANNELS[:1], (0.0,))
     with pytest.raises(ValueError, match="damping_scale"):
         fm.response(Sweep.unbalance([1000.0]), np.ones((2, 2)), np.ones((1, 2)))
+
+
+@pytest.mark.known_answer
+def test_several_sweeps_in_one_pass_equal_each_sweep_and_row_alone(spindle):
+    """``responses`` (every sweep and row in one pass: rows sharing a rotor coupled together,
+    sweeps with one stiffness array sharing the bearing impedance) gives bit for bit what
+    ``response`` gives sweep by sweep and row by row, with a mass disk, a rotor-acting row
+    effect (gyroscopics), a housing stage and per-sweep stiffness factors."""
+    sp, g = spindle
+    fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0), mass_disks=("tool_holder",))
+    f = np.linspace(50.0, 2000.0, 5)
+    sweeps = [Sweep.unbalance([3000.0, 12000.0, 21000.0])] + [
+        Sweep.impact(f, (CHANNELS[i],), rpm) for rpm in (0.0, 15000.0) for i in (0, 1)]
+    rng = np.random.default_rng(3)
+    th = 1 + 0.2 * rng.random((5, 2))
+    th_impact = th * (1 + 0.05 * rng.random((5, 2)))
+    ds, mass = 1 + 0.3 * rng.random((5, 2)), 1 + 0.05 * rng.random((5, 1))
+    extras = [(), EXTRA[:1], (), EXTRA[1:2], EXTRA]
+    thetas = [th] + [th_impact] * 4
+    got = fm.responses(sweeps, thetas, ds, extras, mass)
+    for s, t, G in zip(sweeps, thetas, got, strict=True):
+        for i in range(5):
+            one = fm.response(s, t[i:i + 1], ds[i:i + 1], [extras[i]], mass[i:i + 1])[0]
+            assert np.array_equal(G[i], one)
+    # the impact sweeps saw their own stiffness factors, not the 1x sweep's
+    other = fm.response(sweeps[1], th[:1], ds[:1], [extras[0]], mass[:1])[0]
+    assert not np.allclose(got[1][0], other, rtol=1e-6, atol=0)
