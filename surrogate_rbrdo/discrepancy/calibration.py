@@ -306,9 +306,9 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
         Wb = (W, wr)
         ew = _apply(Wb, e[..., None])[..., 0]
         Mw = _apply(Wb, np.broadcast_to(M, (B,) + M.shape))
-        N = Mw[..., :p]
-        r = ew - _project(N, ew)
-        U = Mw[..., p:] - _project(N, Mw[..., p:])
+        Q, _ = np.linalg.qr(Mw[..., :p])            # one factorisation for both projections
+        r = ew - _project_on(Q, ew)
+        U = Mw[..., p:] - _project_on(Q, Mw[..., p:])
         gof.append(np.sum(r**2, axis=1))
         struct.append(gp_statistic(r, series, eig))
         Ug = U[..., U.shape[-1] - ng:]
@@ -325,13 +325,13 @@ def linear_statistics(problem: Problem, lin: Linearisation, r: np.ndarray) -> np
     was linearised (data whitening): the same formula as the bootstrap's, so it screens which
     candidates are worth a nonlinear fit."""
     W = _data_whitening(problem)
-    N = _apply(W, lin.nuisance)[None]
-    rr = r[None] - _project(N, r[None])
+    Q, _ = np.linalg.qr(_apply(W, lin.nuisance)[None])
+    rr = r[None] - _project_on(Q, r[None])
     out = np.zeros(len(lin.candidates))
     for k, (c, vs) in enumerate(lin.candidates):
         for v in vs:
             U = _apply(W, v.columns)[None]
-            U = U - _project(N, U)
+            U = U - _project_on(Q, U)
             if U.shape[-1] == 1:
                 u = U[0, :, 0]
                 num = float(u @ rr[0])
@@ -348,10 +348,10 @@ def generic_statistic(problem: Problem, lin: Linearisation, r: np.ndarray) -> fl
     if lin.generic.shape[1] == 0:
         return 0.0
     W = _data_whitening(problem)
-    N = _apply(W, lin.nuisance)[None]
-    rr = r[None] - _project(N, r[None])
+    Q, _ = np.linalg.qr(_apply(W, lin.nuisance)[None])
+    rr = r[None] - _project_on(Q, r[None])
     U = _apply(W, lin.generic)[None]
-    return float(_max_single(U - _project(N, U), rr)[0])
+    return float(_max_single(U - _project_on(Q, U), rr)[0])
 
 
 def _max_single(U: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -364,9 +364,13 @@ def _project(N: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """Batched orthogonal projection of ``Y`` (B, n[, k]) on the columns of ``N`` (B, n, p),
     by Householder QR (the nuisance columns are far from orthogonal — channel gains against
     the unbalance — so normal equations would lose the digits the test needs)."""
+    return _project_on(np.linalg.qr(N)[0], Y)
+
+
+def _project_on(Q: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """:func:`_project` with the orthonormal basis ``Q`` (B, n, p) of the columns given."""
     vec = Y.ndim == 2
     Y = Y[..., None] if vec else Y
-    Q, _ = np.linalg.qr(N)
     out = Q @ (np.swapaxes(Q, -1, -2) @ Y)
     return out[..., 0] if vec else out
 

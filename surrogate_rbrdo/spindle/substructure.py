@@ -153,12 +153,26 @@ def condense_chain(model: SpindleModel, speeds_rpm: np.ndarray,
     sp = np.asarray(speeds_rpm, dtype=float).reshape(-1)
     if sp.size == 0 or not np.all(np.isfinite(sp)) or np.any(sp <= 0):
         raise ValueError(f"speeds_rpm = {sp.tolist()} is not allowed: give finite speeds > 0")
-    aK, aM, aG = (a[:, None, None, None] for a in dynamic_coefficients(model, sp * RPM))
+    return chain_condensation(model, dynamic_coefficients(model, sp * RPM), layout.nodes,
+                              f"at one of the speeds {sp.tolist()} rpm")
+
+
+def chain_condensation(model: SpindleModel,
+                       coefficients: tuple[np.ndarray, np.ndarray, np.ndarray],
+                       nodes: tuple[int, ...], where: str = "", *, with_det: bool = True
+                       ) -> ChainCondensation:
+    """The block elimination of :func:`condense_chain` for any operating points: the rotor
+    ``a_K K + a_M M + a_G G`` with coefficient arrays ``(a_K, a_M, a_G)`` of shape ``(S,)``
+    (:func:`~surrogate_rbrdo.spindle.harmonic.dynamic_coefficients` for ``ω = Ω``; a response
+    frequency apart from the spin, ``1 + iωβ``, ``−ω² + iωα``, ``iωΩ g``, for impact tests),
+    condensed onto all four DOFs of each of the ascending ``nodes``. ``where`` completes the
+    error message; ``with_det=False`` skips the interior determinant (returned as 1)."""
+    aK, aM, aG = (np.asarray(a)[:, None, None, None] for a in coefficients)
     (Kd, Ku, Kl), (Md, Mu, Ml), (Gd, Gu, Gl) = (model.blocks[k] for k in ("K", "M", "G"))
     D = aK * Kd + aM * Md + aG * Gd                  # (S, nn, 4, 4)
     U = aK * Ku + aM * Mu + aG * Gu                  # (S, nn-1, 4, 4): block (i, i+1)
     L = aK * Kl + aM * Ml + aG * Gl                  # block (i+1, i)
-    R = list(layout.nodes)
+    R = list(nodes)
     nn = model.n_nodes
     Dr = {a: D[:, a].copy() for a in R}              # retained diagonal blocks
     off = {}
@@ -192,10 +206,11 @@ def condense_chain(model: SpindleModel, speeds_rpm: np.ndarray,
             Dr[b] = Dr[b] + Dc - D[:, b]
             off[a, b] = (C, Ct)
     except np.linalg.LinAlgError as exc:
-        raise ModelError("condensed_rotor_chain: an interior block is singular at one of the "
-                         f"speeds {sp.tolist()} rpm") from exc
-    r = layout.n_dof
-    S = np.zeros((sp.size, r, r), dtype=complex)
+        raise ModelError(f"condensed_rotor_chain: an interior block is singular {where}"
+                         ) from exc
+    n_pts = D.shape[0]
+    r = 4 * len(R)
+    S = np.zeros((n_pts, r, r), dtype=complex)
     pos = {a: 4 * k for k, a in enumerate(R)}
     for a in R:
         S[:, pos[a]:pos[a] + 4, pos[a]:pos[a] + 4] = Dr[a]
@@ -203,12 +218,12 @@ def condense_chain(model: SpindleModel, speeds_rpm: np.ndarray,
         S[:, pos[a]:pos[a] + 4, pos[b]:pos[b] + 4] = C
         S[:, pos[b]:pos[b] + 4, pos[a]:pos[a] + 4] = Ct
     if not np.all(np.isfinite(S)):
-        raise ModelError(f"condensed_rotor_chain: non-finite stiffness at {sp.tolist()} rpm")
-    if pivots:
+        raise ModelError(f"condensed_rotor_chain: non-finite stiffness {where}")
+    if pivots and with_det:
         sg, la = np.linalg.slogdet(np.stack(pivots))                # (n_interior, S)
         sign, logabs = np.prod(sg, axis=0), la.sum(axis=0)
     else:
-        sign, logabs = np.ones(sp.size, dtype=complex), np.zeros(sp.size)
+        sign, logabs = np.ones(n_pts, dtype=complex), np.zeros(n_pts)
     return ChainCondensation(S, sign, logabs)
 
 
