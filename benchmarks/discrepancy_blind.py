@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import resource
 import time
 from dataclasses import dataclass, replace
 
@@ -261,13 +262,27 @@ def main() -> None:
             fh.close()
     t_grid = time.perf_counter() - t1
     _report(rows)
-    cpu = sum(float(r["cpu_seconds"]) for r in rows)
-    print(f"grid: {t_grid:.0f} s for {len(rows)} scenarios on {args.jobs} jobs "
-          f"({np.mean([r['seconds'] for r in rows]):.1f} s workflow per scenario); "
-          f"total {time.perf_counter() - t0:.0f} s; load average {os.getloadavg()}")
-    print(f"CPU: calibration {c_cal:.0f} s + scenarios {cpu:.0f} s "
-          f"({cpu / len(rows):.2f} s per scenario, data + workflow + baselines); on 2 "
-          f"otherwise idle cores about {(c_cal + cpu / 2) / 60:.1f} min")
+    _timings(rows, args.jobs, t_grid, time.perf_counter() - t0, c_cal)
+
+
+def _timings(rows: list[dict], jobs: int, t_grid: float, t_total: float, c_cal: float
+             ) -> None:
+    """CPU per scenario (which other jobs on the machine do not inflate), the wall time it
+    implies on 2 idle cores (calibration serial, scenarios two at a time) and peak memory."""
+    cpu = np.array([float(r["cpu_seconds"]) for r in rows])
+    print(f"grid: {t_grid:.0f} s wall for {len(rows)} scenarios on {jobs} jobs "
+          f"({np.mean([float(r['seconds']) for r in rows]):.1f} s workflow wall per "
+          f"scenario); total {t_total:.0f} s; load average {os.getloadavg()}")
+    print(f"CPU: calibration {c_cal:.0f} s + scenarios {cpu.sum():.0f} s ({cpu.mean():.2f} s "
+          f"per scenario, median {np.median(cpu):.2f}, max {cpu.max():.2f}; data + workflow + "
+          f"baselines); on 2 otherwise idle cores about {(c_cal + cpu.sum() / 2) / 60:.1f} "
+          f"min; 495 scenarios (the full grid) at this sample's mean about "
+          f"{(c_cal + 495 * cpu.mean() / 2) / 60:.1f} min")
+    rss = [float(r["peak_rss_mb"]) for r in rows if "peak_rss_mb" in r]
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak RSS: this process {own:.0f} MB" + (
+        f", the process(es) running the scenarios at most {max(rss):.0f} MB each"
+        if rss else ""))
 
 
 def _report(rows: list[dict]) -> None:

@@ -28,6 +28,7 @@ the virtual rig's fast path plugs in the same way (``benchmarks/discrepancy_blin
 from __future__ import annotations
 
 import math
+import resource
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
@@ -256,7 +257,8 @@ def score(truth: frozenset[str], outside: bool, absorbed: frozenset[str], verdic
 def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
     """Simulate one scenario, run the workflow and both baselines; one result row
     (``seconds``: the workflow's wall time; ``cpu_seconds``: the process's CPU time for the
-    whole row, which a machine shared with other jobs does not inflate)."""
+    whole row, which a machine shared with other jobs does not inflate; ``peak_rss_mb``: the
+    peak resident memory of the process that ran it so far, a worker's with joblib)."""
     cpu0 = time.process_time()
     data = ctx.source.measure(*ctx.truth(sc.hidden), sc.noise, sc.seed)
     res = find_discrepancy(data, ctx.geometry, ctx.effects, options=ctx.options,
@@ -279,6 +281,7 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
                            if sv != "not_run" else "not_run"),
         "gap_before_chi2": res.gap_before.chi2_dof, "gap_after_chi2": res.gap_after.chi2_dof,
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
+        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
 
 

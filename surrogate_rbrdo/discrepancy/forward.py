@@ -214,13 +214,15 @@ class ForwardModel:
         if key not in self._condensed:
             dofs, out, cpl, F = self.layout(model, sweep)
             S = self._schur(model, sweep, dofs)
+            rhs = np.concatenate([F, np.broadcast_to(np.eye(dofs.size)[:, cpl],
+                                                     S.shape[:1] + (dofs.size, cpl.size))], -1)
             try:
-                HF = np.linalg.solve(S, F)
-                HP = np.linalg.solve(S, np.broadcast_to(np.eye(dofs.size)[:, cpl],
-                                                        S.shape[:1] + (dofs.size, cpl.size)))
+                H = np.linalg.solve(S, rhs)              # one factorisation for both
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
-            self._condensed[key] = _Condensed(HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])
+            HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
+            self._condensed[key] = _Condensed(*(np.ascontiguousarray(a) for a in (
+                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])))
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
         else:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -466,13 +467,23 @@ def _assemble_shaft(z: np.ndarray, sec_idx: np.ndarray, sections: tuple[BeamSect
             emats[e, 1] = _joint_matrix(next(j for j in joints
                                              if abs(j.position_mm * MM - z[e]) < 1e-9))
         else:
-            emats[e] = element_matrices(sec, L, shear=shear, rotary=rotary)
+            emats[e] = _element_matrices(sec, float(L), shear, rotary)
         sl = slice(4 * e, 4 * e + 8)
         M[sl, sl] += emats[e, 0]
         K[sl, sl] += emats[e, 1]
         G[sl, sl] += emats[e, 2]
         mass += sec.rho * sec.area * L
     return M, K, G, emats, mass
+
+
+@lru_cache(maxsize=4096)
+def _element_matrices(sec: BeamSection, L: float, shear: bool, rotary: bool) -> np.ndarray:
+    """:func:`~.element.element_matrices` as one read-only ``(3, 8, 8)`` array, memoised: a
+    model rebuilt with another effect (a candidate's joint, a gyroscopic scale) has the same
+    elements."""
+    out = np.array(element_matrices(sec, L, shear=shear, rotary=rotary))
+    out.flags.writeable = False
+    return out
 
 
 def _add_disks(M: np.ndarray, G: np.ndarray, geometry: SpindleGeometry, z: np.ndarray,
