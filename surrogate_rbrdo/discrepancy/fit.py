@@ -124,13 +124,15 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
     def fun(x: np.ndarray) -> np.ndarray:
         ev = problem.evaluate(par, x[None])
         count[0] += 1
-        cache["x"], cache["r"] = x.copy(), ev.residuals[0]
+        cache["x"], cache["r"], cache["ev"] = x.copy(), ev.residuals[0], ev
         return ev.residuals[0]
 
     def jac(x: np.ndarray) -> np.ndarray:
-        r0 = cache["r"] if np.array_equal(cache.get("x"), x) else None
-        J, n = jacobian(problem, par, x, r0)
+        hit = np.array_equal(cache.get("x"), x)
+        J, n = jacobian(problem, par, x, cache["r"] if hit else None)
         count[0] += n
+        # the solver ends at a point whose Jacobian it has asked for: kept for the result
+        cache["jx"], cache["J"] = (x.copy(), J.copy()) if hit else (None, None)
         return J
 
     if x0.size:
@@ -139,8 +141,12 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
         x = sol.x
     else:
         x = x0
-    ev = problem.evaluate(par, x[None])
-    J, n = jacobian(problem, par, x, ev.residuals[0]) if x.size else (np.zeros((ev.residuals
-                                                                              .shape[1], 0)), 0)
+    if x.size and np.array_equal(cache.get("x"), x) and np.array_equal(cache.get("jx"), x):
+        # the same evaluation and Jacobian as recomputing them here (same rows, same r0)
+        ev, J, n = cache["ev"], cache["J"], -1
+    else:
+        ev = problem.evaluate(par, x[None])
+        J, n = jacobian(problem, par, x, ev.residuals[0]) if x.size else (
+            np.zeros((ev.residuals.shape[1], 0)), 0)
     return Fit(par, x, float(ev.chi2[0]), J, ev, problem.n_obs, x.size + problem.n_inner,
                count[0] + n + 1)

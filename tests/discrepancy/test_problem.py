@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.discrepancy.fit import fit
+from surrogate_rbrdo.discrepancy.fit import fit, jacobian
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
@@ -113,3 +113,18 @@ def test_impact_run_state_and_hammer_calibration_come_back(model):
     # without impact tests there are no force parameters
     assert Problem(model, _data(model, sw, theta), nuisance=opts).parametrisation(
     ).force_names == ()
+
+
+@pytest.mark.known_answer
+def test_the_fit_keeps_the_solvers_last_jacobian_only_where_it_is_the_same(model):
+    """The fit returns the Jacobian the solver asked for at its end point instead of a new
+    one: bit for bit what recomputing it there gives (same rows, same residual)."""
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 9))
+    prob = Problem(model, _data(model, sw, np.array([1.1, 0.9]), noise=1e-9, seed=4))
+    par = prob.parametrisation()
+    f = fit(prob, par, par.x0(), max_nfev=40)
+    ev = prob.evaluate(par, f.x[None])
+    J, _ = jacobian(prob, par, f.x, ev.residuals[0])
+    assert np.array_equal(f.jac, J)
+    assert np.array_equal(f.evaluation.residuals, ev.residuals)
+    assert f.chi2 == float(ev.chi2[0])
