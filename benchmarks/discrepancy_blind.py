@@ -194,7 +194,13 @@ def main() -> None:
                     help="root of the scenarios' seeds (another value: an independent sample)")
     ap.add_argument("--report", nargs="+", default=[],
                     help="only print the rates of earlier runs' --out CSVs, pooled")
+    ap.add_argument("--compare", nargs=2, default=[], metavar=("BEFORE", "AFTER"),
+                    help="compare two runs' --out CSVs of the same scenarios (e.g. two commits): "
+                         "verdicts, names, statistics and CPU")
     args = ap.parse_args()
+    if args.compare:
+        _compare(*args.compare)
+        return
     if args.calibrate_on == "none" and args.source != "rig":
         ap.error("--calibrate-on none is for --source rig (the 1x data without the impacts)")
     if args.report:
@@ -283,6 +289,34 @@ def _timings(rows: list[dict], jobs: int, t_grid: float, t_total: float, c_cal: 
     print(f"peak RSS: this process {own:.0f} MB" + (
         f", the process(es) running the scenarios at most {max(rss):.0f} MB each"
         if rss else ""))
+
+
+def _compare(before: str, after: str) -> None:
+    """Per scenario (class, strength, noise, seed) of both files: whether the answers are the
+    same, the largest relative change of the numbers, and the CPU of each."""
+    def rows(path):
+        with open(path, newline="") as fh:
+            return {(r["class"], r["strength"], r["noise"], r["seed"]): r
+                    for r in csv.DictReader(fh)}
+    a, b = rows(before), rows(after)
+    answers = ("verdict", "names", "outcome", "gp_verdict", "sparse_verdict", "sparse_names")
+    numbers = ("statistic", "p_value", "gap_before_chi2", "gap_after_chi2")
+    keys = [k for k in a if k in b]
+    same, cpu_a, cpu_b = 0, 0.0, 0.0
+    for k in keys:
+        x, y = a[k], b[k]
+        eq = all(x.get(c) == y.get(c) for c in answers)
+        same += eq
+        rel = max((abs(float(x[c]) - float(y[c])) / max(abs(float(x[c])), 1e-300), c)
+                  for c in numbers if c in x and c in y)
+        cpu_a, cpu_b = cpu_a + float(x["cpu_seconds"]), cpu_b + float(y["cpu_seconds"])
+        print(f"{k[0][:34]:34s} {k[1]:9s} {k[2]:8s} {x['verdict']:17s} "
+              f"{'same' if eq else 'DIFFERENT ' + y['verdict']:10s} max rel change "
+              f"{rel[0]:.1e} ({rel[1]}); CPU {float(x['cpu_seconds']):.1f} -> "
+              f"{float(y['cpu_seconds']):.1f} s")
+    n = max(len(keys), 1)
+    print(f"{len(keys)} scenarios in both: {same} with the same answers; CPU {cpu_a:.0f} -> "
+          f"{cpu_b:.0f} s ({cpu_a / n:.2f} -> {cpu_b / n:.2f} s per scenario)")
 
 
 def _report(rows: list[dict]) -> None:

@@ -279,6 +279,7 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
         "sparse_verdict": sv, "sparse_names": "+".join(snames),
         "sparse_outcome": (score(sc.truth_names, sc.outside, absorbed, sv, snames)
                            if sv != "not_run" else "not_run"),
+        "statistic": res.test["statistic"], "p_value": res.test["p_value"],
         "gap_before_chi2": res.gap_before.chi2_dof, "gap_after_chi2": res.gap_after.chi2_dof,
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,

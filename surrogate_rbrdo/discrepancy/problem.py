@@ -241,8 +241,17 @@ KNOWN_DOF = 10**9
 
 def _whitened(r: np.ndarray, W: np.ndarray) -> np.ndarray:
     """Whiten complex residuals ``r`` (B, X, C) with per-cell ``W`` (X, C, 2, 2) → (B, 2XC)."""
-    v = np.stack([r.real, r.imag], axis=-1)
-    return np.einsum("xcij,bxcj->bxci", W, v).reshape(r.shape[0], -1)
+    return _times_2x2(W, np.stack([r.real, r.imag], axis=-1)[..., None])[..., 0].reshape(
+        r.shape[0], -1)
+
+
+def _times_2x2(W: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """``W @ V`` for 2x2 ``W`` (..., 2, 2) and ``V`` (..., 2, k), written out: the same sums
+    of two products as ``einsum``'s, a few times faster for many small cells."""
+    out = np.empty(np.broadcast_shapes(W.shape[:-2], V.shape[:-2]) + (2, V.shape[-1]))
+    for i in (0, 1):
+        out[..., i, :] = W[..., i, 0, None] * V[..., 0, :] + W[..., i, 1, None] * V[..., 1, :]
+    return out
 
 
 def _real_design(G: np.ndarray) -> np.ndarray:
@@ -256,7 +265,7 @@ def _project_unbalance(G: np.ndarray, y: np.ndarray, W: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted LS unbalance ``u`` per row and the whitened residual ``W (y − G u)``."""
     B, X, C, L = G.shape
-    A = np.einsum("xcij,bxcjk->bxcik", W, _real_design(G)).reshape(B, 2 * X * C, 2 * L)
+    A = _times_2x2(W, _real_design(G)).reshape(B, 2 * X * C, 2 * L)
     yw = np.einsum("xcij,xcj->xci", W, np.stack([y.real, y.imag], axis=-1)).reshape(-1)
     Q, R = np.linalg.qr(A)
     coef = np.linalg.solve(R, np.einsum("bnk,n->bk", Q, yw)[..., None])[..., 0]

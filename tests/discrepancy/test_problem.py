@@ -9,7 +9,7 @@ from surrogate_rbrdo.discrepancy.fit import fit, jacobian
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
-from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.problem import Problem, _times_2x2
 from surrogate_rbrdo.discrepancy.sweeps import Sweep
 from surrogate_rbrdo.discrepancy.synthetic import default_channels
 
@@ -128,3 +128,9 @@ def test_the_fit_keeps_the_solvers_last_jacobian_only_where_it_is_the_same(model
     assert np.array_equal(f.jac, J)
     assert np.array_equal(f.evaluation.residuals, ev.residuals)
     assert f.chi2 == float(ev.chi2[0])
+
+
+def test_the_written_out_2x2_products_equal_einsum():
+    rng = np.random.default_rng(5)
+    W, V = rng.normal(size=(7, 3, 2, 2)), rng.normal(size=(4, 7, 3, 2, 5))
+    assert np.array_equal(_times_2x2(W, V), np.einsum("xcij,bxcjk->bxcik", W, V))
