@@ -333,7 +333,8 @@ class ForwardModel:
                         self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
                         freq[pts], theta[ks[0]][at], ds[at])
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
-            # one coupled solve per number of loads (the same BLAS calls as sweep by sweep)
+            # one coupled solve per number of loads (padding loads with zero columns would
+            # change the BLAS kernels, hence the last digits)
             for nl in sorted(set(n_load)):
                 ks = [k for k in range(len(sweeps)) if n_load[k] == nl]
                 pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
