@@ -44,3 +44,27 @@ def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
     col = G[:y1.size, 2 * ne + 2 * nd + fm.node(m, 350.0)]
     fd = (y1 - y0[:y1.size]) / (-eps) * NODE_SPRING_SCALE
     assert np.linalg.norm(fd - col) < 2e-3 * np.linalg.norm(col)
+
+
+@pytest.mark.known_answer
+def test_a_grounded_spring_may_be_negative_only_at_the_motor(spindle):
+    """Passive connections are positive; a negative spring only where the motor's air gap is
+    (the motor rotor's node, 350 mm, and its two neighbours); without a motor disk, anywhere."""
+    from dataclasses import replace
+
+    from surrogate_rbrdo.discrepancy.generic import PLAUSIBLE, node_spring_ranges
+    from surrogate_rbrdo.spindle.assembly import build_model
+
+    sp, g = spindle
+    m = build_model(g, sp.effects)
+    rng_ = node_spring_ranges(m)
+    motor = int(np.argmin(np.abs(m.z - 0.350)))
+    negative = np.flatnonzero(rng_[:, 0] < 0)
+    assert negative.tolist() == [motor - 1, motor, motor + 1]
+    assert np.all(rng_[:, 1] == PLAUSIBLE["node_spring"][1])
+    assert np.all(rng_[np.setdiff1d(np.arange(m.n_nodes), negative), 0] == 0.0)
+    assert all(n not in negative for n in m.bearing_nodes)
+    g2 = replace(g, disks=tuple(replace(d, name=d.name.replace("motor", "drive"))
+                                for d in g.disks))
+    assert np.all(node_spring_ranges(build_model(g2, sp.effects))[:, 0]
+                  == PLAUSIBLE["node_spring"][0])
