@@ -2,17 +2,25 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from surrogate_rbrdo.discrepancy.fit import fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
-from surrogate_rbrdo.discrepancy.generic import NODE_SPRING_SCALE, generic_columns
+from surrogate_rbrdo.discrepancy.generic import (
+    NODE_SPRING_SCALE,
+    PLAUSIBLE,
+    generic_columns,
+    node_spring_ranges,
+)
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.sweeps import Sweep
 from surrogate_rbrdo.discrepancy.synthetic import default_channels
 from surrogate_rbrdo.discrepancy.truth_effects import magnetic_pull
+from surrogate_rbrdo.spindle.assembly import build_model
 
 
 @pytest.mark.known_answer
@@ -50,11 +58,6 @@ def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
 def test_a_grounded_spring_may_be_negative_only_at_the_motor(spindle):
     """Passive connections are positive; a negative spring only where the motor's air gap is
     (the motor rotor's node, 350 mm, and its two neighbours); without a motor disk, anywhere."""
-    from dataclasses import replace
-
-    from surrogate_rbrdo.discrepancy.generic import PLAUSIBLE, node_spring_ranges
-    from surrogate_rbrdo.spindle.assembly import build_model
-
     sp, g = spindle
     m = build_model(g, sp.effects)
     rng_ = node_spring_ranges(m)
