@@ -15,25 +15,18 @@ from surrogate_rbrdo.discrepancy.generic import (
     generic_columns,
     node_spring_ranges,
 )
-from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.sweeps import Sweep
-from surrogate_rbrdo.discrepancy.synthetic import default_channels
 from surrogate_rbrdo.discrepancy.truth_effects import magnetic_pull
 from surrogate_rbrdo.spindle.assembly import build_model
+
+from .conftest import baseline_1x
 
 
 @pytest.mark.known_answer
 def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
     sp, g = spindle
-    ch = default_channels(g)
-    sw = Sweep.unbalance(np.linspace(3000, 22000, 9))
-    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
-    rng = np.random.default_rng(0)
-    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ np.array([5e-6, 5e-6j])
-    rec = y[None] * (1 + 1e-3 * (rng.normal(size=(8,) + y.shape)
-                                 + 1j * rng.normal(size=(8,) + y.shape)))
-    data = MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sw, ch, rec),))
+    fm, data = baseline_1x(spindle, seed=0)
+    ch = data.channels
     prob = Problem(fm, data)
     par = prob.parametrisation()
     f = fit(prob, par, par.x0())

@@ -10,31 +10,24 @@ import pytest
 from surrogate_rbrdo.discrepancy.calibration import linearise
 from surrogate_rbrdo.discrepancy.candidates import library
 from surrogate_rbrdo.discrepancy.fit import fit
-from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
-from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.sweeps import Sweep
 from surrogate_rbrdo.discrepancy.synthetic import default_channels
 from surrogate_rbrdo.spindle.effects import SpeedSoftening
+
+from .conftest import baseline_1x
 
 
 @pytest.mark.known_answer
 def test_a_candidate_column_leaves_the_priors_alone(spindle):
     """A candidate effect changes the data, not the nuisance's prior pseudo-observations: its
-    column is the derivative of the data part (a central difference of the model with the
-    effect added) and zero on the prior rows, even where the fit left the priors off their
-    means (a column carrying ``prior residual / step`` there once swamped the signature)."""
-    sp, g = spindle
-    ch = default_channels(g)
-    sw = Sweep.unbalance(np.linspace(3000, 22000, 9))
-    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
-    rng = np.random.default_rng(3)
-    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ np.array([5e-6, 5e-6j])
-    gain = 1 + 0.04 * np.arange(y.shape[1]) / y.shape[1]          # channels' gains differ
-    rec = y[None] * gain * (1 + 1e-3 * (rng.normal(size=(8,) + y.shape)
-                                        + 1j * rng.normal(size=(8,) + y.shape)))
-    data = MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sw, ch, rec),))
+    column is the derivative of the data part (a second-order one-sided difference of the
+    model with the effect added) and zero on the prior rows, even where the fit left the
+    priors off their means (a column carrying ``prior residual / step`` there once swamped the
+    signature)."""
+    n_ch = len(default_channels(spindle[1]))
+    gain = 1 + 0.04 * np.arange(n_ch) / n_ch                  # the channels' gains differ
+    fm, data = baseline_1x(spindle, seed=3, gain=gain)
     prob = Problem(fm, data, None, NuisanceOptions(gain_sd=0.02))
     par = prob.parametrisation()
     base = fit(prob, par, par.x0())
