@@ -116,12 +116,19 @@ RIVAL_SEPARATION = (
 
 #: what is left when the data already hold impact tests at speed
 RIVAL_SEPARATION_AT_SPEED = (
+    "a larger effect or impact tests at more speeds over a wider range: the data hold FRFs "
+    "off the synchronous line already, and the closest generic change differs from the "
+    "candidate only in its speed law")
+
+#: ... when the closest rival is a (passive, positive) grounded spring: with the bearing's
+#: stiffness factor recalibrated it spans any change ``a + b k(Ω)`` of a bearing's stiffness
+RIVAL_SEPARATION_SPRING = (
     "a thermal soak (hold a speed and repeat the impact tests as the spindle warms: a preload "
     "growth drifts with temperature, a constant stiffness beside the bearing — a seal, a "
-    "bearing row that does not soften — does not), a larger effect, or impact tests at more "
-    "speeds: the data hold FRFs off the synchronous line already, and the closest generic "
-    "change differs from the candidate only in its speed law (with the bearing's stiffness "
-    "factor recalibrated, a constant spring at its node spans any change a + b k(Ω))")
+    "bearing row that does not soften — does not); no excitation separates them, since with "
+    "the bearing's stiffness factor recalibrated a constant spring at its node spans any "
+    "change a + b k(Ω) of that bearing's stiffness")
+
 
 #: plausible range of a bearing damping's speed exponent ``p`` in ``c ∝ Ω^p``
 DAMPING_EXPONENT = (-1.0, 1.0)

@@ -6,8 +6,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.discrepancy import rivals
 from surrogate_rbrdo.discrepancy.calibration import Linearisation
-from surrogate_rbrdo.discrepancy.rivals import rival_test
+from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+from surrogate_rbrdo.discrepancy.workflow import _rival_separation
 
 N_CELLS = 30                      # complex cells: 60 real observations, no priors
 
@@ -89,9 +92,6 @@ def test_damping_speed_law_refers_every_test_to_one_speed():
     """``c ∝ (Ω/Ω_ref)^p``: ∂/∂p at p = 0 is ``ln(Ω/Ω_ref)`` times the damping factor's column,
     with Ω_ref the 1x speeds' geometric mean for every test — an impact block at speed sees the
     damping at its own speed, at standstill the law does not act."""
-    from surrogate_rbrdo.discrepancy.rivals import damping_law_columns
-    from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
-
     ch = (Channel("t", 0.0, "x"),)
     one_x = Sweep.unbalance([1000.0, 4000.0])                 # geometric mean 2000 rpm
     blocks = [SimpleNamespace(mean=np.zeros((2, 1)), sweep=one_x),
@@ -153,3 +153,23 @@ def test_a_one_sided_spring_cannot_mimic_what_needs_it_negative():
         else:
             assert t.statistic == pytest.approx(0.0, abs=1e-8)
         assert t.passed is separable
+
+
+def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
+    """The experiment a withheld name carries: off-synchronous excitation without impact tests
+    at speed; with them, a thermal soak when the closest rival is a grounded spring (it spans a
+    bearing's speed law, no excitation separates it), else a larger effect or more speeds."""
+    ch = (Channel("t", 0.0, "x"),)
+    one_x = SimpleNamespace(sweep=Sweep.unbalance([1000.0, 4000.0]))
+    at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))))
+    standstill = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch))))
+
+    def held(*labels):
+        return tuple(SimpleNamespace(rival=RivalTest(float(i), 9.2, lb, 1.0))
+                     for i, lb in enumerate(labels))
+
+    spring = held("stiffness of shaft element 3", "grounded spring at node 4")
+    assert _rival_separation(standstill, spring) == rivals.RIVAL_SEPARATION
+    assert _rival_separation(at_speed, spring) == rivals.RIVAL_SEPARATION_SPRING
+    assert _rival_separation(at_speed, held("grounded spring at node 4", "mass of disk x")) \
+        == rivals.RIVAL_SEPARATION_AT_SPEED
