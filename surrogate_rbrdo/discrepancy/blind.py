@@ -111,6 +111,7 @@ HIDDEN: dict[str, Hidden] = {
     "gyroscopics": Hidden("gyroscopics", "g", 1.0),
     "unbalance_error": Hidden("unbalance_error", "epsilon", 5.0, {"delta_deg": 30.0}),
     "magnetic_pull": Hidden("magnetic_pull", "k_N_per_m", 1.5e8, truth_only=True),
+    "bearing_seal": Hidden("bearing_seal", "k_N_per_m", 1.5e8, truth_only=True),
     "shaft_stiffness_loss": Hidden("shaft_stiffness_loss", "depth", 0.9,
                                    {"position_mm": 250.0}, truth_only=True),
     "disk_mass_error": Hidden("disk_mass_error", "factor", 3.0, truth_only=True, knob_off=1.0),

@@ -107,7 +107,10 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     if nrow:
         rb = par.rows(x[None])
         rows = replace(rb.repeat(nrow), extras=ex_rows)
-        fc = np.hstack([problem.data_vector(rows, u), np.zeros((nrow, problem.n_prior))])
+        # a candidate leaves the nuisance's prior pseudo-observations as they are at ``x``
+        fc = np.hstack([problem.data_vector(rows, u),
+                        np.broadcast_to(f[0, f.shape[1] - problem.n_prior:],
+                                        (nrow, problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0
     for c, scope, shape, steps in specs:

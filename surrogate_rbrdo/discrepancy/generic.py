@@ -70,16 +70,55 @@ def _perturbations(model, sweep) -> list[tuple[np.ndarray, np.ndarray]]:
 #: some where a shrink-fitted part stiffens it; its mass follows drawn geometry and density,
 #: with unmodelled nuts, spacers and balancing rings adding some; a disk's mass and inertia may
 #: be off by half (a motor rotor's laminations and windings, a holder drawn without its tool);
-#: a grounded spring (seal, coupling, magnetic pull) is a fraction of a bearing's stiffness,
-#: which is of the order of NODE_SPRING_SCALE.
+#: a grounded spring (a seal, a bearing row the model lacks, magnetic pull) is a fraction of a
+#: bearing's stiffness, which is of the order of NODE_SPRING_SCALE. Its sign: see
+#: :func:`node_spring_ranges`.
 PLAUSIBLE = {"element_stiffness": (-0.9, 0.3), "element_mass": (-0.2, 0.3),
              "disk_mass": (-0.5, 0.5), "disk_inertia": (-0.5, 0.5), "node_spring": (-0.5, 0.5)}
+
+#: a disk whose name contains this word is the motor's rotor: the plane of its air gap
+MOTOR_WORD = "motor"
+
+
+def node_spring_ranges(model) -> np.ndarray:
+    """Plausible range ``(n_nodes, 2)`` of a grounded spring at each node (column units).
+
+    Between a spinning shaft and the ground there are bearings, seals and — in a motor spindle
+    — the motor's air gap. A passive mechanical connection (a seal, an elastomer ring, a
+    bearing row the model lacks) stores energy ``½ k x²`` and so has a positive stiffness; a
+    *negative* radial stiffness needs a field doing work, and in a spindle without magnetic
+    bearings that is the motor's unbalanced magnetic pull (Dorrell & Smith 1994; Abele,
+    Altintas & Brecher 2010, §3.3), acting over the rotor's lamination stack. So a spring may
+    be negative only at the motor rotor's node and its two neighbours (the lumped disk stands
+    for a stack of finite length: two elements of the reference spindle, 83 mm, about 1.3
+    shaft diameters); elsewhere it is one-sided, ``[0, hi]``. Without a disk named ``motor…``
+    the air gap's place is unknown and every node keeps both signs. Left out: the small
+    negative direct stiffness a gas labyrinth seal can have (Childs, *Turbomachinery
+    Rotordynamics*, 1993, ch. 5; its force scales with the pressure drop, a spindle's sealing
+    air is a bar or two).
+
+    This matters most at a bearing's own node: a constant spring there, with the bearing's
+    stiffness factor θ recalibrated, spans ``{1, k(Ω)}`` and mimics any change ``a + b k(Ω)``
+    of that bearing's stiffness — a further softening with speed needs a *negative* one (θ up,
+    a constant taken away), which no passive part supplies; a preload growth needs a positive
+    one, which a seal or a non-softening bearing row does (``docs/discrepancy.md``).
+    """
+    lo, hi = PLAUSIBLE["node_spring"]
+    out = np.tile([0.0, hi], (model.n_nodes, 1))
+    motor = [d for d in model.geometry.disks if MOTOR_WORD in d.name.lower()]
+    if not motor:
+        out[:, 0] = lo
+        return out
+    for d in motor:
+        n = int(np.argmin(np.abs(model.z - d.position_mm * 1e-3)))
+        out[max(n - 1, 0):n + 2, 0] = lo
+    return out
 
 
 def generic_labels(model) -> tuple[tuple[str, float, float], ...]:
     """Per generic local parameter, in the column order of :func:`generic_columns` (the order
     :func:`_perturbations` builds them in): its name and plausible range (:data:`PLAUSIBLE`,
-    in the column's units)."""
+    :func:`node_spring_ranges`; in the column's units)."""
     out = []
     for e in range(model.element_mats.shape[0]):
         out += [(f"stiffness of shaft element {e}", *PLAUSIBLE["element_stiffness"]),
@@ -87,8 +126,8 @@ def generic_labels(model) -> tuple[tuple[str, float, float], ...]:
     for disk in model.geometry.disks:
         out += [(f"mass of disk {disk.name}", *PLAUSIBLE["disk_mass"]),
                 (f"diametral inertia of disk {disk.name}", *PLAUSIBLE["disk_inertia"])]
-    out += [(f"grounded spring at node {n}", *PLAUSIBLE["node_spring"])
-            for n in range(model.n_nodes)]
+    out += [(f"grounded spring at node {n}", float(lo), float(hi))
+            for n, (lo, hi) in enumerate(node_spring_ranges(model))]
     return tuple(out)
 
 

@@ -30,7 +30,7 @@ from surrogate_rbrdo.discrepancy.fit import fit
 from surrogate_rbrdo.discrepancy.problem import Problem
 
 #: the outside-library effects of the grid
-OUTSIDE = ("magnetic_pull", "shaft_stiffness_loss", "disk_mass_error")
+OUTSIDE = ("magnetic_pull", "shaft_stiffness_loss", "disk_mass_error", "bearing_seal")
 #: pairs hidden together (both strong)
 PAIRS = (("housing", "speed_softening"), ("cross_coupling", "anisotropy"))
 

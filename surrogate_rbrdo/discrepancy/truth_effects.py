@@ -16,6 +16,13 @@ them.
   a fretted shrink fit) modelled as one shaft element of reduced diameter (the "equivalent
   reduced section" of Dimarogonas, *Eng. Fract. Mech.* 55, 1996, for an open crack; the
   crack's asymmetry and breathing are left out, so the truth stays linear and isotropic).
+* ``bearing_seal``: a constant, speed-independent radial stiffness ``+k_s`` from shaft to
+  ground beside a bearing (one mesh node from its plane) — a contact seal or an elastomer ring
+  between shaft and housing there, or a bearing row whose stiffness does not change with speed
+  (a cylindrical roller row beside angular-contact rows). Passive, so positive. With the
+  model's bearing stiffness already falling with speed it makes the bearing's *relative*
+  stiffness fall less — the sign of a thermal preload growth — which no library effect is
+  (the sceptic's case against naming a bearing speed law).
 
 >>> from surrogate_rbrdo.spindle.reference import reference_spindle
 >>> sp = reference_spindle()
@@ -24,6 +31,9 @@ them.
 >>> [b.name for b in gm.bearings]
 ['front', 'rear', 'magnetic_pull']
 >>> gs = TRUTH_MODIFIERS["shaft_stiffness_loss"](g, position_mm=250.0, depth=0.3)
+>>> gb = TRUTH_MODIFIERS["bearing_seal"](g, k_N_per_m=1e7)
+>>> [(b.name, float(b.position_mm)) for b in gb.bearings]
+[('front', 100.0), ('rear', 600.0), ('seal_front', 75.0)]
 >>> len(gs.sections) - len(g.sections), [round(float(s.outer_diameter_mm), 1) for s in gs.sections]
 (2, [70.0, 65.0, 54.5, 65.0, 50.0])
 """
@@ -52,6 +62,25 @@ def magnetic_pull(geometry: SpindleGeometry, *, k_N_per_m: float,
                       c_matrix_Ns_per_m=((0.0, 0.0), (0.0, 0.0)), damping_eta_s=0.0)
     return replace(geometry, bearings=geometry.bearings
                    + (Bearing("magnetic_pull", float(position_mm), law),))
+
+
+@TRUTH_MODIFIERS.register("bearing_seal")
+def bearing_seal(geometry: SpindleGeometry, *, k_N_per_m: float, bearing: str = "front",
+                 offset_mm: float = -25.0) -> SpindleGeometry:
+    """Positive constant stiffness ``k_N_per_m`` (undamped, isotropic) from shaft to ground
+    beside the named bearing, ``offset_mm`` from its plane (default: 25 mm towards the nose,
+    where a spindle's front seal sits; one element of the reference spindle's nose section —
+    the FE model cannot put two supports on one node)."""
+    check_positive("bearing_seal.k_N_per_m", k_N_per_m)
+    pos = {b.name: b.position_mm for b in geometry.bearings}
+    if bearing not in pos:
+        raise ValueError(f"bearing_seal.bearing = {bearing!r} is not a bearing; bearings are "
+                         f"{list(pos)}")
+    z = float(pos[bearing]) + offset_mm
+    check_range("bearing_seal.offset_mm", z, 0.0, geometry.total_length_mm)
+    law = ConstantLaw(k_matrix_N_per_m=((k_N_per_m, 0.0), (0.0, k_N_per_m)),
+                      c_matrix_Ns_per_m=((0.0, 0.0), (0.0, 0.0)), damping_eta_s=0.0)
+    return replace(geometry, bearings=geometry.bearings + (Bearing(f"seal_{bearing}", z, law),))
 
 
 @TRUTH_MODIFIERS.register("shaft_stiffness_loss")

@@ -50,7 +50,11 @@ from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jac
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.rivals import RIVAL_SEPARATION, RIVAL_SEPARATION_AT_SPEED
+from surrogate_rbrdo.discrepancy.rivals import (
+    RIVAL_SEPARATION,
+    RIVAL_SEPARATION_AT_SPEED,
+    RIVAL_SEPARATION_SPRING,
+)
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
@@ -351,12 +355,20 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
         np.asarray(speeds), partial, separating_test(list(conf)) if conf
-        else (_rival_separation(data) if withheld else ""), seconds,
+        else (_rival_separation(data, withheld) if withheld else ""), seconds,
         options)
 
 
-def _rival_separation(data: MeasuredData) -> str:
+def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:
     """The experiment that would separate a withheld name: off-synchronous data if the data
-    have none (impact tests at speed), else a larger effect or more speeds."""
+    have none (impact tests at speed); else, when the closest rival of the best-separated
+    member is a grounded spring (a constant stiffness, which with θ recalibrated spans a
+    bearing's speed law), a thermal soak; else a larger effect or more speeds."""
     at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
-    return RIVAL_SEPARATION_AT_SPEED if at_speed else RIVAL_SEPARATION
+    if not at_speed:
+        return RIVAL_SEPARATION
+    rt = max((a.rival for a in withheld if a.rival is not None), key=lambda t: t.statistic,
+             default=None)
+    if rt is not None and rt.rival.startswith("grounded spring"):
+        return RIVAL_SEPARATION_SPRING
+    return RIVAL_SEPARATION_AT_SPEED

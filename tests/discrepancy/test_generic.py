@@ -2,30 +2,31 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from surrogate_rbrdo.discrepancy.fit import fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
-from surrogate_rbrdo.discrepancy.generic import NODE_SPRING_SCALE, generic_columns
-from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.generic import (
+    NODE_SPRING_SCALE,
+    PLAUSIBLE,
+    generic_columns,
+    node_spring_ranges,
+)
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.sweeps import Sweep
-from surrogate_rbrdo.discrepancy.synthetic import default_channels
 from surrogate_rbrdo.discrepancy.truth_effects import magnetic_pull
+from surrogate_rbrdo.spindle.assembly import build_model
+
+from .conftest import baseline_1x
 
 
 @pytest.mark.known_answer
 def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
     sp, g = spindle
-    ch = default_channels(g)
-    sw = Sweep.unbalance(np.linspace(3000, 22000, 9))
-    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
-    rng = np.random.default_rng(0)
-    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ np.array([5e-6, 5e-6j])
-    rec = y[None] * (1 + 1e-3 * (rng.normal(size=(8,) + y.shape)
-                                 + 1j * rng.normal(size=(8,) + y.shape)))
-    data = MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sw, ch, rec),))
+    fm, data = baseline_1x(spindle, seed=0)
+    ch = data.channels
     prob = Problem(fm, data)
     par = prob.parametrisation()
     f = fit(prob, par, par.x0())
@@ -44,3 +45,22 @@ def test_node_spring_column_is_the_derivative_of_a_grounded_spring(spindle):
     col = G[:y1.size, 2 * ne + 2 * nd + fm.node(m, 350.0)]
     fd = (y1 - y0[:y1.size]) / (-eps) * NODE_SPRING_SCALE
     assert np.linalg.norm(fd - col) < 2e-3 * np.linalg.norm(col)
+
+
+@pytest.mark.known_answer
+def test_a_grounded_spring_may_be_negative_only_at_the_motor(spindle):
+    """Passive connections are positive; a negative spring only where the motor's air gap is
+    (the motor rotor's node, 350 mm, and its two neighbours); without a motor disk, anywhere."""
+    sp, g = spindle
+    m = build_model(g, sp.effects)
+    rng_ = node_spring_ranges(m)
+    motor = int(np.argmin(np.abs(m.z - 0.350)))
+    negative = np.flatnonzero(rng_[:, 0] < 0)
+    assert negative.tolist() == [motor - 1, motor, motor + 1]
+    assert np.all(rng_[:, 1] == PLAUSIBLE["node_spring"][1])
+    assert np.all(rng_[np.setdiff1d(np.arange(m.n_nodes), negative), 0] == 0.0)
+    assert all(n not in negative for n in m.bearing_nodes)
+    g2 = replace(g, disks=tuple(replace(d, name=d.name.replace("motor", "drive"))
+                                for d in g.disks))
+    assert np.all(node_spring_ranges(build_model(g2, sp.effects))[:, 0]
+                  == PLAUSIBLE["node_spring"][0])

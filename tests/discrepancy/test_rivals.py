@@ -6,8 +6,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.discrepancy import rivals
 from surrogate_rbrdo.discrepancy.calibration import Linearisation
-from surrogate_rbrdo.discrepancy.rivals import rival_test
+from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+from surrogate_rbrdo.discrepancy.workflow import _rival_separation
 
 N_CELLS = 30                      # complex cells: 60 real observations, no priors
 
@@ -89,9 +92,6 @@ def test_damping_speed_law_refers_every_test_to_one_speed():
     """``c ∝ (Ω/Ω_ref)^p``: ∂/∂p at p = 0 is ``ln(Ω/Ω_ref)`` times the damping factor's column,
     with Ω_ref the 1x speeds' geometric mean for every test — an impact block at speed sees the
     damping at its own speed, at standstill the law does not act."""
-    from surrogate_rbrdo.discrepancy.rivals import damping_law_columns
-    from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
-
     ch = (Channel("t", 0.0, "x"),)
     one_x = Sweep.unbalance([1000.0, 4000.0])                 # geometric mean 2000 rpm
     blocks = [SimpleNamespace(mean=np.zeros((2, 1)), sweep=one_x),
@@ -103,3 +103,73 @@ def test_damping_speed_law_refers_every_test_to_one_speed():
     expect = np.r_[np.repeat(np.log([0.5, 2.0]), 2), np.full(6, np.log(4.0)), 0, 0, 0]
     assert np.allclose(cols[:, 0], expect)
     assert labels == ("speed law of damping (f)",) and ranges.tolist() == [[-1.0, 1.0]]
+
+
+def _span_case(rng, sign: float):
+    """A 'bearing' column ``k`` (the stiffness factor θ's, in the nuisance) and a constant
+    'spring' ``s`` at the same node (a generic rival): the candidate's direction is inside their
+    span, ``d = k − s`` scaled by ``sign`` — a speed law ``a + b k(Ω)`` of that bearing."""
+    n = 2 * N_CELLS
+    k = rng.standard_normal(n)
+    other = rng.standard_normal((n, 1))
+    nuis = np.column_stack([k, other])
+    s = rng.standard_normal(n)
+    d = sign * (k - s)
+    y = 4.0 * d + 0.05 * rng.standard_normal(n)
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([nuis, d[:, None]])
+    r1 = _ls_residual(A, y)
+    return nuis, s, r0, r1, A
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_signature_inside_the_span_of_theta_and_a_spring_is_not_separable(sign):
+    """The hypothesis in miniature: with θ free, a constant spring at the bearing's node spans
+    the bearing's speed law, so a candidate inside that span adds nothing to the spring (either
+    sign, when the spring may take either)."""
+    rng = np.random.default_rng(5)
+    nuis, s, r0, r1, A = _span_case(rng, sign)
+    lin = Linearisation(nuis, (), (), s[:, None], 0, ("spring",), np.array([[-np.inf, np.inf]]))
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    assert t.rival == "spring" and t.statistic == pytest.approx(0.0, abs=1e-8)
+    assert not t.passed
+
+
+@pytest.mark.known_answer
+def test_a_one_sided_spring_cannot_mimic_what_needs_it_negative():
+    """The same span, but the spring is passive (range ``[0, ∞)``). When the data need it
+    negative (``y ∝ k − s`` asks for ``−4 s``) its bounded best is 0: it explains nothing and
+    the candidate adds its whole ``Δχ² = |r0|² − |r1|²``; when they need it positive
+    (``y ∝ s − k``) it mimics the candidate as before."""
+    rng = np.random.default_rng(5)
+    for sign, separable in ((1.0, True), (-1.0, False)):
+        nuis, s, r0, r1, A = _span_case(rng, sign)
+        lin = Linearisation(nuis, (), (), s[:, None], 0, ("spring",), np.array([[0.0, np.inf]]))
+        t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+        if separable:
+            assert t.rival_delta_chi2 == pytest.approx(0.0, abs=1e-12)
+            assert t.statistic == pytest.approx(float(r0 @ r0 - r1 @ r1), rel=1e-9)
+        else:
+            assert t.statistic == pytest.approx(0.0, abs=1e-8)
+        assert t.passed is separable
+
+
+def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
+    """The experiment a withheld name carries: off-synchronous excitation without impact tests
+    at speed; with them, a thermal soak when the closest rival is a grounded spring (it spans a
+    bearing's speed law, no excitation separates it), else a larger effect or more speeds."""
+    ch = (Channel("t", 0.0, "x"),)
+    one_x = SimpleNamespace(sweep=Sweep.unbalance([1000.0, 4000.0]))
+    at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))))
+    standstill = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch))))
+
+    def held(*labels):
+        return tuple(SimpleNamespace(rival=RivalTest(float(i), 9.2, lb, 1.0))
+                     for i, lb in enumerate(labels))
+
+    spring = held("stiffness of shaft element 3", "grounded spring at node 4")
+    assert _rival_separation(standstill, spring) == rivals.RIVAL_SEPARATION
+    assert _rival_separation(at_speed, spring) == rivals.RIVAL_SEPARATION_SPRING
+    assert _rival_separation(at_speed, held("grounded spring at node 4", "mass of disk x")) \
+        == rivals.RIVAL_SEPARATION_AT_SPEED

@@ -1,0 +1,47 @@
+"""The first-order candidate columns of ``calibration.linearise`` against finite differences."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.calibration import linearise
+from surrogate_rbrdo.discrepancy.candidates import library
+from surrogate_rbrdo.discrepancy.fit import fit
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.synthetic import default_channels
+from surrogate_rbrdo.spindle.effects import SpeedSoftening
+
+from .conftest import baseline_1x
+
+
+@pytest.mark.known_answer
+def test_a_candidate_column_leaves_the_priors_alone(spindle):
+    """A candidate effect changes the data, not the nuisance's prior pseudo-observations: its
+    column is the derivative of the data part (a second-order one-sided difference of the
+    model with the effect added) and zero on the prior rows, even where the fit left the
+    priors off their means (a column carrying ``prior residual / step`` there once swamped the
+    signature)."""
+    n_ch = len(default_channels(spindle[1]))
+    gain = 1 + 0.04 * np.arange(n_ch) / n_ch                  # the channels' gains differ
+    fm, data = baseline_1x(spindle, seed=3, gain=gain)
+    prob = Problem(fm, data, None, NuisanceOptions(gain_sd=0.02))
+    par = prob.parametrisation()
+    base = fit(prob, par, par.x0())
+    assert np.abs(par.prior_residuals(base.x)).max() > 0.3       # the priors are pulled
+    cand = library(("speed_softening",), ("front", "rear"))[0]
+    lin = linearise(prob, base, (cand,))
+    (c, variants), = lin.candidates
+    v = next(v for v in variants if v.scope == () and dict(v.shape)["exponent"] == 2.0)
+    u = tuple(x[0] for x in base.evaluation.unbalance)
+    rows = par.rows(base.x[None])
+    h = 1e-5
+    y0, y1, y2 = (prob.data_vector(replace(rows, extras=[rows.extras[0] + (
+        SpeedSoftening(a=a, exponent=2.0),)]), u)[0] for a in (0.0, h, 2 * h))
+    fd = (4 * y1 - 3 * y0 - y2) / (2 * h)                   # one-sided, second order
+    col = v.columns[:, 0]
+    assert np.allclose(col[prob.n_obs - prob.n_prior:], 0.0)
+    assert np.linalg.norm(col[:fd.size] - fd) < 1e-2 * np.linalg.norm(fd)
