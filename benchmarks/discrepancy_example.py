@@ -43,10 +43,10 @@ def main() -> None:
     rig = parse(RigTable, cfg["rig"], "rig").config()
     run_campaign(rig.truth, rig.options, out / "rig", rng=np.random.default_rng(seed))
     t1 = time.perf_counter()
-    data = data_from_folder(out / "rig")
+    options = options_from_dict(cfg.get("discrepancy", {}))
+    data = data_from_folder(out / "rig", impacts=options.use_impacts)
     res, paths = analyse(data, sp.geometry_for(sp.baseline), sp.effects,
-                         spindle_section=cfg["spindle"],
-                         options=options_from_dict(cfg.get("discrepancy", {})),
+                         spindle_section=cfg["spindle"], options=options,
                          rng=np.random.default_rng([seed, 1]), out_dir=out)
     t2 = time.perf_counter()
     paths.update(plot_all(res, out))

@@ -113,6 +113,7 @@ class DiscrepancyTable:
     holdout_tolerance: float = _D.holdout_tolerance
     use_identified: bool = _D.use_identified
     use_impacts: bool = _D.use_impacts
+    min_impact_dof: int = _D.min_impact_dof
     max_nfev: int = _D.max_nfev
 
     def __post_init__(self) -> None:

@@ -40,7 +40,7 @@ from surrogate_rbrdo.discrepancy.fit import Fit
 from surrogate_rbrdo.discrepancy.holdout import residuals
 from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
-from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate
+from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
 #: — or whenever a lack-of-fit test of the stage's base model has a p-value below QUIET_P
@@ -135,7 +135,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
     base_ho = holdout.chi2(base)
     law = damping_law_columns(problem, lin, base.par.names)
-    out = []
+    out, warm = [], None
     for k, (c, _) in enumerate(lin.candidates):
         threshold = tails[k].isf(p_crit)
         if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
@@ -143,7 +143,9 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
                                   {"likelihood_ratio": False}))
             continue
-        cf = fit_candidate(problem, base, c, max_nfev=max_nfev)
+        if warm is None:                 # the 1x-only recalibration, once per stage
+            warm = (warm_base(problem, base, max_nfev=max_nfev),)
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
         p = float(tails[k].sf(cf.delta_chi2))
         ho = holdout.chi2(cf.fit)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}

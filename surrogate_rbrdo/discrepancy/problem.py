@@ -11,6 +11,7 @@ parameters: a finite-difference Jacobian is one call.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -90,6 +91,19 @@ class Problem:
         if len(self.run_offset) != len(self.blocks):
             raise ValueError(f"run_offset has {len(self.run_offset)} entries for "
                              f"{len(self.blocks)} blocks")
+
+    def only(self, kind: str) -> Problem:
+        """The same problem on its blocks of sweep ``kind`` alone (and the identified
+        stiffness); its parametrisation drops what only the other blocks see (the force
+        channel of impact tests)."""
+        sub = copy.copy(self)
+        keep = [i for i, b in enumerate(self.blocks) if b.sweep.kind == kind]
+        sub.blocks = [self.blocks[i] for i in keep]
+        sub.channel_index = [self.channel_index[i] for i in keep]
+        sub.whiten = [self.whiten[i] for i in keep]
+        sub.run_offset = [self.run_offset[i] for i in keep]
+        sub.n_prior = sub.parametrisation().n_prior
+        return sub
 
     def parametrisation(self) -> Parametrisation:
         """The nuisance-only parametrisation of this problem."""

@@ -93,10 +93,20 @@ class DiscrepancyOptions:
     use_impacts : bool
         Whether a measured-data folder's (or a rig campaign's) impact records become FRF
         blocks, one per spin speed and hit direction (``experiment.data_from_folder``; the
-        impact test plan of ``rig.impacts.ImpactPlan``). Off by default: for gross effects
-        whose modes move far, the candidate search (local, from screened starts) can stop in a
-        local minimum once FRFs are in the data (``docs/discrepancy.md``). Blocks passed to
-        :func:`find_discrepancy` directly are used as given.
+        impact test plan of ``rig.impacts.ImpactPlan``). On by default: the candidate search
+        carries each candidate from the 1x data to the FRFs (:mod:`.search`), and blocks with
+        too few hits are dropped (``min_impact_dof``). Blocks passed to
+        :func:`find_discrepancy` directly are used as given (subject to ``min_impact_dof``).
+    min_impact_dof : int
+        Fewest degrees of freedom of an impact block's noise covariance for the block to be
+        used (``R − 1`` for ``R`` hits; 9: 10 hits). Each line's 2×2 covariance is estimated
+        with ``ν`` degrees of freedom, so the line's whitened residual is a Hotelling T²,
+        ``∝ F(2, ν − 1)``: its variance is finite only for ``ν ≥ 6``, and the expected
+        precision of the estimate is ``ν/(ν − 3)`` times the true one (Wishart; 4 with 5
+        hits, 1.5 with 10), a bias the whitening corrects at the price of a noisier scale.
+        With fewer the few lines near a resonance dominate χ² with heavy tails; pooling the
+        covariance over lines is no remedy, since an FRF's noise grows with the response at
+        a resonance. The default campaign's 5 hits at standstill (ν = 4) are not used.
     max_nfev : int
         Residual evaluations per candidate fit.
     """
@@ -112,7 +122,8 @@ class DiscrepancyOptions:
     confound_delta: float = 6.63
     holdout_tolerance: float = 10.83
     use_identified: bool = False
-    use_impacts: bool = False
+    use_impacts: bool = True
+    min_impact_dof: int = 9
     max_nfev: int = 150
 
     def __post_init__(self) -> None:
@@ -127,6 +138,7 @@ class DiscrepancyOptions:
         check_range("extrapolate_fraction", self.extrapolate_fraction, 0.0, 0.5)
         check_int("max_effects", self.max_effects, minimum=1)
         check_int("max_nfev", self.max_nfev, minimum=5)
+        check_int("min_impact_dof", self.min_impact_dof, minimum=4)
         check_positive("confound_delta", self.confound_delta)
         check_positive("holdout_tolerance", self.holdout_tolerance, allow_zero=True)
 
@@ -257,6 +269,11 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     t0 = time.perf_counter()
     if not options.use_identified and data.identified is not None:
         data = MeasuredData(data.blocks, None, data.provenance)
+    if any(b.sweep.kind == "impact" and b.dof < options.min_impact_dof
+           for b in data.blocks):
+        data = MeasuredData(tuple(b for b in data.blocks if b.sweep.kind != "impact"
+                                  or b.dof >= options.min_impact_dof),
+                            data.identified, data.provenance)
     one_x = [b for b in data.blocks if b.sweep.kind == "unbalance_1x"]
     if not one_x:
         raise ValueError("data: no 'unbalance_1x' block; the workflow needs 1x responses vs "

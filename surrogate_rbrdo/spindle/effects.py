@@ -293,11 +293,24 @@ class HousingFlexibility(Effect):
     """Housing/foundation stage in series with each bearing: spring ``k_h``, mass ``m_h``.
 
     ``k_h = inf`` is off. Signature: all bearing-dominated modes lower; an extra housing mode.
+
+    The mass is the effective mass the housing adds at one bearing, at most
+    250 kg: a stage at a bearing cannot move more than the housing it
+    stands for. A motor spindle unit's housing is a steel shell around the bearings' outer
+    rings and the stator with its cooling jacket (the principal set-up of Abele, Altintas &
+    Brecher 2010, *CIRP Annals* 59:781, Fig. 3; the housing modelled as a beam carried by the
+    spindle head through springs in Cao & Altintas 2007, *Int. J. Mach. Tools Manuf.*
+    47:1342). For spindles of the reference's class (65 mm bearing bores, a 0.68 m rotor of
+    21 kg) a generous shell, outer diameter 250 mm, bore 120 mm, length 0.7 m, weighs
+    ``7850 π/4 (0.25² − 0.12²) 0.7 ≈ 207 kg``: an upper estimate of the whole housing, so of
+    what one stage can carry. A fitted mass beyond it is not a housing (a 500 kg stage once
+    stood in for a magnetic pull, docs/discrepancy.md). Heavier structures behind the housing
+    (headstock, column) are a model of the machine, not of this stage.
     """
 
     name: ClassVar[str] = "housing"
     bounds: ClassVar[dict[str, tuple[float, float]]] = {
-        "k_N_per_m": (1e6, np.inf), "m_kg": (0.0, 1e3), "c_Ns_per_m": (0.0, 1e6)}
+        "k_N_per_m": (1e6, np.inf), "m_kg": (0.0, 250.0), "c_Ns_per_m": (0.0, 1e6)}
     off_params: ClassVar[dict[str, float]] = {"k_N_per_m": np.inf}
     k_N_per_m: InfOff = np.inf
     m_kg: float = 0.0

@@ -18,10 +18,11 @@ from surrogate_rbrdo.discrepancy.synthetic import (
 )
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
-#: a small campaign that keeps the default suite fast (24 speeds, 10 repeats, 60 FRF lines)
+#: a small campaign that keeps the default suite fast (24 speeds, 10 repeats, 60 FRF lines of
+#: 10 hits: the fewest the workflow uses, DiscrepancyOptions.min_impact_dof)
 SMALL = Campaign(speeds_rpm=tuple(np.linspace(2000.0, 24000.0, 24).tolist()), repeats=10,
                  impact_freqs_hz=tuple(np.linspace(50.0, 1500.0, 60).tolist()),
-                 impact_repeats=8)
+                 impact_repeats=10)
 
 
 @pytest.fixture(scope="session")

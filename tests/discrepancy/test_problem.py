@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.discrepancy.fit import fit, jacobian
+from surrogate_rbrdo.discrepancy.fit import fit, fit_batch, jacobian
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
@@ -134,3 +134,49 @@ def test_the_written_out_2x2_products_equal_einsum():
     rng = np.random.default_rng(5)
     W, V = rng.normal(size=(7, 3, 2, 2)), rng.normal(size=(4, 7, 3, 2, 5))
     assert np.array_equal(_times_2x2(W, V), np.einsum("xcij,bxcjk->bxcik", W, V))
+
+
+def _with_frf(fm, theta):
+    """The model's own 1x response and a standstill FRF at the tool (noise-level records)."""
+    data = _data(fm, Sweep.unbalance(np.linspace(2000, 24000, 12)), theta)
+    tool = fm.channels[0]
+    sw = Sweep.impact(np.linspace(100.0, 1400.0, 14), (tool,))
+    H = fm.response(sw, theta[None], np.ones((1, 2)))[0][..., 0]
+    rng = np.random.default_rng(3)
+    rec = H[None] + 1e-10 * (rng.normal(size=(10,) + H.shape)
+                             + 1j * rng.normal(size=(10,) + H.shape))
+    frf = ComplexBlock.from_repeats("impact_tool_x", sw, fm.channels, rec, runs=False)
+    return MeasuredData(data.blocks + (frf,))
+
+
+@pytest.mark.known_answer
+def test_only_keeps_the_1x_rows_and_the_priors_they_need(model):
+    """``Problem.only`` is the same problem on the 1x block: its residuals are the full
+    problem's 1x rows, and the priors of the force channel (only FRFs see it) are gone."""
+    data = _with_frf(model, np.array([0.95, 1.03]))
+    opts = NuisanceOptions(force_gain_sd=0.01)
+    full = Problem(model, data, nuisance=opts)
+    sub = full.only("unbalance_1x")
+    pf, ps = full.parametrisation(), sub.parametrisation()
+    assert pf.force_names == ("log_force_gain",) and ps.force_names == ()
+    x = pf.x0() + 0.01
+    rf = full.evaluate(pf, x[None]).residuals[0]
+    rs = sub.evaluate(ps, x[None, :len(ps.names)]).residuals[0]
+    n1 = 2 * data.blocks[0].mean.size
+    assert sub.n_obs == full.n_obs - 2 * data.blocks[1].mean.size - 1
+    np.testing.assert_array_equal(rs[:n1], rf[:n1])
+
+
+@pytest.mark.known_answer
+def test_fit_batch_walks_every_start_back_to_the_truth(model):
+    """Batched Levenberg–Marquardt steps from three perturbed starts on the model's own
+    response: every start reaches the true stiffness factors (noise 1e-12 m)."""
+    data = _data(model, Sweep.unbalance(np.linspace(2000, 24000, 12)), np.array([0.93, 1.04]))
+    prob = Problem(model, data)
+    par = prob.parametrisation()
+    truth = np.log([0.93, 1.04])
+    X0 = par.x0()[None].repeat(3, axis=0)
+    X0[:, :2] = truth + np.array([[0.1, -0.1], [-0.15, 0.05], [0.05, 0.15]])
+    X, chi = fit_batch(prob, par, X0, n_iter=12)
+    assert np.allclose(np.exp(X[:, :2]), [0.93, 1.04], rtol=1e-4)
+    assert np.all(chi < 1e-3 * prob.evaluate(par, X0).chi2)
