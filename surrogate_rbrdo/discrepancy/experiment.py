@@ -152,13 +152,14 @@ def data_files(path: str | Path) -> tuple[Path, ...]:
     return (table,) + tuple(sorted((root / "dataset" / "records").glob("*.npz"))[:1])
 
 
-def data_from_folder(path: str | Path, *, impacts: bool = False) -> MeasuredData:
+def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
     """Observables from a measured-data folder: ``phasors.csv`` (the rig campaign's 1x table,
     or a user's in the same columns) and the channels' positions from ``channels.json``
     (``{name: [position_mm, direction]}``) or else from the first native record of
     ``dataset/records``; or a dataset folder of ``docs/measured-data.md`` (``dataset.json``,
     ``index.jsonl``, ``records/``), whose steady records are demodulated
-    (:func:`~.measured.dataset_phasor_rows`). With ``impacts``, the impact records of the
+    (:func:`~.measured.dataset_phasor_rows`). With ``impacts`` (default, as
+    ``DiscrepancyOptions.use_impacts``), the impact records of the
     dataset (a rig campaign's ``dataset/``, or the dataset folder itself) become FRF blocks,
     one per speed and hit direction (:func:`~.measured.impact_blocks`)."""
     root = Path(path)

@@ -73,6 +73,7 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
         "absorbed_by_recalibration": list(result.stages[0].absorbed),
         "recalibration": result.recalibration(result.base),
         "run_scatter_log_stiffness": list(result.run_scatter),
+        "dropped_impact_blocks": [{"name": n, "dof": d} for n, d in result.dropped_blocks],
         "split_speeds_rpm": result.split.to_dict(result.speeds_rpm),
         "chi2_dof_by_observable": {c.name: {"before": c.chi2_table("before"),
                                             "after": c.chi2_table("after")}

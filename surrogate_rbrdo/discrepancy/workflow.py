@@ -23,6 +23,7 @@ much the gap shrinks once it is added.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -167,6 +168,8 @@ class DiscrepancyResult:
     run_scatter: tuple[float, ...] = ()
     #: every block's data and predictions at every point (:mod:`.summary`)
     curves: tuple[BlockCurves, ...] = ()
+    #: impact blocks left out for too few hits: ``(name, dof)`` (``min_impact_dof``)
+    dropped_blocks: tuple[tuple[str, int], ...] = ()
 
     @property
     def named_effects(self) -> tuple[Effect, ...]:
@@ -269,11 +272,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     t0 = time.perf_counter()
     if not options.use_identified and data.identified is not None:
         data = MeasuredData(data.blocks, None, data.provenance)
-    if any(b.sweep.kind == "impact" and b.dof < options.min_impact_dof
-           for b in data.blocks):
-        data = MeasuredData(tuple(b for b in data.blocks if b.sweep.kind != "impact"
-                                  or b.dof >= options.min_impact_dof),
-                            data.identified, data.provenance)
+    data, dropped = _drop_thin_impacts(data, options.min_impact_dof)
     one_x = [b for b in data.blocks if b.sweep.kind == "unbalance_1x"]
     if not one_x:
         raise ValueError("data: no 'unbalance_1x' block; the workflow needs 1x responses vs "
@@ -322,7 +321,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         float(v) for v in np.concatenate(list(runs[2].values())).std(axis=0, ddof=1))
         if runs else (),
                    curves=tuple(block_curves(everything, held_pts, base, current, gp)),
-                   seconds=time.perf_counter() - t0)
+                   dropped_blocks=dropped, seconds=time.perf_counter() - t0)
 
 
 def _conclude(data, train, held, split, base, final, stages, named, confounded, withheld,
@@ -374,6 +373,23 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
         np.asarray(speeds), partial, separating_test(list(conf)) if conf
         else (_rival_separation(data, withheld) if withheld else ""), seconds,
         options)
+
+
+def _drop_thin_impacts(data: MeasuredData, min_dof: int
+                       ) -> tuple[MeasuredData, tuple[tuple[str, int], ...]]:
+    """The data without impact blocks whose noise covariance has fewer than ``min_dof``
+    degrees of freedom, and ``(name, dof)`` of those dropped (with a warning: the user's hits
+    are not silently ignored)."""
+    thin = tuple((b.name, int(b.dof)) for b in data.blocks
+                 if b.sweep.kind == "impact" and b.dof < min_dof)
+    if not thin:
+        return data, ()
+    warnings.warn(f"{len(thin)} impact block(s) left out: their noise covariance has "
+                  f"{min(d for _, d in thin)}-{max(d for _, d in thin)} degrees of freedom, "
+                  f"fewer than min_impact_dof = {min_dof} (hits per direction - 1); the "
+                  "analysis uses the other blocks", stacklevel=3)
+    keep = tuple(b for b in data.blocks if b.sweep.kind != "impact" or b.dof >= min_dof)
+    return MeasuredData(keep, data.identified, data.provenance), thin
 
 
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:

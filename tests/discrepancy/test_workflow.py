@@ -15,11 +15,15 @@ from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.discrepancy.report import findings, write_run
 from surrogate_rbrdo.discrepancy.search import slot_estimate
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
-from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
+from surrogate_rbrdo.discrepancy.workflow import (
+    DiscrepancyOptions,
+    _drop_thin_impacts,
+    find_discrepancy,
+)
 from surrogate_rbrdo.spindle.config import SpindleTable, build_spindle
 from surrogate_rbrdo.spindle.effects import HousingFlexibility
 
-from .conftest import campaign_data
+from .conftest import SMALL, campaign_data
 
 FAST = DiscrepancyOptions(n_draws=150)
 
@@ -129,3 +133,23 @@ def test_a_strength_the_data_barely_see_is_reported_unidentified(housing_result,
     assert blind.identified == {**e.identified, "k_N_per_m": False}
     assert blind.ci["k_N_per_m"] is None
     assert blind.parameters == e.parameters
+
+
+def test_impact_blocks_with_too_few_hits_are_left_out_and_reported(spindle):
+    """5 hits give a covariance with 4 degrees of freedom, under ``min_impact_dof = 9``: the
+    impact blocks are left out with a warning naming them, and kept from 10 hits on."""
+    five = replace(SMALL, impact_repeats=5)
+    data, _ = campaign_data(spindle, seed=3, campaign=five)
+    impacts = [b.name for b in data.blocks if b.sweep.kind == "impact"]
+    with pytest.warns(UserWarning, match="min_impact_dof = 9"):
+        kept, dropped = _drop_thin_impacts(data, 9)
+    assert impacts and dropped == tuple((n, 4) for n in impacts)
+    assert all(b.sweep.kind != "impact" for b in kept.blocks)
+    ten, _ = campaign_data(spindle, seed=3)
+    assert _drop_thin_impacts(ten, 9)[1] == ()
+
+
+def test_findings_list_the_dropped_impact_blocks(housing_result):
+    assert findings(housing_result)["dropped_impact_blocks"] == []
+    res = replace(housing_result, dropped_blocks=(("impact_tool_x", 4),))
+    assert findings(res)["dropped_impact_blocks"] == [{"name": "impact_tool_x", "dof": 4}]
