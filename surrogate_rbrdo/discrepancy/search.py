@@ -25,7 +25,7 @@ Updating in Structural Dynamics*); it needs nothing of the effect but its class.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -69,6 +69,9 @@ class CandidateFit:
     significant : bool
         Some strength's interval, conditional on the fitted shapes, excludes the off state
         (the effect is on).
+    warm_fit : CandidateFit or None
+        The candidate's fit on the 1x blocks alone (with a :class:`Warm`), from which
+        :func:`fit_valley` continues.
     """
 
     name: str
@@ -79,6 +82,7 @@ class CandidateFit:
     ci: dict
     at_bound: bool
     significant: bool
+    warm_fit: CandidateFit | None = None
 
     @property
     def effect(self):
@@ -165,8 +169,9 @@ def transfer(src, x: np.ndarray, dst, fill: np.ndarray) -> np.ndarray:
 def fit_candidate(problem: Problem, base: Fit, c: Candidate,
                   extra_starts: list[tuple[Slot, dict[str, float]]] = (),
                   *, max_nfev: int = 60, warm: Warm | None = None) -> CandidateFit:
-    """Best fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one more
-    start comes from the candidate's fit on the 1x blocks alone."""
+    """Best local fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one
+    more start comes from the candidate's fit on the 1x blocks alone, which is kept as the
+    result's ``warm_fit`` (the global search along its valley is :func:`fit_valley`)."""
     starts, seen = [], set()
     par0 = base.par
 
@@ -180,11 +185,18 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
             seen.add(s.scope)
             starts.append(at_base(s, st))
     starts += [at_base(s, st) for s, st in extra_starts]
+    cw = None
     if warm is not None:
         cw = fit_candidate(warm.problem, warm.base, c, max_nfev=max_nfev)
         par = par0.with_slots(par0.slots + (cw.slot,))
         starts.append((cw.slot, transfer(cw.fit.par, cw.fit.x, par, par.x0())))
-        starts += [(cw.slot, x) for x in valley(problem, warm, cw, par)]
+    best_slot, best = _race(problem, par0, starts, max_nfev)
+    return replace(describe(c, best_slot, best, base.chi2), warm_fit=cw)
+
+
+def _race(problem: Problem, par0, starts: list[tuple[Slot, np.ndarray]], max_nfev: int
+          ) -> tuple[Slot, Fit]:
+    """A short fit from every start (one start: a full fit) and the best of them finished."""
     best: Fit | None = None
     best_slot = None
     for slot, x0 in starts:
@@ -194,7 +206,26 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
             best, best_slot = f, slot
     if len(starts) > 1:                              # finish the best start
         best = fit(problem, best.par, best.x, max_nfev=max_nfev)
-    return describe(c, best_slot, best, base.chi2)
+    return best_slot, best
+
+
+def fit_valley(problem: Problem, base: Fit, cf: CandidateFit, warm: Warm, *,
+               max_nfev: int = 60) -> CandidateFit:
+    """The global part of the search: the starts of :func:`valley` (from ``cf.warm_fit``)
+    fitted on all the data, the best finished; returns it if its χ² is below ``cf``'s, else
+    ``cf``. The caller decides when it is worth its cost (:mod:`.naming`: only when no local
+    fit of the stage explains the data)."""
+    cw = cf.warm_fit
+    if cw is None:
+        return cf
+    par = base.par.with_slots(base.par.slots + (cw.slot,))
+    starts = [(cw.slot, x) for x in valley(problem, warm, cw, par)]
+    if not starts:
+        return cf
+    slot, f = _race(problem, base.par, starts, max_nfev)
+    if f.chi2 >= cf.fit.chi2:
+        return cf
+    return replace(describe(cw.slot.candidate, slot, f, base.chi2), warm_fit=cw)
 
 
 def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarray]:
