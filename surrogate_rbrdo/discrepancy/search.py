@@ -20,6 +20,13 @@ bearing state) at its prior mean: its recalibrated value has absorbed part of th
 effect. This is the usual order of model updating, smooth data first and the sharp data from
 there (a homotopy in the data, cf. Friswell & Mottershead 1995, *Finite Element Model
 Updating in Structural Dynamics*); it needs nothing of the effect but its class.
+
+The search is local (:func:`fit_candidate`: the screen's starts and the 1x-only start) and,
+when the caller asks for it, global (:func:`fit_valley`: the 1x valley of the first shape
+parameter, :func:`valley`). A stage (:func:`.naming.run_stage`) asks for the global part only
+when no candidate's local fit explains the data (:func:`.naming.explains`): a fit stuck in a
+wrong well of a rugged χ² is grossly inadequate, and once some local fit is not, the data hold
+no evidence left for a global search to find.
 """
 
 from __future__ import annotations
