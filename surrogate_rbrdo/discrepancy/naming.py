@@ -141,7 +141,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
     base_ho = holdout.chi2(base)
     law = damping_law_columns(problem, lin, base.par.names)
-    out, fits, warm = [], {}, None
+    out, fits = [], {}
     for k, (c, _) in enumerate(lin.candidates):
         threshold = tails[k].isf(p_crit)
         if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
@@ -149,13 +149,14 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
                                   {"likelihood_ratio": False}))
             continue
-        if warm is None:                 # the 1x-only recalibration, once per stage
-            warm = (warm_base(problem, base, max_nfev=max_nfev),)
-        fits[k] = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
+        fits[k] = fit_candidate(problem, base, c, max_nfev=max_nfev)
         out.append(k)
-    if warm is not None and warm[0] is not None and not any(
-            explains(problem, lin, null, cf.fit) for cf in fits.values()):
-        fits = {k: fit_valley(problem, base, cf, warm[0], max_nfev=max_nfev)
+    # the continuation in the data (1x-only starts and valleys) only when no local fit
+    # explains the data
+    settled = any(explains(problem, lin, null, cf.fit) for cf in fits.values())
+    warm = None if settled or not fits else warm_base(problem, base, max_nfev=max_nfev)
+    if warm is not None:
+        fits = {k: fit_valley(problem, base, cf, warm, max_nfev=max_nfev)
                 for k, cf in fits.items()}
     for i, k in enumerate(out):
         if not isinstance(k, int):
@@ -184,9 +185,9 @@ def explains(problem: Problem, lin: Linearisation, null: NullDistribution, f: Fi
     their null distributions from the stage's bootstrap) have p-values above
     :data:`QUIET_P` — the test by which a stage's base model needs no nonlinear fits.
 
-    A local fit that passes them explains the data: a global search could lower its χ² only
-    by what noise explains too, so the candidate search does not continue along the 1x
-    valleys (:func:`~.search.fit_valley`) in a stage where some candidate's local fit passes.
+    A local fit that passes them explains the data, so the candidate search does not continue
+    in the data (the 1x-only starts and valleys, :func:`~.search.fit_valley`) in a stage
+    where some candidate's local fit passes.
     """
     r = f.evaluation.residuals[0]
     return min(null.p_value("gof", f.chi2),

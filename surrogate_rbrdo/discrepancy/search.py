@@ -21,9 +21,10 @@ effect. This is the usual order of model updating, smooth data first and the sha
 there (a homotopy in the data, cf. Friswell & Mottershead 1995, *Finite Element Model
 Updating in Structural Dynamics*); it needs nothing of the effect but its class.
 
-The search is local (:func:`fit_candidate`: the screen's starts and the 1x-only start) and,
-when the caller asks for it, global (:func:`fit_valley`: the 1x valley of the first shape
-parameter, :func:`valley`). A stage (:func:`.naming.run_stage`) asks for the global part only
+The search is local (:func:`fit_candidate`: the screen's starts, and the 1x-only start when
+given a :class:`Warm`) and, when the caller asks for it, global (:func:`fit_valley`: the
+continuation, the 1x-only start and the 1x valley of the first shape parameter,
+:func:`valley`). A stage (:func:`.naming.run_stage`) asks for the global part only
 when no candidate's local fit explains the data (:func:`.naming.explains`): a fit stuck in a
 wrong well of a rugged χ² is grossly inadequate, and once some local fit is not, the data hold
 no evidence left for a global search to find.
@@ -218,21 +219,25 @@ def _race(problem: Problem, par0, starts: list[tuple[Slot, np.ndarray]], max_nfe
 
 def fit_valley(problem: Problem, base: Fit, cf: CandidateFit, warm: Warm, *,
                max_nfev: int = 60) -> CandidateFit:
-    """The global part of the search: the starts of :func:`valley` (from ``cf.warm_fit``)
-    fitted on all the data, the best finished; returns it if its χ² is below ``cf``'s, else
-    ``cf``. The caller decides when it is worth its cost (:mod:`.naming`: only when no local
-    fit of the stage explains the data)."""
-    cw = cf.warm_fit
-    if cw is None:
-        return cf
+    """The global part of the search, the continuation in the data (module doc): the start
+    from the candidate's fit on the 1x blocks alone (``cf.warm_fit``, fitted here when ``cf``
+    has none — its start is then tried too) and the starts of :func:`valley`, fitted on all
+    the data, the best finished; returns it if its χ² is below ``cf``'s, else ``cf``. The
+    caller decides when it is worth its cost (:mod:`.naming`: only when no local fit of the
+    stage explains the data)."""
+    c = cf.slot.candidate
+    cw, fresh = cf.warm_fit, cf.warm_fit is None
+    if fresh:
+        cw = fit_candidate(warm.problem, warm.base, c, max_nfev=max_nfev)
     par = base.par.with_slots(base.par.slots + (cw.slot,))
-    starts = [(cw.slot, x) for x in valley(problem, warm, cw, par)]
+    starts = [(cw.slot, transfer(cw.fit.par, cw.fit.x, par, par.x0()))] if fresh else []
+    starts += [(cw.slot, x) for x in valley(problem, warm, cw, par)]
     if not starts:
         return cf
     slot, f = _race(problem, base.par, starts, max_nfev)
     if f.chi2 >= cf.fit.chi2:
-        return cf
-    return replace(describe(cw.slot.candidate, slot, f, base.chi2), warm_fit=cw)
+        return replace(cf, warm_fit=cw)
+    return replace(describe(c, slot, f, base.chi2), warm_fit=cw)
 
 
 def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarray]:
