@@ -1,10 +1,8 @@
-"""The candidate search's global part (the 1x valley) and when a stage runs it: skipped when a
-local fit already explains the data, run — and finding the truth — when the local fit sits in
-a wrong well."""
+"""The candidate search's global part (the continuation in the data: 1x-only fits and the 1x
+valley) and when a stage runs it: skipped when a local fit already explains the data, run — and
+finding the truth — when the local fit sits in a wrong well."""
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -64,7 +62,7 @@ def test_the_valley_finds_the_truth_from_a_wrong_well(stage):
     x0 = par.x0({f"{lab}.m_kg": 10 * M_TRUE, f"{lab}.k_N_per_m": 1 / (10 * K_TRUE),
                  f"{lab}.c_Ns_per_m": 0.0})
     x0[:base.x.size] = base.x
-    wrong = replace(describe(c, cf.slot, fit(train, par, x0), base.chi2), warm_fit=cf.warm_fit)
+    wrong = describe(c, cf.slot, fit(train, par, x0), base.chi2)       # no 1x fit yet
     assert not naming.explains(train, lin, null, wrong.fit)
     assert abs(wrong.parameters["m_kg"] - M_TRUE) > 0.5 * M_TRUE
     found = fit_valley(train, base, wrong, warm)
@@ -74,13 +72,20 @@ def test_the_valley_finds_the_truth_from_a_wrong_well(stage):
 
 
 def _count_valleys(monkeypatch) -> list:
+    """Names of the candidates continued (fit_valley), "warm_base" for each 1x-only
+    recalibration."""
     calls = []
 
     def counted(*a, **k):
         calls.append(a[2].name)
         return fit_valley(*a, **k)
 
+    def counted_base(*a, **k):
+        calls.append("warm_base")
+        return warm_base(*a, **k)
+
     monkeypatch.setattr(naming, "fit_valley", counted)
+    monkeypatch.setattr(naming, "warm_base", counted_base)
     return calls
 
 
@@ -92,7 +97,7 @@ def _run(stage, names):
                             confound_delta=OPT.confound_delta)
 
 
-def test_a_stage_skips_the_valleys_when_a_local_fit_explains_the_data(stage, monkeypatch):
+def test_a_stage_skips_the_continuation_when_a_local_fit_explains_the_data(stage, monkeypatch):
     calls = _count_valleys(monkeypatch)
     st = _run(stage, ("housing", "speed_softening"))
     assert calls == []
@@ -100,7 +105,7 @@ def test_a_stage_skips_the_valleys_when_a_local_fit_explains_the_data(stage, mon
     assert best.name == "housing"
 
 
-def test_a_stage_runs_the_valleys_when_no_local_fit_explains_the_data(stage, monkeypatch):
+def test_a_stage_runs_the_continuation_when_no_local_fit_explains_the_data(stage, monkeypatch):
     calls = _count_valleys(monkeypatch)
     _run(stage, ("speed_softening", "thermal_preload"))
-    assert sorted(calls) == ["speed_softening", "thermal_preload"]
+    assert sorted(calls) == ["speed_softening", "thermal_preload", "warm_base"]
