@@ -243,6 +243,8 @@ def main() -> None:
     if args.classes and not any("confounded" in c for c in args.classes):
         pairs = []                    # not run: their strengths need not be calibrated
     grid = build_grid(ctx, cal, noises, args.seeds, pairs, base_seed=args.base_seed)
+    # the full grid's size (3 noise levels x 5 seeds) from this run's cells
+    n_full = (len(grid) * 3 * 5 // (args.seeds * len(noises)), not pairs)
     if args.classes:
         grid = [sc for sc in grid if any(all(w in f"{sc.label} {sc.strength}"
                                              for w in c.split()) for c in args.classes)]
@@ -268,11 +270,11 @@ def main() -> None:
             fh.close()
     t_grid = time.perf_counter() - t1
     _report(rows)
-    _timings(rows, args.jobs, t_grid, time.perf_counter() - t0, c_cal)
+    _timings(rows, args.jobs, t_grid, time.perf_counter() - t0, c_cal, n_full)
 
 
-def _timings(rows: list[dict], jobs: int, t_grid: float, t_total: float, c_cal: float
-             ) -> None:
+def _timings(rows: list[dict], jobs: int, t_grid: float, t_total: float, c_cal: float,
+             n_full: tuple[int, bool]) -> None:
     """CPU per scenario (which other jobs on the machine do not inflate), the wall time it
     implies on 2 idle cores (calibration serial, scenarios two at a time) and peak memory."""
     cpu = np.array([float(r["cpu_seconds"]) for r in rows])
@@ -282,8 +284,9 @@ def _timings(rows: list[dict], jobs: int, t_grid: float, t_total: float, c_cal: 
     print(f"CPU: calibration {c_cal:.0f} s + scenarios {cpu.sum():.0f} s ({cpu.mean():.2f} s "
           f"per scenario, median {np.median(cpu):.2f}, max {cpu.max():.2f}; data + workflow + "
           f"baselines); on 2 otherwise idle cores about {(c_cal + cpu.sum() / 2) / 60:.1f} "
-          f"min; 495 scenarios (the full grid) at this sample's mean about "
-          f"{(c_cal + 495 * cpu.mean() / 2) / 60:.1f} min")
+          f"min; the full grid ({n_full[0]} scenarios"
+          f"{', without the confounded pairs' if n_full[1] else ''}) at this sample's mean "
+          f"about {(c_cal + n_full[0] * cpu.mean() / 2) / 60:.1f} min")
     rss = [float(r["peak_rss_mb"]) for r in rows if "peak_rss_mb" in r]
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak RSS: this process {own:.0f} MB" + (
