@@ -56,7 +56,7 @@ from surrogate_rbrdo.discrepancy.rivals import (
     RIVAL_SEPARATION_AT_SPEED,
     RIVAL_SEPARATION_SPRING,
 )
-from surrogate_rbrdo.discrepancy.search import SlotEstimate, slot_estimate
+from surrogate_rbrdo.discrepancy.search import SlotEstimate, fit_nuisance, slot_estimate
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -227,7 +227,7 @@ def _recalibrate(fm, data, split, options) -> tuple:
     the state it is taken at, so fit and average alternate until the fit settles."""
     train, ho, held = _problems(fm, data, split, options.nuisance)
     par = train.parametrisation()
-    base = fit(train, par, par.x0(), max_nfev=options.max_nfev)
+    base = fit_nuisance(train, max_nfev=options.max_nfev)
     W = np.concatenate([w.reshape(-1, 2, 2) for w in train.whiten])
     runs = None
     for _ in range(RUN_ITERATIONS):
