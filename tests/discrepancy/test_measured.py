@@ -107,3 +107,20 @@ def test_impact_records_at_speed_become_frf_blocks_with_their_speed(tmp_path):
     # the model at speed is off only by the probes' and the hammer's calibration (a few
     # percent: the workflow recalibrates them); the standstill model is far off
     assert chi2_dof(still) > 10 * chi2_dof(at), (chi2_dof(still), chi2_dof(at))
+
+
+def test_a_speed_with_too_few_hits_is_left_out_with_a_warning(tmp_path):
+    """Two hits per direction (a campaign planned for identification): no FRF block, a warning
+    naming the speed and direction, the 1x data still read (impact records are read by
+    default)."""
+    from surrogate_rbrdo.discrepancy.experiment import data_from_folder
+    from surrogate_rbrdo.rig.campaign import CampaignOptions, run_campaign
+    from surrogate_rbrdo.rig.truth import Variability, reference_truth
+
+    opts = CampaignOptions(speeds_rpm=(4000.0, 12000.0, 20000.0), repeats=5, duration_s=0.2,
+                           runup=None, impacts_per_direction=2, impact_duration_s=0.5)
+    run_campaign(reference_truth(variability=Variability.none()), opts, tmp_path,
+                 rng=np.random.default_rng(2))
+    with pytest.warns(UserWarning, match="2 impact records at 0 rpm in x left out"):
+        data = data_from_folder(tmp_path)
+    assert [b.name for b in data.blocks] == ["unbalance_1x"]
