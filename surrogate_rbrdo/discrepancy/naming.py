@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from surrogate_rbrdo.discrepancy.calibration import (
-    Linearisation,
     NullDistribution,
     generic_statistic,
     gp_statistic,
@@ -41,12 +40,7 @@ from surrogate_rbrdo.discrepancy.fit import Fit
 from surrogate_rbrdo.discrepancy.holdout import residuals
 from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
-from surrogate_rbrdo.discrepancy.search import (
-    CandidateFit,
-    fit_candidate,
-    fit_valley,
-    warm_base,
-)
+from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
 #: — or whenever a lack-of-fit test of the stage's base model has a p-value below QUIET_P
@@ -141,7 +135,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
     base_ho = holdout.chi2(base)
     law = damping_law_columns(problem, lin, base.par.names)
-    out, fits = [], {}
+    out, warm = [], None
     for k, (c, _) in enumerate(lin.candidates):
         threshold = tails[k].isf(p_crit)
         if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
@@ -149,19 +143,9 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
                                   {"likelihood_ratio": False}))
             continue
-        fits[k] = fit_candidate(problem, base, c, max_nfev=max_nfev)
-        out.append(k)
-    # the continuation in the data (1x-only starts and valleys) only when no local fit
-    # explains the data
-    settled = any(explains(problem, lin, null, cf.fit) for cf in fits.values())
-    warm = None if settled or not fits else warm_base(problem, base, max_nfev=max_nfev)
-    if warm is not None:
-        fits = {k: fit_valley(problem, base, cf, warm, max_nfev=max_nfev)
-                for k, cf in fits.items()}
-    for i, k in enumerate(out):
-        if not isinstance(k, int):
-            continue
-        cf = fits[k]
+        if warm is None:                 # the 1x-only recalibration, once per stage
+            warm = (warm_base(problem, base, max_nfev=max_nfev),)
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
         p = float(tails[k].sf(cf.delta_chi2))
         ho = holdout.chi2(cf.fit)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
@@ -174,25 +158,9 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
         }
         rt = rival_test(problem, lin, base.chi2, r, cf.fit.chi2, cf.fit.evaluation.residuals[0],
                         cf.fit.jac, len(cf.slot.free), confound_delta, law)
-        out[i] = Assessment(lin.candidates[k][0].name, cf.delta_chi2, p, null.adjusted(p), cf,
-                            gain, checks, rt)
+        out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
+                              rt))
     return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
-
-
-def explains(problem: Problem, lin: Linearisation, null: NullDistribution, f: Fit) -> bool:
-    """Whether fit ``f`` leaves a residual that looks like noise: all three lack-of-fit tests
-    of the stage (χ² goodness of fit, GP structure along speed, best generic local change;
-    their null distributions from the stage's bootstrap) have p-values above
-    :data:`QUIET_P` — the test by which a stage's base model needs no nonlinear fits.
-
-    A local fit that passes them explains the data, so the candidate search does not continue
-    in the data (the 1x-only starts and valleys, :func:`~.search.fit_valley`) in a stage
-    where some candidate's local fit passes.
-    """
-    r = f.evaluation.residuals[0]
-    return min(null.p_value("gof", f.chi2),
-               null.p_value("structure", float(gp_statistic(r, problem.series()))),
-               null.p_value("generic", generic_statistic(problem, lin, r))) > QUIET_P
 
 
 def decide(stage: Stage, delta: float) -> list[Assessment]:

@@ -20,20 +20,12 @@ bearing state) at its prior mean: its recalibrated value has absorbed part of th
 effect. This is the usual order of model updating, smooth data first and the sharp data from
 there (a homotopy in the data, cf. Friswell & Mottershead 1995, *Finite Element Model
 Updating in Structural Dynamics*); it needs nothing of the effect but its class.
-
-The search is local (:func:`fit_candidate`: the screen's starts, and the 1x-only start when
-given a :class:`Warm`) and, when the caller asks for it, global (:func:`fit_valley`: the
-continuation, the 1x-only start and the 1x valley of the first shape parameter,
-:func:`valley`). A stage (:func:`.naming.run_stage`) asks for the global part only
-when no candidate's local fit explains the data (:func:`.naming.explains`): a fit stuck in a
-wrong well of a rugged χ² is grossly inadequate, and once some local fit is not, the data hold
-no evidence left for a global search to find.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -77,9 +69,6 @@ class CandidateFit:
     significant : bool
         Some strength's interval, conditional on the fitted shapes, excludes the off state
         (the effect is on).
-    warm_fit : CandidateFit or None
-        The candidate's fit on the 1x blocks alone (with a :class:`Warm`), from which
-        :func:`fit_valley` continues.
     """
 
     name: str
@@ -90,7 +79,6 @@ class CandidateFit:
     ci: dict
     at_bound: bool
     significant: bool
-    warm_fit: CandidateFit | None = None
 
     @property
     def effect(self):
@@ -201,9 +189,8 @@ def transfer(src, x: np.ndarray, dst, fill: np.ndarray) -> np.ndarray:
 def fit_candidate(problem: Problem, base: Fit, c: Candidate,
                   extra_starts: list[tuple[Slot, dict[str, float]]] = (),
                   *, max_nfev: int = 60, warm: Warm | None = None) -> CandidateFit:
-    """Best local fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one
-    more start comes from the candidate's fit on the 1x blocks alone, which is kept as the
-    result's ``warm_fit`` (the global search along its valley is :func:`fit_valley`)."""
+    """Best fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one more
+    start comes from the candidate's fit on the 1x blocks alone."""
     starts, seen = [], set()
     par0 = base.par
 
@@ -217,18 +204,11 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
             seen.add(s.scope)
             starts.append(at_base(s, st))
     starts += [at_base(s, st) for s, st in extra_starts]
-    cw = None
     if warm is not None:
         cw = fit_candidate(warm.problem, warm.base, c, max_nfev=max_nfev)
         par = par0.with_slots(par0.slots + (cw.slot,))
         starts.append((cw.slot, transfer(cw.fit.par, cw.fit.x, par, par.x0())))
-    best_slot, best = _race(problem, par0, starts, max_nfev)
-    return replace(describe(c, best_slot, best, base.chi2), warm_fit=cw)
-
-
-def _race(problem: Problem, par0, starts: list[tuple[Slot, np.ndarray]], max_nfev: int
-          ) -> tuple[Slot, Fit]:
-    """A short fit from every start (one start: a full fit) and the best of them finished."""
+        starts += [(cw.slot, x) for x in valley(problem, warm, cw, par)]
     best: Fit | None = None
     best_slot = None
     for slot, x0 in starts:
@@ -238,30 +218,7 @@ def _race(problem: Problem, par0, starts: list[tuple[Slot, np.ndarray]], max_nfe
             best, best_slot = f, slot
     if len(starts) > 1:                              # finish the best start
         best = fit(problem, best.par, best.x, max_nfev=max_nfev)
-    return best_slot, best
-
-
-def fit_valley(problem: Problem, base: Fit, cf: CandidateFit, warm: Warm, *,
-               max_nfev: int = 60) -> CandidateFit:
-    """The global part of the search, the continuation in the data (module doc): the start
-    from the candidate's fit on the 1x blocks alone (``cf.warm_fit``, fitted here when ``cf``
-    has none — its start is then tried too) and the starts of :func:`valley`, fitted on all
-    the data, the best finished; returns it if its χ² is below ``cf``'s, else ``cf``. The
-    caller decides when it is worth its cost (:mod:`.naming`: only when no local fit of the
-    stage explains the data)."""
-    c = cf.slot.candidate
-    cw, fresh = cf.warm_fit, cf.warm_fit is None
-    if fresh:
-        cw = fit_candidate(warm.problem, warm.base, c, max_nfev=max_nfev)
-    par = base.par.with_slots(base.par.slots + (cw.slot,))
-    starts = [(cw.slot, transfer(cw.fit.par, cw.fit.x, par, par.x0()))] if fresh else []
-    starts += [(cw.slot, x) for x in valley(problem, warm, cw, par)]
-    if not starts:
-        return cf
-    slot, f = _race(problem, base.par, starts, max_nfev)
-    if f.chi2 >= cf.fit.chi2:
-        return replace(cf, warm_fit=cw)
-    return replace(describe(c, slot, f, base.chi2), warm_fit=cw)
+    return describe(c, best_slot, best, base.chi2)
 
 
 def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarray]:
