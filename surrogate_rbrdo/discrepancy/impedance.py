@@ -79,24 +79,29 @@ def condensed_dynamic_stiffness(model: SpindleModel, spin: np.ndarray, freq: np.
     if dofs.size % 4 or not np.array_equal(dofs, (4 * nodes[:, None] + np.arange(4)).ravel()) \
             or np.any(np.diff(nodes) <= 0):
         return condensed_dynamic_stiffness_dense(model, spin, freq, dofs)
-    w = np.asarray(freq, dtype=float)
-    coef = (1 + 1j * w * model.beta, -(w**2) + 1j * w * model.alpha,
-            1j * w * np.asarray(spin, dtype=float) * model.gyro_scale)
     try:
-        return chain_condensation(model, coef, tuple(int(n) for n in nodes),
+        return chain_condensation(model, _coefficients(model, spin, freq),
+                                  tuple(int(n) for n in nodes),
                                   "(condensed_dynamic_stiffness)", with_det=False).S
     except ModelError as exc:
         raise ModelError("condensed_dynamic_stiffness: singular rotor interior") from exc
+
+
+def _coefficients(model: SpindleModel, spin: np.ndarray, freq: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(a_K, a_M, a_G)`` of ``A(Ω, ω) = a_K K + a_M M + a_G G`` per point: ``1 + iωβ``,
+    ``−ω² + iωα``, ``iωΩ g``."""
+    w = np.asarray(freq, dtype=float)
+    return (1 + 1j * w * model.beta, -(w**2) + 1j * w * model.alpha,
+            1j * w * np.asarray(spin, dtype=float) * model.gyro_scale)
 
 
 def condensed_dynamic_stiffness_dense(model: SpindleModel, spin: np.ndarray, freq: np.ndarray,
                                       dofs: np.ndarray) -> np.ndarray:
     """:func:`condensed_dynamic_stiffness` by the dense solve ``A_dd − A_di A_ii⁻¹ A_id``
     (any DOFs; the reference the node-by-node elimination is tested against)."""
-    spin = np.asarray(spin, dtype=float)[:, None, None]
-    w = np.asarray(freq, dtype=float)[:, None, None]
-    A = ((1 + 1j * w * model.beta) * model.K + (-(w**2) + 1j * w * model.alpha) * model.M
-         + 1j * w * spin * model.gyro_scale * model.G)
+    aK, aM, aG = (a[:, None, None] for a in _coefficients(model, spin, freq))
+    A = aK * model.K + aM * model.M + aG * model.G
     inner = np.setdiff1d(np.arange(A.shape[-1]), dofs)
     try:
         X = np.linalg.solve(A[:, inner[:, None], inner], A[:, inner[:, None], dofs])

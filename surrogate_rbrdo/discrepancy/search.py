@@ -44,6 +44,8 @@ VALLEY_PER_DECADE = 24
 VALLEY_DECADES = 3
 VALLEY_LM = 16
 VALLEY_KEEP = 2
+#: residual evaluations of each 1x fit along the valley (each starts at its neighbour's)
+VALLEY_NFEV = 15
 
 
 @dataclass(frozen=True)
@@ -146,10 +148,9 @@ class Warm:
 def warm_base(problem: Problem, base: Fit, *, max_nfev: int = 60) -> Warm | None:
     """The recalibration of ``base`` refitted on ``problem``'s 1x blocks alone, or None when
     the problem has no other blocks (nothing to continue to) or no 1x block."""
-    kinds = {b.sweep.kind for b in problem.blocks}
-    if "unbalance_1x" not in kinds or kinds == {"unbalance_1x"}:
+    sub = _one_x_part(problem)
+    if sub is None:
         return None
-    sub = problem.only("unbalance_1x")
     par = sub.parametrisation().with_slots(base.par.slots)
     return Warm(sub, fit(sub, par, transfer(base.par, base.x, par, par.x0()),
                          max_nfev=max_nfev))
@@ -169,14 +170,22 @@ def fit_nuisance(problem: Problem, *, max_nfev: int = 60) -> Fit:
     """
     par = problem.parametrisation()
     best = fit(problem, par, par.x0(), max_nfev=max_nfev)
-    kinds = {b.sweep.kind for b in problem.blocks}
-    if "unbalance_1x" not in kinds or kinds == {"unbalance_1x"}:
+    sub = _one_x_part(problem)
+    if sub is None:
         return best
-    sub = problem.only("unbalance_1x")
     ps = sub.parametrisation()
     warm = fit(sub, ps, ps.x0(), max_nfev=max_nfev)
     other = fit(problem, par, transfer(ps, warm.x, par, par.x0()), max_nfev=max_nfev)
     return other if other.chi2 < best.chi2 else best
+
+
+def _one_x_part(problem: Problem) -> Problem | None:
+    """``problem`` on its 1x blocks alone, or None when it has no 1x block or nothing else
+    (no sharper data to continue to)."""
+    kinds = {b.sweep.kind for b in problem.blocks}
+    if "unbalance_1x" not in kinds or kinds == {"unbalance_1x"}:
+        return None
+    return problem.only("unbalance_1x")
 
 
 def transfer(src, x: np.ndarray, dst, fill: np.ndarray) -> np.ndarray:
@@ -259,9 +268,6 @@ def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarr
     X, chi = fit_batch(problem, par, X[np.argsort(chi)[:VALLEY_LM]])
     return list(X[np.argsort(chi)[:VALLEY_KEEP]])
 
-
-#: residual evaluations of each 1x fit along the valley (each starts at its neighbour's)
-VALLEY_NFEV = 15
 
 
 @dataclass(frozen=True)
