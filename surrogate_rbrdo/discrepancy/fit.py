@@ -83,10 +83,11 @@ class Fit:
 
 def _fd_rows(x: np.ndarray, par: Parametrisation, lo: np.ndarray, hi: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
-    """Rows ``x + h_j e_j`` (step towards the interior at a bound) and the steps ``h``."""
+    """Rows ``x + h_j e_j`` (step towards the interior at a bound) and the steps ``h``; for
+    ``x`` of shape ``(B, n)`` (a batch of points) rows ``(B, n, n)`` and steps ``(B, n)``."""
     h = FD_STEP * np.maximum(np.abs(x), par.scales())
     h = np.where(x + h > hi, -h, h)
-    return x[None] + np.diag(h), h
+    return x[..., None, :] + h[..., :, None] * np.eye(x.shape[-1]), h
 
 
 def jacobian(problem: Problem, par: Parametrisation, x: np.ndarray,
@@ -171,10 +172,9 @@ def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: 
     lam = np.full(B, 1e-3)
     eye = np.eye(n)
     for _ in range(n_iter):
-        h = FD_STEP * np.maximum(np.abs(X), par.scales()[None])
-        h = np.where(X + h > hi, -h, h)
-        rows = (X[:, None, :] + h[:, :, None] * eye[None]).reshape(-1, n)
-        J = (problem.evaluate(par, rows).residuals.reshape(B, n, -1) - r[:, None]) / h[..., None]
+        rows, h = _fd_rows(X, par, lo, hi)
+        J = (problem.evaluate(par, rows.reshape(-1, n)).residuals.reshape(B, n, -1)
+             - r[:, None]) / h[..., None]
         A = np.einsum("bio,bjo->bij", J, J)
         g = np.einsum("bio,bo->bi", J, r)
         d = np.sqrt(np.maximum(np.einsum("bii->bi", A), 1e-300))
