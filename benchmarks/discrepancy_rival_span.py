@@ -16,7 +16,6 @@ mimics the candidate entirely (``docs/discrepancy.md``, "A grounded spring has a
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -28,12 +27,10 @@ from surrogate_rbrdo.discrepancy.generic import NODE_SPRING_SCALE
 from surrogate_rbrdo.discrepancy.holdout import split_speeds
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
+from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, _recalibrate
 from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.spindle.reference import reference_spindle
-
-sys.path.insert(0, str(Path(__file__).parent))            # the blind harness's rig source
-from discrepancy_blind import FACTORS, RigSource  # noqa: E402
 
 
 def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:

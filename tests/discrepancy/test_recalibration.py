@@ -1,15 +1,11 @@
 """The base recalibration on rig data with impact FRFs reaches the χ² the truth reaches.
 
-The data come from the blind harness's rig source (``benchmarks/discrepancy_blind.py``), whose
+The data come from the blind harness's rig source (``discrepancy.rig_source``), whose
 truth is known: every run's bearing stiffness, the build's damping, the tool's mass, each
 probe's and the hammer's gain.
 """
 
 from __future__ import annotations
-
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,25 +16,16 @@ from surrogate_rbrdo.discrepancy.holdout import masks_for, split_speeds
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.search import fit_nuisance
 from surrogate_rbrdo.rig.impacts import ImpactPlan
-
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "discrepancy_blind.py"
-
-
-def _harness():
-    spec = importlib.util.spec_from_file_location("discrepancy_blind_harness", BENCH)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod                       # its dataclasses resolve their module
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def _truth_x(par, source, g, effects, seed, channels):
     """The truth's nuisance in the fit's parametrisation: log of the 1x runs' geometric mean
     stiffness factor, the impact run's factor relative to it, the build's damping, the tool's
     mass, each probe's and the hammer's gain (time constants and skews at their prior mean)."""
-    truth, sensors = source._parts(g, effects, "high")
+    truth, sensors = source.parts(g, effects, "high")
     ss = np.random.SeedSequence(seed)
     inst = sensors.install(np.random.default_rng(ss.spawn(1)[0]))
     th = np.log([truth.state(ss, build=0, tool=0, run=r).theta[0]
@@ -64,9 +51,8 @@ def test_recalibration_with_impacts_reaches_the_truths_chi2(spindle):
     reach the minimum the fit started at the truth's nuisance reaches (2 398 on 2 585
     observations) and return the truth's draws."""
     sp, g = spindle
-    h = _harness()
     seed = 1399883758
-    src = h.RigSource(tuple(np.linspace(1000.0, 24000.0, 50).tolist()), 20, h.FACTORS,
+    src = RigSource(tuple(np.linspace(1000.0, 24000.0, 50).tolist()), 20, FACTORS,
                       impacts=ImpactPlan())
     data = src.measure(g, sp.effects, "high", seed)
     data = MeasuredData(data.blocks, None, data.provenance)   # the workflow's default
