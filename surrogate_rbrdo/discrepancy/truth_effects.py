@@ -40,6 +40,7 @@ them.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from surrogate_rbrdo.core.registry import Registry
@@ -76,8 +77,12 @@ def bearing_seal(geometry: SpindleGeometry, *, k_N_per_m: float, bearing: str = 
     if bearing not in pos:
         raise ValueError(f"bearing_seal.bearing = {bearing!r} is not a bearing; bearings are "
                          f"{list(pos)}")
-    z = float(pos[bearing]) + offset_mm
-    check_range("bearing_seal.offset_mm", z, 0.0, geometry.total_length_mm)
+    z = float(pos[bearing]) + check_range("bearing_seal.offset_mm", offset_mm, -math.inf,
+                                          math.inf)
+    if not 0.0 <= z <= geometry.total_length_mm:
+        raise ValueError(f"bearing_seal.offset_mm = {offset_mm!r} is not allowed: the seal "
+                         f"would sit at {z} mm, outside the shaft [0, "
+                         f"{geometry.total_length_mm}] mm")
     law = ConstantLaw(k_matrix_N_per_m=((k_N_per_m, 0.0), (0.0, k_N_per_m)),
                       c_matrix_Ns_per_m=((0.0, 0.0), (0.0, 0.0)), damping_eta_s=0.0)
     return replace(geometry, bearings=geometry.bearings + (Bearing(f"seal_{bearing}", z, law),))

@@ -167,6 +167,11 @@ def chain_condensation(model: SpindleModel,
     frequency apart from the spin, ``1 + iωβ``, ``−ω² + iωα``, ``iωΩ g``, for impact tests),
     condensed onto all four DOFs of each of the ascending ``nodes``. ``where`` completes the
     error message; ``with_det=False`` skips the interior determinant (returned as 1)."""
+    idx = np.asarray(nodes)
+    if (idx.ndim != 1 or idx.size == 0 or not np.issubdtype(idx.dtype, np.integer)
+            or idx[0] < 0 or idx[-1] >= model.n_nodes or np.any(np.diff(idx) <= 0)):
+        raise ValueError(f"nodes = {tuple(nodes)!r} is not allowed: must be strictly "
+                         f"ascending node indices in [0, {model.n_nodes - 1}]")
     aK, aM, aG = (np.asarray(a)[:, None, None, None] for a in coefficients)
     (Kd, Ku, Kl), (Md, Mu, Ml), (Gd, Gu, Gl) = (model.blocks[k] for k in ("K", "M", "G"))
     D = aK * Kd + aM * Md + aG * Gd                  # (S, nn, 4, 4)

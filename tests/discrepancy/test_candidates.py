@@ -9,6 +9,7 @@ import pytest
 from surrogate_rbrdo.discrepancy.candidates import DEFAULT_LIBRARY, candidate, library
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.spindle.effects import EFFECTS
+from surrogate_rbrdo.spindle.reference import reference_spindle
 
 BEARINGS = ("front", "rear")
 
@@ -43,3 +44,10 @@ def test_library_names_are_registered_and_truth_only_effects_are_not():
         library(("no_such_effect",), BEARINGS)
     with pytest.raises(ValueError, match="twice"):
         library(("housing", "housing"), BEARINGS)
+
+
+def test_bearing_seal_off_the_shaft_names_its_offset():
+    sp = reference_spindle()
+    g = sp.geometry_for(sp.baseline)
+    with pytest.raises(ValueError, match=r"bearing_seal.offset_mm = -500.0 .* -400.0 mm"):
+        TRUTH_MODIFIERS["bearing_seal"](g, k_N_per_m=1e7, offset_mm=-500.0)

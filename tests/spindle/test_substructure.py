@@ -11,6 +11,7 @@ from surrogate_rbrdo.spindle.assembly import build_model
 from surrogate_rbrdo.spindle.reference import reference_spindle
 from surrogate_rbrdo.spindle.substructure import (
     PointwiseCondensed,
+    chain_condensation,
     condensed_from_vector,
     condensed_rotor,
     condensed_rotor_chain,
@@ -106,3 +107,11 @@ def test_chain_condensation_with_free_ends_on_both_sides():
     S = condensed_rotor(m, sp, lay)
     np.testing.assert_allclose(condensed_rotor_chain(m, sp, lay), S, rtol=0,
                                atol=1e-11 * np.abs(S).max())
+
+
+@pytest.mark.parametrize("nodes", [(), (3, 2), (1, 1), (-1, 4), (0, 10_000), (0.0, 2.0)])
+def test_chain_condensation_refuses_bad_nodes(nodes):
+    m = SP.model(SP.baseline)
+    one = np.ones(1)
+    with pytest.raises(ValueError, match="nodes = .* strictly ascending"):
+        chain_condensation(m, (one, -one, 0 * one), nodes)
