@@ -13,7 +13,7 @@ least ``min_cos``; *two effects at once* (both strong); and effects *outside the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,6 +23,7 @@ from surrogate_rbrdo.discrepancy.blind import (
     Context,
     Scenario,
     calibrate,
+    separable_strength,
 )
 from surrogate_rbrdo.discrepancy.calibration import _apply, _data_whitening, linearise
 from surrogate_rbrdo.discrepancy.candidates import library
@@ -63,17 +64,24 @@ class Calibration:
 
     knob: dict[tuple[str, str, str], float]
     z: dict[tuple[str, str, str], float]
+    #: for the ``strong`` cells: the part of ``z`` no generic rival explains and that rival
+    #: (:func:`~.blind.separable_strength`)
+    separable: dict[tuple[str, str, str], tuple[float, str]] = field(default_factory=dict)
 
 
 def calibrate_grid(ctx: Context, names: tuple[str, ...], noises: tuple[str, ...],
                    strengths: dict[str, float] = STRENGTHS) -> Calibration:
-    """Bisect every (effect, strength, noise) to its target strength."""
-    knob, z = {}, {}
+    """Bisect every (effect, strength, noise) to its target strength; the separable part of
+    every strong cell's strength."""
+    knob, z, sep = {}, {}, {}
     for n in names:
         for s, target in strengths.items():
             for nz in noises:
                 knob[(n, s, nz)], z[(n, s, nz)] = calibrate(ctx, HIDDEN[n], target, nz)
-    return Calibration(knob, z)
+                if s == "strong":
+                    sep[(n, s, nz)] = separable_strength(
+                        ctx, ((HIDDEN[n], knob[(n, s, nz)]),), nz)[1:]
+    return Calibration(knob, z, sep)
 
 
 def confounded_pairs(names: tuple[str, ...], cos: np.ndarray, one_sided: dict[str, bool],

@@ -170,6 +170,44 @@ def _bounded_gain(U: np.ndarray, r: np.ndarray, bounds: np.ndarray) -> np.ndarra
     return np.where(live, 2 * c * ur - c * c * uu, 0.0)
 
 
+def _rivals(problem: Problem, lin: Linearisation,
+            extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None):
+    """Whitened nuisance ``N``, rival columns ``G`` and ``U`` (``G`` with ``N`` projected
+    out), the rivals' labels and ranges, and which rivals the nuisance does not absorb; None
+    when there is no rival."""
+    cols, labels = lin.generic, lin.generic_labels
+    bounds = (lin.generic_bounds if lin.generic_bounds is not None
+              else np.tile([-np.inf, np.inf], (cols.shape[1], 1)))
+    if extra is not None and extra[0].shape[1]:
+        cols, labels = np.hstack([cols, extra[0]]), labels + extra[1]
+        bounds = np.vstack([bounds, extra[2]])
+    if cols.shape[1] == 0:
+        return None
+    W = _data_whitening(problem)
+    N = _apply(W, lin.nuisance)
+    G = _apply(W, cols)
+    gg = np.einsum("nk,nk->k", G, G)
+    U = _orth(N, G)
+    live = np.einsum("nk,nk->k", U, U) > 1e-12 * gg          # not absorbed by the nuisance
+    return N, G, U, labels, bounds, live
+
+
+def best_rival(problem: Problem, lin: Linearisation, r: np.ndarray,
+               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
+               ) -> tuple[float, str]:
+    """The largest first-order χ² reduction one generic rival (inside its plausible range,
+    nuisance refitted with it) gives on whitened residuals ``r`` of a fit at ``lin``'s base,
+    and that rival's label (``(0.0, "")`` without rivals). What is left, ``rᵀr −`` the gain,
+    is the part of a discrepancy no generic local change explains."""
+    rv = _rivals(problem, lin, extra)
+    if rv is None:
+        return 0.0, ""
+    N, _, U, labels, bounds, live = rv
+    gain = np.where(live, _bounded_gain(U, _orth(N, r[:, None])[:, 0], bounds), 0.0)
+    j = int(np.argmax(gain))
+    return float(gain[j]), labels[j]
+
+
 def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: np.ndarray,
                fit_chi2: float, fit_r: np.ndarray, fit_jac: np.ndarray, n_free: int,
                confound_delta: float,
@@ -198,21 +236,12 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     level = float(chi2.sf(confound_delta, 1))
     k = max(n_free, 1)
     threshold = float(chi2.isf(level, k))
-    cols, labels = lin.generic, lin.generic_labels
-    bounds = (lin.generic_bounds if lin.generic_bounds is not None
-              else np.tile([-np.inf, np.inf], (cols.shape[1], 1)))
-    if extra is not None and extra[0].shape[1]:
-        cols, labels = np.hstack([cols, extra[0]]), labels + extra[1]
-        bounds = np.vstack([bounds, extra[2]])
-    if cols.shape[1] == 0:
+    rv = _rivals(problem, lin, extra)
+    if rv is None:
         return RivalTest(np.inf, threshold, "", 0.0, level, k)
-    W = _data_whitening(problem)
-    N = _apply(W, lin.nuisance)
-    G = _apply(W, cols)
-    gg = np.einsum("nk,nk->k", G, G)
-    U = _orth(N, G)
-    live = np.einsum("nk,nk->k", U, U) > 1e-12 * gg          # not absorbed by the nuisance
+    N, G, U, labels, bounds, live = rv
     gain = _bounded_gain(U, _orth(N, base_r[:, None])[:, 0], bounds)       # rival alone
+    gg = np.einsum("nk,nk->k", G, G)
     V = _orth(np.hstack([N, fit_jac]), G)
     V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
     both = fit_chi2 - _bounded_gain(V, fit_r, bounds)                     # rival + candidate

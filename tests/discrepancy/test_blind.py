@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context, SyntheticSource, rates, score
+from surrogate_rbrdo.discrepancy.blind import (
+    HIDDEN,
+    Context,
+    SyntheticSource,
+    rates,
+    score,
+    separable_strength,
+)
 from surrogate_rbrdo.discrepancy.grid import build_grid, calibrate_grid, confounded_pairs
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
@@ -75,3 +82,23 @@ def test_blind_grid_small(spindle):
     assert all(r["outcome"] == "nothing" for r in rows if r["class"] == "nothing hidden")
     strong = [r for r in rows if r["class"].startswith("single")]
     assert all(r["outcome"] in ("correct_name", "correct_confounded") for r in strong)
+
+
+@pytest.mark.parametrize("name, knob, ratio", [
+    ("bearing_seal", 4e5, (0.0, 0.05)),      # the rival itself: a passive spring at a node
+    ("magnetic_pull", 1e4, (0.0, 0.05)),     # a negative spring at the motor's node
+    ("anisotropy", 2.3e-4, (0.99, 1.0)),     # backward whirl: no isotropic change has it
+])
+def test_separable_strength_known_cases(spindle, name, knob, ratio):
+    """A hidden generic change is its own closest rival (nothing separable); an anisotropy's
+    first-order signature at 1x is the backward-whirl part, orthogonal to every isotropic
+    generic change once the recalibration is refitted (everything separable)."""
+    sp, g = spindle
+    src = SyntheticSource(Campaign(), {"default": NoiseLevel()},
+                          2 * sp.geometry.unbalances[0].magnitude_kgm, (0.0, 350.0))
+    ctx = Context(g, sp.effects, src, DiscrepancyOptions(n_draws=200))
+    z, z_sep, rival = separable_strength(ctx, ((HIDDEN[name], knob),), "default")
+    assert z > 5.0                           # visible: the ratio is not about noise
+    assert ratio[0] <= z_sep / z <= ratio[1], (z, z_sep, rival)
+    if name != "anisotropy":
+        assert rival.startswith("grounded spring")
