@@ -23,7 +23,7 @@ from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context
 from surrogate_rbrdo.discrepancy.calibration import _apply, _data_whitening, linearise
 from surrogate_rbrdo.discrepancy.candidates import library
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
-from surrogate_rbrdo.discrepancy.generic import NODE_SPRING_SCALE
+from surrogate_rbrdo.discrepancy.generic import BESIDE_BEARING, NODE_SPRING_SCALE
 from surrogate_rbrdo.discrepancy.holdout import split_speeds
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
@@ -56,7 +56,7 @@ def report(ctx: Context, data: MeasuredData, label: str) -> None:
           f"{r @ r:.1f}")
     springs = {}
     for name, node in zip(fm.bearing_names, model.bearing_nodes, strict=True):
-        j = lin.generic_labels.index(f"grounded spring at node {node}")
+        j = lin.generic_labels.index(f"grounded spring at node {node} {BESIDE_BEARING} {name}")
         u = G[:, j]
         c = (u @ r) / (u @ u)
         # columns are scaled to unit nuisance-orthogonal norm: back to N/m

@@ -126,9 +126,22 @@ def generic_labels(model) -> tuple[tuple[str, float, float], ...]:
     for disk in model.geometry.disks:
         out += [(f"mass of disk {disk.name}", *PLAUSIBLE["disk_mass"]),
                 (f"diametral inertia of disk {disk.name}", *PLAUSIBLE["disk_inertia"])]
-    out += [(f"grounded spring at node {n}", float(lo), float(hi))
+    own = dict(zip((int(n) for n in model.bearing_nodes),
+                   (b.name for b in model.geometry.bearings), strict=True))
+    beside = dict(own)                     # a bearing's own node first, then its neighbours
+    for node, name in own.items():
+        for n in (node - 1, node + 1):
+            beside.setdefault(n, name)
+    out += [(f"grounded spring at node {n}"
+             + (f" {BESIDE_BEARING} {beside[n]}" if n in beside else ""), float(lo), float(hi))
             for n, (lo, hi) in enumerate(node_spring_ranges(model))]
     return tuple(out)
+
+
+#: the label of a grounded spring at a bearing's node or a neighbour (one element away) ends
+#: with this and the bearing's name: with the bearing's stiffness factor recalibrated such a
+#: spring spans the bearing's speed laws (:func:`node_spring_ranges`)
+BESIDE_BEARING = "beside bearing"
 
 
 def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:

@@ -38,6 +38,7 @@ from surrogate_rbrdo.discrepancy.candidates import (
 )
 from surrogate_rbrdo.discrepancy.fit import Fit, fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.generic import BESIDE_BEARING
 from surrogate_rbrdo.discrepancy.gp import gp_correction
 from surrogate_rbrdo.discrepancy.holdout import Gap, Split, gap, masks_for, residuals, split_speeds
 from surrogate_rbrdo.discrepancy.naming import (
@@ -395,13 +396,14 @@ def _drop_thin_impacts(data: MeasuredData, min_dof: int
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:
     """The experiment that would separate a withheld name: off-synchronous data if the data
     have none (impact tests at speed); else, when the closest rival of the best-separated
-    member is a grounded spring (a constant stiffness, which with θ recalibrated spans a
-    bearing's speed law), a thermal soak; else a larger effect or more speeds."""
+    member is a grounded spring at a bearing's node or beside it (a constant stiffness,
+    which with θ recalibrated spans that bearing's speed law), a thermal soak; else a larger
+    effect or more speeds."""
     at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
     if not at_speed:
         return RIVAL_SEPARATION
     rt = max((a.rival for a in withheld if a.rival is not None), key=lambda t: t.statistic,
              default=None)
-    if rt is not None and rt.rival.startswith("grounded spring"):
+    if rt is not None and rt.rival.startswith("grounded spring") and BESIDE_BEARING in rt.rival:
         return RIVAL_SEPARATION_SPRING
     return RIVAL_SEPARATION_AT_SPEED

@@ -13,6 +13,7 @@ from surrogate_rbrdo.discrepancy.generic import (
     NODE_SPRING_SCALE,
     PLAUSIBLE,
     generic_columns,
+    generic_labels,
     node_spring_ranges,
 )
 from surrogate_rbrdo.discrepancy.problem import Problem
@@ -64,3 +65,17 @@ def test_a_grounded_spring_may_be_negative_only_at_the_motor(spindle):
                                 for d in g.disks))
     assert np.all(node_spring_ranges(build_model(g2, sp.effects))[:, 0]
                   == PLAUSIBLE["node_spring"][0])
+
+
+def test_springs_at_or_next_to_a_bearing_are_labelled_with_it(spindle):
+    """The reference spindle's bearings sit at 100 and 600 mm: the springs at their nodes and
+    one element either side carry the bearing's name, no other spring does."""
+    sp, g = spindle
+    m = build_model(g)
+    springs = [lb for lb, _, _ in generic_labels(m) if lb.startswith("grounded spring")]
+    assert len(springs) == m.n_nodes
+    for name, z_mm in (("front", 100.0), ("rear", 600.0)):
+        n = int(np.argmin(np.abs(m.z - z_mm * 1e-3)))
+        assert [i for i, lb in enumerate(springs) if lb.endswith(f"beside bearing {name}")] \
+            == [n - 1, n, n + 1]
+    assert sum("beside bearing" in lb for lb in springs) == 6

@@ -158,7 +158,8 @@ def test_a_one_sided_spring_cannot_mimic_what_needs_it_negative():
 def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
     """The experiment a withheld name carries: off-synchronous excitation without impact tests
     at speed; with them, a thermal soak when the closest rival is a grounded spring (it spans a
-    bearing's speed law, no excitation separates it), else a larger effect or more speeds."""
+    bearing's speed law, no excitation separates it) at or beside a bearing, else a larger
+    effect or more speeds."""
     ch = (Channel("t", 0.0, "x"),)
     one_x = SimpleNamespace(sweep=Sweep.unbalance([1000.0, 4000.0]))
     at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))))
@@ -168,8 +169,10 @@ def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
         return tuple(SimpleNamespace(rival=RivalTest(float(i), 9.2, lb, 1.0))
                      for i, lb in enumerate(labels))
 
-    spring = held("stiffness of shaft element 3", "grounded spring at node 4")
+    spring = held("stiffness of shaft element 3", "grounded spring at node 4 beside bearing a")
     assert _rival_separation(standstill, spring) == rivals.RIVAL_SEPARATION
     assert _rival_separation(at_speed, spring) == rivals.RIVAL_SEPARATION_SPRING
+    far = held("stiffness of shaft element 3", "grounded spring at node 9")
+    assert _rival_separation(at_speed, far) == rivals.RIVAL_SEPARATION_AT_SPEED
     assert _rival_separation(at_speed, held("grounded spring at node 4", "mass of disk x")) \
         == rivals.RIVAL_SEPARATION_AT_SPEED
