@@ -40,12 +40,12 @@ from surrogate_rbrdo.core.validate import check_choice
 from surrogate_rbrdo.discrepancy.measured import (
     channel_positions,
     dataset_phasor_rows,
-    impact_blocks,
+    impact_data,
     phasor_block,
     read_phasor_table,
 )
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
-from surrogate_rbrdo.discrepancy.observables import MeasuredData
+from surrogate_rbrdo.discrepancy.observables import THIN_IMPACTS, MeasuredData
 from surrogate_rbrdo.discrepancy.report import write_run
 from surrogate_rbrdo.discrepancy.workflow import (
     DiscrepancyOptions,
@@ -161,16 +161,17 @@ def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
     (:func:`~.measured.dataset_phasor_rows`). With ``impacts`` (default, as
     ``DiscrepancyOptions.use_impacts``), the impact records of the
     dataset (a rig campaign's ``dataset/``, or the dataset folder itself) become FRF blocks,
-    one per speed and hit direction (:func:`~.measured.impact_blocks`)."""
+    one per speed and hit direction (:func:`~.measured.impact_blocks`); those with too few
+    hits are listed in the provenance (:data:`~.observables.THIN_IMPACTS`)."""
     root = Path(path)
     if not root.is_dir():
         raise ValueError(f"data folder {str(root)!r} is not allowed: it is not a folder")
     table = root / "phasors.csv"
     if not table.is_file() and (root / "index.jsonl").is_file():
         rows, pos = dataset_phasor_rows(root)
-        return MeasuredData((phasor_block(rows, pos),) + (impact_blocks(root) if impacts
-                                                           else ()),
-                            provenance={"source": str(root)})
+        imp, thin = impact_data(root) if impacts else ((), ())
+        return MeasuredData((phasor_block(rows, pos),) + imp,
+                            provenance=_provenance(root, thin))
     if not table.is_file():
         raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table) "
                          "and no index.jsonl (a dataset folder)")
@@ -184,9 +185,14 @@ def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
                              "dataset/records/*.npz to read the channels' positions from")
         pos = channel_positions(recs[0])
     ds = root / "dataset"
-    imp = impact_blocks(ds) if impacts and (ds / "index.jsonl").is_file() else ()
+    imp, thin = impact_data(ds) if impacts and (ds / "index.jsonl").is_file() else ((), ())
     return MeasuredData((phasor_block(read_phasor_table(table), pos),) + imp,
-                        provenance={"source": str(root)})
+                        provenance=_provenance(root, thin))
+
+
+def _provenance(root: Path, thin: tuple[tuple[str, int], ...]) -> dict:
+    """The data's source and the impact blocks the reader left out (too few hits)."""
+    return {"source": str(root), **({THIN_IMPACTS: list(thin)} if thin else {})}
 
 
 def analyse(data: MeasuredData, geometry: SpindleGeometry, effects: tuple[Effect, ...], *,

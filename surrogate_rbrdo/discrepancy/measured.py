@@ -186,23 +186,22 @@ def impact_blocks(root: str | Path, plan: ImpactPlan | None = None
     hits. A speed and direction with fewer than :data:`MIN_HITS` hits is left out with a
     warning (a campaign planned for identification may hit twice). Empty if there are no
     impact records."""
+    return impact_data(root, plan)[0]
+
+
+def impact_data(root: str | Path, plan: ImpactPlan | None = None
+                ) -> tuple[tuple[ComplexBlock, ...], tuple[tuple[str, int], ...]]:
+    """:func:`impact_blocks` and ``(name, dof)`` of the blocks it leaves out for fewer than
+    :data:`MIN_HITS` hits (``dof``: hits − 1), for a workflow's findings to list beside the
+    blocks it leaves out itself."""
     plan = ImpactPlan() if plan is None else plan
-    ds = open_dataset(root)
-    groups: dict[tuple[float, str], list] = {}
-    for row in ds.select(kind="impact"):
-        rec = ds.load(row)
-        speed = 0.0 if not math.isfinite(rec.speed_rpm) else float(rec.speed_rpm)
-        force = next((c for c in rec.channels if c.quantity == "force"), None)
-        if force is None or force.location.direction not in ("x", "y"):
-            raise ValueError(f"{root}: impact record {rec.id!r} needs a force channel with a "
-                             "location direction x or y")
-        groups.setdefault((speed, force.location.direction), []).append(rec)
-    out = []
-    for (speed, d), recs in sorted(groups.items()):
+    out, thin = [], []
+    for (speed, d), recs in sorted(_impact_groups(root).items()):
         if len(recs) < MIN_HITS:
             warnings.warn(f"{root}: {len(recs)} impact records at {speed:g} rpm in {d} left "
                           f"out: the FRF noise is estimated from the hits, which needs at "
-                          f"least {MIN_HITS}", stacklevel=2)
+                          f"least {MIN_HITS}", stacklevel=3)
+            thin.append((_impact_name(speed, d), len(recs) - 1))
             continue
         force = next(c for c in recs[0].channels if c.quantity == "force")
         probes = [c for c in recs[0].channels if c.quantity == "displacement"]
@@ -217,7 +216,27 @@ def impact_blocks(root: str | Path, plan: ImpactPlan | None = None
                         for c in probes)
         exc = Channel(f"{force.location.target}_{d}", float(force.location.position_mm), d)
         out.append(ComplexBlock.from_repeats(
-            f"impact_{d}_{speed:.0f}rpm", Sweep.impact(est.freq_hz[idx], (exc,), speed),
+            _impact_name(speed, d), Sweep.impact(est.freq_hz[idx], (exc,), speed),
             outputs, np.array(hits), {"source": "impact records", "n_hits": len(recs),
                                       "speed_rpm": speed}, runs=False))
-    return tuple(out)
+    return tuple(out), tuple(thin)
+
+
+def _impact_name(speed_rpm: float, direction: str) -> str:
+    return f"impact_{direction}_{speed_rpm:.0f}rpm"
+
+
+def _impact_groups(root: str | Path) -> dict[tuple[float, str], list]:
+    """The impact records of the dataset folder ``root`` by (spin speed in rpm, 0 at
+    standstill; hit direction)."""
+    ds = open_dataset(root)
+    groups: dict[tuple[float, str], list] = {}
+    for row in ds.select(kind="impact"):
+        rec = ds.load(row)
+        speed = 0.0 if not math.isfinite(rec.speed_rpm) else float(rec.speed_rpm)
+        force = next((c for c in rec.channels if c.quantity == "force"), None)
+        if force is None or force.location.direction not in ("x", "y"):
+            raise ValueError(f"{root}: impact record {rec.id!r} needs a force channel with a "
+                             "location direction x or y")
+        groups.setdefault((speed, force.location.direction), []).append(rec)
+    return groups

@@ -178,6 +178,10 @@ class RealBlock:
         return Sweep.unbalance(self.speeds_rpm)
 
 
+#: the provenance key of impact blocks a reader left out (:class:`MeasuredData`)
+THIN_IMPACTS = "impact_blocks_left_out"
+
+
 @dataclass(frozen=True)
 class MeasuredData:
     """Everything the workflow compares with the model.
@@ -189,7 +193,9 @@ class MeasuredData:
     identified : RealBlock or None
         Identified bearing stiffness vs speed (from an identification run), optional.
     provenance : dict
-        Where the data came from (truth effects and seeds for rig data).
+        Where the data came from (truth effects and seeds for rig data); under
+        :data:`THIN_IMPACTS` the reader's ``(name, dof)`` of impact blocks it could not form
+        (too few hits: :func:`~.measured.impact_data`), which the workflow's findings list.
     """
 
     blocks: tuple[ComplexBlock, ...]

@@ -50,7 +50,7 @@ from surrogate_rbrdo.discrepancy.naming import (
 )
 from surrogate_rbrdo.discrepancy.noise import run_offsets, run_states, theta_jacobian
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
-from surrogate_rbrdo.discrepancy.observables import MeasuredData
+from surrogate_rbrdo.discrepancy.observables import THIN_IMPACTS, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import (
     RIVAL_SEPARATION,
@@ -380,17 +380,19 @@ def _drop_thin_impacts(data: MeasuredData, min_dof: int
                        ) -> tuple[MeasuredData, tuple[tuple[str, int], ...]]:
     """The data without impact blocks whose noise covariance has fewer than ``min_dof``
     degrees of freedom, and ``(name, dof)`` of those dropped (with a warning: the user's hits
-    are not silently ignored)."""
+    are not silently ignored) after those the reader left out already (the provenance's
+    :data:`~.observables.THIN_IMPACTS`)."""
     thin = tuple((b.name, int(b.dof)) for b in data.blocks
                  if b.sweep.kind == "impact" and b.dof < min_dof)
+    before = tuple((str(n), int(d)) for n, d in data.provenance.get(THIN_IMPACTS, ()))
     if not thin:
-        return data, ()
+        return data, before
     warnings.warn(f"{len(thin)} impact block(s) left out: their noise covariance has "
                   f"{min(d for _, d in thin)}-{max(d for _, d in thin)} degrees of freedom, "
                   f"fewer than min_impact_dof = {min_dof} (hits per direction - 1); the "
                   "analysis uses the other blocks", stacklevel=3)
     keep = tuple(b for b in data.blocks if b.sweep.kind != "impact" or b.dof >= min_dof)
-    return MeasuredData(keep, data.identified, data.provenance), thin
+    return MeasuredData(keep, data.identified, data.provenance), before + thin
 
 
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:

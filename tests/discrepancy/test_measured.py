@@ -14,7 +14,9 @@ from surrogate_rbrdo.discrepancy.measured import (
     phasor_block,
     read_phasor_table,
 )
+from surrogate_rbrdo.discrepancy.observables import THIN_IMPACTS
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+from surrogate_rbrdo.discrepancy.workflow import _drop_thin_impacts
 
 
 def test_phasor_table_round_trip(tmp_path):
@@ -124,3 +126,7 @@ def test_a_speed_with_too_few_hits_is_left_out_with_a_warning(tmp_path):
     with pytest.warns(UserWarning, match="2 impact records at 0 rpm in x left out"):
         data = data_from_folder(tmp_path)
     assert [b.name for b in data.blocks] == ["unbalance_1x"]
+    # ... and the workflow's findings list them beside the blocks it leaves out itself
+    left = [("impact_x_0rpm", 1), ("impact_y_0rpm", 1)]
+    assert data.provenance[THIN_IMPACTS] == left
+    assert _drop_thin_impacts(data, 9) == (data, tuple(left))
