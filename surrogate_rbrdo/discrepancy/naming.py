@@ -145,7 +145,8 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             continue
         if warm is None:                 # the 1x-only recalibration, once per stage
             warm = (warm_base(problem, base, max_nfev=max_nfev),)
-        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0],
+                           interior_delta=confound_delta)
         p = float(tails[k].sf(cf.delta_chi2))
         ho = holdout.chi2(cf.fit)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
