@@ -31,8 +31,10 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.discrepancy.impedance import (
+    BearingParts,
     acts_on_rotor,
     bearing_dynamic_stiffness,
+    bearing_parts,
     condensed_dynamic_stiffness,
 )
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
@@ -96,6 +98,7 @@ class ForwardModel:
     _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _prints: dict = field(default_factory=dict, init=False, repr=False)
+    _parts: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -331,7 +334,7 @@ class ForwardModel:
                     pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
                     Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
                         self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
-                        freq[pts], theta[ks[0]][at], ds[at])
+                        freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
             # one coupled solve per number of loads (padding loads with zero columns would
             # change the BLAS kernels, hence the last digits)
@@ -347,6 +350,19 @@ class ForwardModel:
             raise ModelError("ForwardModel.response: non-finite response")
         return out
 
+    def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
+        """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
+        a fit's rows share them with its finite-difference rows)."""
+        key = (extra, np.ascontiguousarray(spin, dtype=float).tobytes())
+        hit = self._parts.get(key)
+        if hit is None:
+            hit = self._parts[key] = bearing_parts(self.geometry, self.effects + extra, spin)
+            if len(self._parts) > 4 * self.cache_size:
+                self._parts.popitem(last=False)
+        else:
+            self._parts.move_to_end(key)
+        return hit
+
     def bearing_impedance(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
                           extras: Sequence[tuple[Effect, ...]] | None = None) -> np.ndarray:
         """Effective bearing impedance ``(B, X, nb, 2, 2)`` (what an identification of the
@@ -356,7 +372,8 @@ class ForwardModel:
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
         return np.stack([bearing_dynamic_stiffness(
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
-            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0] for i, extra in enumerate(extras)])
+            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
+            self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
 
 
 def _stack(conds: list[_Condensed]) -> _Condensed:
