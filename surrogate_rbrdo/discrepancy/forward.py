@@ -51,6 +51,9 @@ class _Condensed:
     H_OP: np.ndarray  # (X, nO, nP)
     H_PP: np.ndarray  # (X, nP, nP)
     H_PF: np.ndarray  # (X, nP, nL)
+    #: the coupled system's identity (rotor, points, retained and coupled DOFs, outputs):
+    #: sweeps that share it differ in their loads only
+    system: str = ""
 
 
 @dataclass
@@ -225,7 +228,8 @@ class ForwardModel:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
             self._condensed[key] = _Condensed(*(np.ascontiguousarray(a) for a in (
-                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])))
+                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])), system=self._key(
+                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes()))
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
         else:
@@ -336,16 +340,27 @@ class ForwardModel:
                         self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
                         freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
-            # one coupled solve per number of loads (padding loads with zero columns would
-            # change the BLAS kernels, hence the last digits)
-            for nl in sorted(set(n_load)):
-                ks = [k for k in range(len(sweeps)) if n_load[k] == nl]
-                pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
-                q = _couple(_stack([conds[k] for k in ks]), Z[:, pts],
-                            None if Zd is None else Zd[:, pts])
-                at = np.concatenate([[0], np.cumsum([sizes[k] for k in ks])])
-                for j, k in enumerate(ks):
-                    out[k][rows] = q[:, at[j]:at[j + 1]]
+            # sweeps with the same coupled system (hits in x and in y at one speed) share its
+            # factorisation: their loads are solved together; then one coupled solve per
+            # number of loads (padding loads with zero columns would change the BLAS kernels,
+            # hence the last digits)
+            systems: dict[str, list[int]] = {}
+            for k, c in enumerate(conds):
+                systems.setdefault(c.system, []).append(k)
+            merged = list(systems.values())
+            n_merged = [sum(n_load[k] for k in ks) for ks in merged]
+            for nl in sorted(set(n_merged)):
+                sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
+                pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1])
+                                      for ks in sel])
+                q = _couple(_stack([_loads_together([conds[k] for k in ks]) for ks in sel]),
+                            Z[:, pts], None if Zd is None else Zd[:, pts])
+                at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+                for j, ks in enumerate(sel):
+                    c0 = 0
+                    for k in ks:
+                        out[k][rows] = q[:, at[j]:at[j + 1], :, c0:c0 + n_load[k]]
+                        c0 += n_load[k]
         if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
@@ -383,6 +398,15 @@ def _stack(conds: list[_Condensed]) -> _Condensed:
         return conds[0]
     return _Condensed(*(np.concatenate([getattr(c, f) for c in conds])
                         for f in ("H_OF", "H_OP", "H_PP", "H_PF")))
+
+
+def _loads_together(conds: list[_Condensed]) -> _Condensed:
+    """Condensed rotors of sweeps sharing one coupled system as one, along the loads."""
+    if len(conds) == 1:
+        return conds[0]
+    c = conds[0]
+    return _Condensed(np.concatenate([d.H_OF for d in conds], -1), c.H_OP, c.H_PP,
+                      np.concatenate([d.H_PF for d in conds], -1), c.system)
 
 
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
