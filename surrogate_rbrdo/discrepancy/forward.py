@@ -291,10 +291,12 @@ class ForwardModel:
         ``theta[k]`` (B, m) (an impact run's thermal state) and the rows' other parameters in
         common: per sweep ``(B, X_k, n_channels, n_loads_k)``.
 
-        The same numbers as one :meth:`response` per sweep, computed in one pass: rows that
-        share a rotor are coupled in one batched solve over every sweep's points, and each
-        distinct row effect's bearing impedance is evaluated once per set of stiffness factors
-        over those points (the cost per row is Python's, not arithmetic).
+        The same numbers as one :meth:`response` per sweep (to round-off), computed in one
+        pass: rows that share a rotor are coupled in one batched solve over every sweep's
+        points (sweeps with the same coupled system — hits in x and in y at one speed — with
+        their loads side by side, one factorisation), and each distinct row effect's bearing
+        impedance is evaluated once per set of stiffness factors over those points, from its
+        θ-free part kept per effect and speeds (the cost per row is Python's, not arithmetic).
         """
         theta = [np.atleast_2d(np.asarray(t, dtype=float)) for t in theta]
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
