@@ -31,8 +31,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from surrogate_rbrdo.spindle.effects import EFFECTS, Effect
 
@@ -83,6 +85,10 @@ def separating_test(names: list[str]) -> str:
     return "; ".join(out)
 
 
+#: most effects a candidate keeps built (:meth:`Candidate.effect`)
+EFFECT_CACHE_SIZE = 4096
+
+
 @dataclass(frozen=True)
 class Candidate:
     """How one registered effect is fitted (built by :func:`candidate`).
@@ -103,6 +109,9 @@ class Candidate:
     shape_bounds: tuple[tuple[float, float], ...]
     shape_starts: tuple[tuple[float, ...], ...]
     scopes: tuple[tuple[str, ...], ...]
+    #: effects already built, keyed by scope and the parameters' bits (a fit's finite-difference
+    #: rows rebuild the same effect many times; equal inputs give an equal effect)
+    _built: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_strength(self) -> int:
@@ -114,6 +123,16 @@ class Candidate:
         Reciprocal strengths at 0 are off (∞); when some reciprocal strength is on, the others
         are kept just on (compliance ≥ 1e-18: effectively rigid), since an effect may require
         its stiffnesses to be all finite or all infinite (a tool interface)."""
+        key = (tuple(scope), np.array([values[p] for p in self.strength + self.shape],
+                                      dtype=float).tobytes())
+        hit = self._built.get(key)
+        if hit is None:
+            if len(self._built) >= EFFECT_CACHE_SIZE:
+                self._built.clear()
+            hit = self._built[key] = self._effect(scope, values)
+        return hit
+
+    def _effect(self, scope: tuple[str, ...], values: dict[str, float]) -> Effect:
         kw: dict[str, Any] = {}
         on = any(float(values[p]) > 0 for p, rec in zip(self.strength, self.reciprocal,
                                                         strict=True) if rec)

@@ -31,8 +31,10 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.discrepancy.impedance import (
+    BearingParts,
     acts_on_rotor,
     bearing_dynamic_stiffness,
+    bearing_parts,
     condensed_dynamic_stiffness,
 )
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
@@ -49,6 +51,9 @@ class _Condensed:
     H_OP: np.ndarray  # (X, nO, nP)
     H_PP: np.ndarray  # (X, nP, nP)
     H_PF: np.ndarray  # (X, nP, nL)
+    #: the coupled system's identity (rotor, points, retained and coupled DOFs, outputs):
+    #: sweeps that share it differ in their loads only
+    system: str = ""
 
 
 @dataclass
@@ -96,6 +101,7 @@ class ForwardModel:
     _condensed: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _prints: dict = field(default_factory=dict, init=False, repr=False)
+    _parts: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -222,7 +228,8 @@ class ForwardModel:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
             self._condensed[key] = _Condensed(*(np.ascontiguousarray(a) for a in (
-                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])))
+                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])), system=self._key(
+                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes()))
             if len(self._condensed) > self.cache_size:
                 self._condensed.popitem(last=False)
         else:
@@ -284,10 +291,12 @@ class ForwardModel:
         ``theta[k]`` (B, m) (an impact run's thermal state) and the rows' other parameters in
         common: per sweep ``(B, X_k, n_channels, n_loads_k)``.
 
-        The same numbers as one :meth:`response` per sweep, computed in one pass: rows that
-        share a rotor are coupled in one batched solve over every sweep's points, and each
-        distinct row effect's bearing impedance is evaluated once per set of stiffness factors
-        over those points (the cost per row is Python's, not arithmetic).
+        The same numbers as one :meth:`response` per sweep (to round-off), computed in one
+        pass: rows that share a rotor are coupled in one batched solve over every sweep's
+        points (sweeps with the same coupled system — hits in x and in y at one speed — with
+        their loads side by side, one factorisation), and each distinct row effect's bearing
+        impedance is evaluated once per set of stiffness factors over those points, from its
+        θ-free part kept per effect and speeds (the cost per row is Python's, not arithmetic).
         """
         theta = [np.atleast_2d(np.asarray(t, dtype=float)) for t in theta]
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
@@ -331,21 +340,45 @@ class ForwardModel:
                     pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
                     Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
                         self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
-                        freq[pts], theta[ks[0]][at], ds[at])
+                        freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
-            # one coupled solve per number of loads (padding loads with zero columns would
-            # change the BLAS kernels, hence the last digits)
-            for nl in sorted(set(n_load)):
-                ks = [k for k in range(len(sweeps)) if n_load[k] == nl]
-                pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
-                q = _couple(_stack([conds[k] for k in ks]), Z[:, pts],
-                            None if Zd is None else Zd[:, pts])
-                at = np.concatenate([[0], np.cumsum([sizes[k] for k in ks])])
-                for j, k in enumerate(ks):
-                    out[k][rows] = q[:, at[j]:at[j + 1]]
+            # sweeps with the same coupled system (hits in x and in y at one speed) share its
+            # factorisation: their loads are solved together; then one coupled solve per
+            # number of loads (padding loads with zero columns would change the BLAS kernels,
+            # hence the last digits)
+            systems: dict[str, list[int]] = {}
+            for k, c in enumerate(conds):
+                systems.setdefault(c.system, []).append(k)
+            merged = list(systems.values())
+            n_merged = [sum(n_load[k] for k in ks) for ks in merged]
+            for nl in sorted(set(n_merged)):
+                sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
+                pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1])
+                                      for ks in sel])
+                q = _couple(_stack([_loads_together([conds[k] for k in ks]) for ks in sel]),
+                            Z[:, pts], None if Zd is None else Zd[:, pts])
+                at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+                for j, ks in enumerate(sel):
+                    c0 = 0
+                    for k in ks:
+                        out[k][rows] = q[:, at[j]:at[j + 1], :, c0:c0 + n_load[k]]
+                        c0 += n_load[k]
         if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
+
+    def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
+        """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
+        a fit's rows share them with its finite-difference rows)."""
+        key = (extra, np.ascontiguousarray(spin, dtype=float).tobytes())
+        hit = self._parts.get(key)
+        if hit is None:
+            hit = self._parts[key] = bearing_parts(self.geometry, self.effects + extra, spin)
+            if len(self._parts) > 4 * self.cache_size:
+                self._parts.popitem(last=False)
+        else:
+            self._parts.move_to_end(key)
+        return hit
 
     def bearing_impedance(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
                           extras: Sequence[tuple[Effect, ...]] | None = None) -> np.ndarray:
@@ -356,7 +389,8 @@ class ForwardModel:
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
         return np.stack([bearing_dynamic_stiffness(
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
-            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1])[0] for i, extra in enumerate(extras)])
+            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
+            self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
 
 
 def _stack(conds: list[_Condensed]) -> _Condensed:
@@ -366,6 +400,15 @@ def _stack(conds: list[_Condensed]) -> _Condensed:
         return conds[0]
     return _Condensed(*(np.concatenate([getattr(c, f) for c in conds])
                         for f in ("H_OF", "H_OP", "H_PP", "H_PF")))
+
+
+def _loads_together(conds: list[_Condensed]) -> _Condensed:
+    """Condensed rotors of sweeps sharing one coupled system as one, along the loads."""
+    if len(conds) == 1:
+        return conds[0]
+    c = conds[0]
+    return _Condensed(np.concatenate([d.H_OF for d in conds], -1), c.H_OP, c.H_PP,
+                      np.concatenate([d.H_PF for d in conds], -1), c.system)
 
 
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:

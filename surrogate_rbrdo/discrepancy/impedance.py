@@ -14,13 +14,19 @@ at standstill needs them apart.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
-from surrogate_rbrdo.spindle.assembly import SpindleModel, bearing_coefficients, bearing_supports
-from surrogate_rbrdo.spindle.effects import Effect
+from surrogate_rbrdo.spindle.assembly import (
+    SpindleModel,
+    bearing_supports,
+    scale_bearing_coefficients,
+    unscaled_bearing_stiffness,
+)
+from surrogate_rbrdo.spindle.effects import Effect, Support
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 from surrogate_rbrdo.spindle.substructure import chain_condensation
 
@@ -113,24 +119,47 @@ def condensed_dynamic_stiffness_dense(model: SpindleModel, spin: np.ndarray, fre
 def bearing_dynamic_stiffness(geometry: SpindleGeometry, effects: Sequence[Effect],
                               theta_bearings: Sequence[str], spin: np.ndarray,
                               freq: np.ndarray, theta: np.ndarray,
-                              damping_scale: np.ndarray) -> np.ndarray:
+                              damping_scale: np.ndarray,
+                              parts: BearingParts | None = None) -> np.ndarray:
     """Bearing impedance ``Z = K(Ω) + iω s C(Ω)`` with its housing stage condensed in.
 
     As :func:`~surrogate_rbrdo.spindle.assembly.bearing_impedance` but with the response
     frequency ``ω`` apart from the spin ``Ω`` (an impact test at standstill) and a damping
     scale ``s`` per bearing. ``spin``, ``freq``: ``(X,)``; ``theta``: ``(B, m)``;
-    ``damping_scale``: ``(B, nb)``. Returns ``(B, X, nb, 2, 2)``.
+    ``damping_scale``: ``(B, nb)``. Returns ``(B, X, nb, 2, 2)``. ``parts``: what does not
+    depend on θ and the damping scale (:func:`bearing_parts` of the same effects and ``spin``),
+    if the caller keeps it.
     """
     B = theta.shape[0]
-    sp = np.broadcast_to(spin, (B, spin.size))
-    Kb, Cb = bearing_coefficients(geometry, effects, theta_bearings, sp, theta)
+    if parts is None:
+        parts = bearing_parts(geometry, effects, spin)
+    Kb, Cb = scale_bearing_coefficients(geometry, theta_bearings, parts.stiffness, theta,
+                                        (B, spin.size))
     w = freq[None, :, None, None, None]
     Z = Kb + 1j * w * Cb * damping_scale[:, None, :, None, None]
-    sups = bearing_supports(geometry, effects)
-    for j, sup in enumerate(sups):
+    for j, sup in enumerate(parts.supports):
         if sup is None:
             continue
         zh = sup.k_N_per_m + 1j * freq * sup.c_Ns_per_m - freq**2 * sup.m_kg
         Zj = Z[:, :, j]
         Z[:, :, j] = Zj - Zj @ np.linalg.solve(Zj + zh[None, :, None, None] * np.eye(2), Zj)
     return Z
+
+
+@dataclass(frozen=True)
+class BearingParts:
+    """What a bearing impedance needs besides θ and the damping scale, at given speeds:
+    each bearing's stiffness with the effects applied and before θ, ``(1, X, 2, 2)``
+    (:func:`~surrogate_rbrdo.spindle.assembly.unscaled_bearing_stiffness`), and its housing
+    stage."""
+
+    stiffness: tuple[np.ndarray, ...]
+    supports: tuple[Support | None, ...]
+
+
+def bearing_parts(geometry: SpindleGeometry, effects: Sequence[Effect], spin: np.ndarray
+                  ) -> BearingParts:
+    """:class:`BearingParts` of ``effects`` at spin speeds ``spin`` ``(X,)``."""
+    spin = np.asarray(spin, dtype=float)[None]
+    return BearingParts(tuple(unscaled_bearing_stiffness(geometry, effects, spin)),
+                        bearing_supports(geometry, effects))

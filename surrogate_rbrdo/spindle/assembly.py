@@ -256,6 +256,18 @@ def bearing_coefficients(
     ``omega``) replaces the ``preload_N`` of those bearings' preload laws, so a batch row can
     stand for another design (``DesignMap.bearing_preloads``).
     """
+    Ks = unscaled_bearing_stiffness(geometry, effects, omega, preloads)
+    return scale_bearing_coefficients(geometry, theta_bearings, Ks, theta, omega.shape)
+
+
+def unscaled_bearing_stiffness(
+    geometry: SpindleGeometry, effects: Sequence[Effect], omega: np.ndarray,
+    preloads: Mapping[str, np.ndarray] | None = None,
+) -> list[np.ndarray]:
+    """Per bearing, its stiffness ``(…, 2, 2)`` at ``omega`` (broadcastable to
+    ``omega.shape + (2, 2)``) with the effects applied, before the factors θ: the part of
+    :func:`bearing_coefficients` that does not depend on θ (a caller evaluating many θ at the
+    same speeds and effects computes it once, :func:`scale_bearing_coefficients` the rest)."""
     preloads = {} if preloads is None else preloads
     laws = {b.name: b.law for b in geometry.bearings}
     for name, F in preloads.items():
@@ -268,7 +280,7 @@ def bearing_coefficients(
         if not np.all(np.isfinite(F) & (F > 0)):
             raise ValueError(f"preloads[{name!r}] = {F[~(np.isfinite(F) & (F > 0))].flat[0]} "
                              "is not allowed: must be finite and > 0 (N)")
-    Ks, Cs = [], []
+    Ks = []
     for b in geometry.bearings:
         law = b.law
         if isinstance(law, PreloadLaw):
@@ -281,6 +293,19 @@ def bearing_coefficients(
             K = np.broadcast_to(law.stiffness_matrix(), omega.shape + (2, 2))
         for e in effects:
             K = e.bearing(b.name, omega, K)
+        Ks.append(K)
+    return Ks
+
+
+def scale_bearing_coefficients(
+    geometry: SpindleGeometry, theta_bearings: Sequence[str], Ks: Sequence[np.ndarray],
+    theta: np.ndarray, shape: tuple[int, ...],
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`bearing_coefficients` from :func:`unscaled_bearing_stiffness`'s ``Ks``: each θ
+    bearing's stiffness times its factor, the damping, stacked to ``shape + (nb, 2, 2)``."""
+    out_K, out_C = [], []
+    for b, K in zip(geometry.bearings, Ks, strict=True):
+        law = b.law
         if b.name in theta_bearings:
             j = list(theta_bearings).index(b.name)
             K = K * theta[:, j][:, None, None, None]
@@ -288,9 +313,9 @@ def bearing_coefficients(
             C = np.broadcast_to(np.asarray(law.c_matrix_Ns_per_m, float), K.shape)
         else:
             C = law.damping_eta_s * 0.5 * (K + np.swapaxes(K, -1, -2))
-        Ks.append(np.broadcast_to(K, omega.shape + (2, 2)))
-        Cs.append(np.broadcast_to(C, omega.shape + (2, 2)))
-    return np.stack(Ks, axis=-3), np.stack(Cs, axis=-3)
+        out_K.append(np.broadcast_to(K, shape + (2, 2)))
+        out_C.append(np.broadcast_to(C, shape + (2, 2)))
+    return np.stack(out_K, axis=-3), np.stack(out_C, axis=-3)
 
 
 def bearing_supports(geometry: SpindleGeometry, effects: Sequence[Effect]
