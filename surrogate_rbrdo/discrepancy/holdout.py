@@ -151,25 +151,42 @@ def gap(problem: Problem, res: list[np.ndarray]) -> Gap:
                float(c.sum() / (2 * c.size)), float(c.sum()), 2 * c.size, per)
 
 
-def predictive_chi2(train: Problem, held: Problem, f: Fit) -> float:
+def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit
+                    ) -> float | tuple[float, ...]:
     """χ² of the held-out residuals of ``f`` (fitted on ``train``) against the covariance of
     the prediction error: ``rᵀ (I + J Σ Jᵀ + D (AᵀA)⁻¹ Dᵀ)⁻¹ r`` in whitened units, with ``J``
     the held-out residuals' derivative in the outer parameters (the unbalance re-solved on
     the training points at every step), ``Σ`` the fit's Gauss–Newton covariance, ``D`` and
     ``A`` the whitened unbalance designs of the held-out and training points of each 1x test
-    (the unbalance's own uncertainty given the parameters). ``0`` when ``held`` has no points.
+    (the unbalance's own uncertainty given the parameters). ``0`` when ``held`` has no points;
+    a tuple of held-out problems gives a tuple (the training side computed once).
     """
     par, x = f.par, f.x
     lo, hi = par.bounds()
     rows, h = _fd_rows(x, par, lo, hi)
     X = np.vstack([x[None], rows])
     unb = train.evaluate(par, X).unbalance
+    S = f.covariance()
+    S = np.where(np.isfinite(S), S, 0.0)        # a parameter training does not see at all
+    A = [_whitened_design(W, G[0]) for b, W, G in zip(
+        train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
+        if b.sweep.kind == "unbalance_1x"]
+    AtA = [np.linalg.pinv(a.T @ a) for a in A]
+    out = tuple(_predictive(p, par, X, h, unb, S, AtA)
+                for p in (held if isinstance(held, tuple) else (held,)))
+    return out if isinstance(held, tuple) else out[0]
+
+
+def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarray,
+                unb: tuple[np.ndarray, ...], S: np.ndarray, AtA: list[np.ndarray]) -> float:
+    """:func:`predictive_chi2` on one held-out problem, from the training side's rows ``X``
+    (the fit and its finite-difference steps ``h``), their unbalances, ``Σ`` and ``(AᵀA)⁻¹``."""
     R, D = [], []
     k = off = 0
     for b, W, G in zip(held.blocks, held.whiten, held.responses(par.rows(X)), strict=False):
         if b.sweep.kind == "unbalance_1x":
             pred = np.einsum("bxcl,bl->bxc", G, unb[k])
-            D.append((off, _whitened_design(W, G[0])))
+            D.append((off, _whitened_design(W, G[0]), AtA[k]))
             k += 1
         else:
             pred = G.sum(axis=-1)
@@ -180,17 +197,11 @@ def predictive_chi2(train: Problem, held: Problem, f: Fit) -> float:
         return 0.0
     r0 = R[0]
     J = ((R[1:] - r0[None]) / h[:, None]).T
-    S = f.covariance()
-    S = np.where(np.isfinite(S), S, 0.0)        # a parameter training does not see at all
     C = np.eye(r0.size) + J @ S @ J.T
-    A = [_whitened_design(W, G[0]) for b, W, G in zip(
-        train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
-        if b.sweep.kind == "unbalance_1x"]
-    for (o, Dk), Ak in zip(D, A, strict=True):
+    for o, Dk, Pk in D:
         n = Dk.shape[0]
-        C[o:o + n, o:o + n] += Dk @ np.linalg.pinv(Ak.T @ Ak) @ Dk.T
+        C[o:o + n, o:o + n] += Dk @ Pk @ Dk.T
     return float(r0 @ np.linalg.solve(C, r0))
-
 
 def _whitened_design(W: np.ndarray, G: np.ndarray) -> np.ndarray:
     """Whitened real design ``(2XC, 2L)`` of a 1x block's unbalance (complex ``G`` (X, C, L),

@@ -111,8 +111,7 @@ class HoldoutProblems:
         """Predictive χ² of ``f`` (fitted on ``train``) on the interleaved and extrapolated
         points: the residuals against the noise plus the training fit's prediction
         uncertainty (:func:`~.holdout.predictive_chi2`)."""
-        return (predictive_chi2(train, self.interleaved, f),
-                predictive_chi2(train, self.extrapolated, f))
+        return predictive_chi2(train, (self.interleaved, self.extrapolated), f)
 
 
 def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
