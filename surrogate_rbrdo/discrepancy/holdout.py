@@ -9,6 +9,16 @@ polar-inertia error) must then predict FRF lines it was not fitted to, as a 1x e
 predict held-out speeds. The gap is measured on held-out 1x speeds with the unbalance and
 parameters fitted on training speeds only: RMSE and largest modulus of the complex residual
 (µm), and the whitened χ² per real observable.
+
+The held-out *check* of a candidate (:mod:`.naming`) compares predictive χ²
+(:func:`predictive_chi2`): a held-out residual is whitened with the covariance of the
+prediction error, the noise plus what the training fit's parameter uncertainty propagates to
+the held-out points (``I + J Σ Jᵀ`` in whitened units, the textbook prediction variance
+``σ²(1 + x₀ᵀ(XᵀX)⁻¹x₀)`` of a regression; Seber & Wild 2003, *Nonlinear Regression*, §5.1).
+Without it, held-out points that the training fit predicts poorly even with the true model —
+speeds beyond the training range on the flank of a resonance, where a small error in a mode's
+frequency or damping is many noise SDs — penalise whichever model moves the mode, right or
+wrong.
 """
 
 from __future__ import annotations
@@ -19,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_int, check_range
+from surrogate_rbrdo.discrepancy.fit import Fit, _fd_rows
 from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
-from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
+from surrogate_rbrdo.discrepancy.problem import Problem, _real_design, _times_2x2, _whitened
 
 
 @dataclass(frozen=True)
@@ -138,3 +149,61 @@ def gap(problem: Problem, res: list[np.ndarray]) -> Gap:
     m, c = np.concatenate(mods), np.concatenate(chis)
     return Gap(float(np.sqrt(np.mean(m**2)) * 1e6), float(m.max() * 1e6),
                float(c.sum() / (2 * c.size)), float(c.sum()), 2 * c.size, per)
+
+
+def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit
+                    ) -> float | tuple[float, ...]:
+    """χ² of the held-out residuals of ``f`` (fitted on ``train``) against the covariance of
+    the prediction error: ``rᵀ (I + J Σ Jᵀ + D (AᵀA)⁻¹ Dᵀ)⁻¹ r`` in whitened units, with ``J``
+    the held-out residuals' derivative in the outer parameters (the unbalance re-solved on
+    the training points at every step), ``Σ`` the fit's Gauss–Newton covariance, ``D`` and
+    ``A`` the whitened unbalance designs of the held-out and training points of each 1x test
+    (the unbalance's own uncertainty given the parameters). ``0`` when ``held`` has no points;
+    a tuple of held-out problems gives a tuple (the training side computed once).
+    """
+    par, x = f.par, f.x
+    lo, hi = par.bounds()
+    rows, h = _fd_rows(x, par, lo, hi)
+    X = np.vstack([x[None], rows])
+    unb = train.evaluate(par, X).unbalance
+    S = f.covariance()
+    S = np.where(np.isfinite(S), S, 0.0)        # a parameter training does not see at all
+    A = [_whitened_design(W, G[0]) for b, W, G in zip(
+        train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
+        if b.sweep.kind == "unbalance_1x"]
+    AtA = [np.linalg.pinv(a.T @ a) for a in A]
+    out = tuple(_predictive(p, par, X, h, unb, S, AtA)
+                for p in (held if isinstance(held, tuple) else (held,)))
+    return out if isinstance(held, tuple) else out[0]
+
+
+def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarray,
+                unb: tuple[np.ndarray, ...], S: np.ndarray, AtA: list[np.ndarray]) -> float:
+    """:func:`predictive_chi2` on one held-out problem, from the training side's rows ``X``
+    (the fit and its finite-difference steps ``h``), their unbalances, ``Σ`` and ``(AᵀA)⁻¹``."""
+    R, D = [], []
+    k = off = 0
+    for b, W, G in zip(held.blocks, held.whiten, held.responses(par.rows(X)), strict=False):
+        if b.sweep.kind == "unbalance_1x":
+            pred = np.einsum("bxcl,bl->bxc", G, unb[k])
+            D.append((off, _whitened_design(W, G[0]), AtA[k]))
+            k += 1
+        else:
+            pred = G.sum(axis=-1)
+        R.append(_whitened(b.mean[None] - pred, W))
+        off += R[-1].shape[1]
+    R = np.concatenate(R, axis=1)
+    if R.shape[1] == 0:
+        return 0.0
+    r0 = R[0]
+    J = ((R[1:] - r0[None]) / h[:, None]).T
+    C = np.eye(r0.size) + J @ S @ J.T
+    for o, Dk, Pk in D:
+        n = Dk.shape[0]
+        C[o:o + n, o:o + n] += Dk @ Pk @ Dk.T
+    return float(r0 @ np.linalg.solve(C, r0))
+
+def _whitened_design(W: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """Whitened real design ``(2XC, 2L)`` of a 1x block's unbalance (complex ``G`` (X, C, L),
+    per-cell whitening ``W`` (X, C, 2, 2))."""
+    return _times_2x2(W, _real_design(G)).reshape(-1, 2 * G.shape[-1])

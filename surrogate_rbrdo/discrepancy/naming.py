@@ -8,9 +8,10 @@ any data are seen):
 2. **significant**: the 95 % interval of a strength parameter excludes the off state;
 3. **physical**: no strength parameter sits on its physical bound, no shape parameter on a
    bound other than a natural zero;
-4. **held-out speeds improve**: the held-out χ² (parameters and unbalance from training) falls
-   in total and worsens on neither the interleaved nor the extrapolated speeds by more than
-   ``holdout_tolerance``.
+4. **held-out speeds improve**: the held-out predictive χ² (parameters and unbalance from
+   training; residuals against the noise plus the training fit's prediction uncertainty,
+   :func:`~.holdout.predictive_chi2`) falls in total and worsens on neither the interleaved
+   nor the extrapolated speeds by more than ``holdout_tolerance``.
 
 Candidates passing (1) and (3) whose χ² lies within ``confound_delta`` of the best of them form
 a group the data cannot tell apart (:func:`decide`): one alone is named, several are a
@@ -37,8 +38,8 @@ from surrogate_rbrdo.discrepancy.calibration import (
 )
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit
-from surrogate_rbrdo.discrepancy.holdout import residuals
-from surrogate_rbrdo.discrepancy.problem import Problem, _whitened
+from surrogate_rbrdo.discrepancy.holdout import predictive_chi2
+from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
 
@@ -106,13 +107,11 @@ class HoldoutProblems:
     interleaved: Problem
     extrapolated: Problem
 
-    def chi2(self, f: Fit) -> tuple[float, float]:
-        out = []
-        for p in (self.interleaved, self.extrapolated):
-            res = residuals(p, f.par, f.x, tuple(u[0] for u in f.evaluation.unbalance))
-            out.append(float(sum(np.sum(_whitened(r[None], W) ** 2)
-                                 for r, W in zip(res, p.whiten, strict=True))))
-        return out[0], out[1]
+    def chi2(self, f: Fit, train: Problem) -> tuple[float, float]:
+        """Predictive χ² of ``f`` (fitted on ``train``) on the interleaved and extrapolated
+        points: the residuals against the noise plus the training fit's prediction
+        uncertainty (:func:`~.holdout.predictive_chi2`)."""
+        return predictive_chi2(train, (self.interleaved, self.extrapolated), f)
 
 
 def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
@@ -133,7 +132,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     tails = null.tails()
     p_crit = null.critical_p(alpha) if lin.candidates else 0.0
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
-    base_ho = holdout.chi2(base)
+    base_ho = holdout.chi2(base, problem)
     law = damping_law_columns(problem, lin, base.par.names)
     out, warm = [], None
     for k, (c, _) in enumerate(lin.candidates):
@@ -148,7 +147,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
         cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0],
                            interior_delta=confound_delta)
         p = float(tails[k].sf(cf.delta_chi2))
-        ho = holdout.chi2(cf.fit)
+        ho = holdout.chi2(cf.fit, problem)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
         checks = {
             "likelihood_ratio": null.adjusted(p) <= alpha,

@@ -1,0 +1,51 @@
+"""The held-out check's predictive χ²: residuals against the noise plus the training fit's
+prediction uncertainty."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.holdout import predictive_chi2, residuals
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.problem import KNOWN_DOF, Problem, _whitened
+from surrogate_rbrdo.discrepancy.search import fit_nuisance
+from surrogate_rbrdo.discrepancy.sweeps import Sweep
+from surrogate_rbrdo.discrepancy.synthetic import default_channels
+
+U = np.array([4e-6 * np.exp(0.7j), 9e-6 * np.exp(-2.0j)])
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_predictive_chi2_of_the_true_model_has_the_mean_of_its_dof(spindle):
+    """Known answer: for the true model, Gaussian noise of known covariance and a fit on the
+    training speeds, the held-out residual is (to first order) normal with the covariance of
+    the prediction error, so its predictive χ² is χ²ₘ, mean ``m`` (the held-out real
+    observables). The extrapolated speeds sit beyond the first critical speed, where the plain
+    noise-whitened χ² is larger by what the parameter uncertainty propagates there."""
+    sp, g = spindle
+    ch = default_channels(g)
+    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
+    sw = Sweep.unbalance(np.linspace(2000.0, 24000.0, 12))
+    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ U
+    sd = 0.01 * np.abs(y) + 1e-9                       # 1 % of the response, per cell
+    cov = (sd**2 / 2)[..., None, None] * np.eye(2)     # of [Re, Im]
+    held = np.zeros(12, dtype=bool)
+    held[-2:] = True
+    m = 2 * 2 * len(ch)
+    rng = np.random.default_rng(3)
+    pred, plain = [], []
+    for _ in range(40):
+        z = sd / np.sqrt(2) * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
+        data = MeasuredData((ComplexBlock("unbalance_1x", sw, ch, y + z, cov, KNOWN_DOF),))
+        train = Problem(fm, data, {"unbalance_1x": ~held})
+        ho = Problem(fm, data, {"unbalance_1x": held})
+        f = fit_nuisance(train)
+        pred.append(predictive_chi2(train, ho, f))
+        r = residuals(ho, f.par, f.x, tuple(u[0] for u in f.evaluation.unbalance))
+        plain.append(float(np.sum(_whitened(r[0][None], ho.whiten[0]) ** 2)))
+    # the mean of 40 χ²ₘ draws has the SD sqrt(2m / 40): within 3 SD of m
+    assert abs(np.mean(pred) - m) < 3 * np.sqrt(2 * m / 40)
+    assert np.mean(plain) > np.mean(pred)
