@@ -9,8 +9,13 @@ then the statistics:
 
 * ``gof``: the χ² of the recalibrated model;
 * ``candidates``: per candidate, the likelihood-ratio statistic ``Δχ²`` of adding it, maximised
-  over its bearing scopes and shape starts (the sup-LR over a parameter that vanishes under the
-  null: Davies 1987, *Biometrika* 74:33); one-sided where its strength is (``Δ = max(z, 0)²``);
+  over its variants (the sup-LR over a parameter that vanishes under the null: Davies 1987,
+  *Biometrika* 74:33); one-sided where its strength is (``Δ = max(z, 0)²``). The variants cover
+  what the nonlinear search reaches, since a maximum over more shapes is larger under the null
+  too: every bearing scope; the shape starts and the first shape parameter over the range the
+  search's valley steps through (:func:`~.search.valley_grid`); and for a candidate with a
+  shape, secants to the screened strengths (a housing's first-order column does not depend on
+  its mass: the mass acts only once the spring is soft enough, where the fit may put it);
 * ``structure``: a Gaussian-process likelihood ratio on the residuals along speed (or frequency),
   maximised over a grid of length scales and variances — the Kennedy–O'Hagan discrepancy
   (2001, *J. R. Stat. Soc. B* 63:425) used as a test: it detects structure, it cannot name it;
