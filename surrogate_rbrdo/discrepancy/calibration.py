@@ -9,8 +9,13 @@ then the statistics:
 
 * ``gof``: the χ² of the recalibrated model;
 * ``candidates``: per candidate, the likelihood-ratio statistic ``Δχ²`` of adding it, maximised
-  over its bearing scopes and shape starts (the sup-LR over a parameter that vanishes under the
-  null: Davies 1987, *Biometrika* 74:33); one-sided where its strength is (``Δ = max(z, 0)²``);
+  over its variants (the sup-LR over a parameter that vanishes under the null: Davies 1987,
+  *Biometrika* 74:33); one-sided where its strength is (``Δ = max(z, 0)²``). The variants cover
+  what the nonlinear search reaches, since a maximum over more shapes is larger under the null
+  too: every bearing scope; the shape starts and the first shape parameter over the range the
+  search's valley steps through (:func:`~.search.valley_grid`); and for a candidate with a
+  shape, secants to the screened strengths (a housing's first-order column does not depend on
+  its mass: the mass acts only once the spring is soft enough, where the fit may put it);
 * ``structure``: a Gaussian-process likelihood ratio on the residuals along speed (or frequency),
   maximised over a grid of length scales and variances — the Kennedy–O'Hagan discrepancy
   (2001, *J. R. Stat. Soc. B* 63:425) used as a test: it detects structure, it cannot name it;
@@ -40,7 +45,16 @@ from surrogate_rbrdo.discrepancy.generic import generic_columns, generic_labels
 from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
 from surrogate_rbrdo.discrepancy.noise import NoiseModel
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.search import screen_values, valley_grid
 
+#: shape values per decade of a candidate's first shape parameter among its variants, over the
+#: range the search's valley covers (:func:`~.search.valley_grid`; module doc)
+SHAPE_PER_DECADE = 6
+#: a secant variant stands for the fits near its point ``g`` (its amplitude is free); it is kept
+#: only for an effect of at most this whitened, nuisance-orthogonal norm: under the null the fit
+#: at a larger one has a positive likelihood ratio ``2 z |g| − |g|²`` only when the noise
+#: projection ``z`` exceeds ``|g| / 2 = 6`` (probability 1e-9)
+SECANT_MAX_NORM = 12.0
 #: GP length scales (fraction of the speed or frequency span) and variances of the structure test
 GP_LENGTHS = (0.03, 0.08, 0.2, 0.5)
 GP_TAUS = tuple(np.geomspace(1e-2, 1e3, 16).tolist())
@@ -48,11 +62,14 @@ GP_TAUS = tuple(np.geomspace(1e-2, 1e3, 16).tolist())
 
 @dataclass(frozen=True)
 class Variant:
-    """One (scope, shape) start of a candidate and its unwhitened Jacobian columns."""
+    """One (scope, shape) of a candidate and its unwhitened columns: the Jacobian of its
+    strengths at the off state or, when ``secant`` is not 0, the secant ``(f(s) − f(off)) / s``
+    to the first strength's value ``off + secant`` (one column)."""
 
     scope: tuple[str, ...]
     shape: tuple[tuple[str, float], ...]
     columns: np.ndarray  # (n_obs, n_strength)
+    secant: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -69,10 +86,35 @@ class Linearisation:
 
 
 def _shape_grid(c: Candidate) -> list[tuple[tuple[str, float], ...]]:
+    """The shapes of a candidate's variants: its shape starts and, for the first shape
+    parameter, the range the search's valley covers (:func:`~.search.valley_grid` at
+    :data:`SHAPE_PER_DECADE`); the starts first, in their order."""
     grids = [[]]
-    for p, starts in zip(c.shape, c.shape_starts, strict=True):
-        grids = [g + [(p, v)] for g in grids for v in starts]
+    for i, (p, starts) in enumerate(zip(c.shape, c.shape_starts, strict=True)):
+        values = list(starts)
+        if i == 0:
+            values += [float(v) for v in valley_grid(c, SHAPE_PER_DECADE) if v not in starts]
+        grids = [g + [(p, v)] for g in grids for v in values]
     return [tuple(g) for g in grids]
+
+
+def _variant_rows(c: Candidate, scope, shape, base_extras, secants: bool):
+    """The model rows of one (scope, shape) of ``c``: a small step of each strength off the
+    off state (derivative columns) or, with ``secants``, the first strength at each screened
+    value (:func:`~.search.screen_values`); each row with its step."""
+    vals0 = {p: o for p, o in zip(c.strength, c.off, strict=True)} | dict(shape)
+    out = []
+    if secants:
+        for v in screen_values(c):
+            out.append((base_extras + (c.effect(scope, vals0 | {c.strength[0]: float(v)}),),
+                        float(v) - c.off[0]))
+        return out
+    for i, (o, lo_i, hi_i, rec) in enumerate(zip(c.off, c.lower, c.upper, c.reciprocal,
+                                                 strict=True)):
+        step = 1e-3 * (1e-9 if rec else max(hi_i - lo_i, 1e-6) / 50.0)
+        step = step if o + step <= hi_i else -step
+        out.append((base_extras + (c.effect(scope, vals0 | {c.strength[i]: o + step}),), step))
+    return out
 
 
 def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) -> Linearisation:
@@ -86,22 +128,22 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
     f = problem.model_vector(par, np.vstack([x[None], x[None] + np.diag(h)]), u)
     J = ((f[1:] - f[0]) / h[:, None]).T
     nuis = np.hstack([J, problem.unbalance_design(par, x)])
-    # candidate columns: one batch of rows, each its own extra effect
+    # candidate columns: one batch of rows, each its own extra effect; the derivative columns
+    # first, then (for a candidate with a shape) the secants along its first strength
     specs, ex_rows = [], []
-    for c in candidates:
-        for scope in c.scopes:
-            for shape in _shape_grid(c):
-                steps = []
-                for i, (o, lo_i, hi_i, rec) in enumerate(zip(c.off, c.lower, c.upper,
-                                                             c.reciprocal, strict=True)):
-                    step = 1e-3 * (1e-9 if rec else max(hi_i - lo_i, 1e-6) / 50.0)
-                    step = step if o + step <= hi_i else -step
-                    vals = {p: o_j for p, o_j in zip(c.strength, c.off, strict=True)}
-                    vals[c.strength[i]] = o + step
-                    vals.update(dict(shape))
-                    ex_rows.append(par.rows(x[None]).extras[0] + (c.effect(scope, vals),))
-                    steps.append(step)
-                specs.append((c, scope, shape, np.array(steps)))
+    extras = par.rows(x[None]).extras[0]
+    for secants in (False, True):
+        for c in candidates:
+            if secants and not c.shape:
+                continue
+            for scope in c.scopes:
+                for shape in _shape_grid(c):
+                    rows = _variant_rows(c, scope, shape, extras, secants)
+                    ex_rows += [r for r, _ in rows]
+                    if secants:
+                        specs += [(c, scope, shape, np.array([h]), h) for _, h in rows]
+                    else:
+                        specs.append((c, scope, shape, np.array([h for _, h in rows]), 0.0))
     nrow = len(ex_rows)
     fc = np.zeros((0, f.shape[1]))
     if nrow:
@@ -113,10 +155,10 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
                                         (nrow, problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0
-    for c, scope, shape, steps in specs:
+    for c, scope, shape, steps, secant in specs:
         cols = ((fc[k:k + steps.size] - f[0]) / steps[:, None]).T
         k += steps.size
-        out.setdefault(c.name, []).append(Variant(scope, shape, cols))
+        out.setdefault(c.name, []).append(Variant(scope, shape, cols, secant))
     W = _data_whitening(problem)
     Q, _ = np.linalg.qr(_apply(W, nuis))
     kept, absorbed = [], []
@@ -146,17 +188,18 @@ def _generic_basis(problem: Problem, base: Fit, W, Q
 
 def _distinct(variants: list[Variant], W, Q) -> list[Variant]:
     """Drop strength columns the nuisance absorbs (relative residual < 1e-6), variants left
-    without a column, and duplicates (|cos| > 0.9999 in the whitened, nuisance-orthogonal
-    metric)."""
+    without a column, secants to effects larger than :data:`SECANT_MAX_NORM` (whitened,
+    nuisance-orthogonal norm), and duplicates (|cos| > 0.9999 in that metric)."""
     keep, dirs = [], []
     for v in variants:
         U = _apply(W, v.columns)
         n0 = np.linalg.norm(U, axis=0)
         U = U - Q @ (Q.T @ U)
-        live = np.linalg.norm(U, axis=0) > 1e-6 * np.maximum(n0, 1e-300)
-        if not live.any():
+        n1 = np.linalg.norm(U, axis=0)
+        live = n1 > 1e-6 * np.maximum(n0, 1e-300)
+        if not live.any() or abs(v.secant) * n1[0] > SECANT_MAX_NORM:
             continue
-        v = Variant(v.scope, v.shape, v.columns[:, live])
+        v = Variant(v.scope, v.shape, v.columns[:, live], v.secant)
         d = U[:, live][:, 0] / np.linalg.norm(U[:, live][:, 0])
         if live.sum() == 1 and any(abs(d @ e) > 0.9999 for e in dirs):
             continue

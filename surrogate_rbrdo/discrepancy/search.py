@@ -88,7 +88,7 @@ class CandidateFit:
         return self.slot.candidate.effect(self.slot.scope, vals)
 
 
-def _screen_values(c: Candidate) -> np.ndarray:
+def screen_values(c: Candidate) -> np.ndarray:
     """Strength values (first strength parameter) tried from the off state outwards."""
     lo, hi, off, rec = c.lower[0], c.upper[0], c.off[0], c.reciprocal[0]
     if rec:
@@ -114,7 +114,7 @@ def screen(problem: Problem, base: Fit, c: Candidate
         for shape in shapes:
             slot = Slot(c, scope)
             par = par0.with_slots(par0.slots + (slot,))
-            for v in _screen_values(c):
+            for v in screen_values(c):
                 start = {f"{slot.label}.{p}": val for p, val in shape}
                 start[f"{slot.label}.{c.strength[0]}"] = float(v)
                 x = par.x0(start)
@@ -292,14 +292,10 @@ def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarr
     per point) and the best :data:`VALLEY_KEEP` returned. None for a candidate without shape
     parameters."""
     c = cw.slot.candidate
-    if not c.shape:
+    grid = valley_grid(c)
+    if grid.size == 0:
         return []
-    p, (a, b) = c.shape[0], c.shape_bounds[0]
-    if not math.isfinite(b) or b <= 0:
-        return []
-    lo = max(a, b * 10.0**-VALLEY_DECADES)
-    grid = np.geomspace(lo, b, max(int(VALLEY_PER_DECADE * math.log10(b / lo)), 2) + 1)
-    grid = np.unique(np.concatenate([[a], grid])) if a < lo else grid
+    p = c.shape[0]
     i0 = int(np.searchsorted(grid, cw.parameters[p]))
     label = cw.slot.label
     rows = []
@@ -316,6 +312,26 @@ def valley(problem: Problem, warm: Warm, cw: CandidateFit, par) -> list[np.ndarr
     X, chi = fit_batch(problem, par, X[np.argsort(chi)[:VALLEY_LM]])
     return list(X[np.argsort(chi)[:VALLEY_KEEP]])
 
+
+def valley_grid(c: Candidate, per_decade: int = VALLEY_PER_DECADE) -> np.ndarray:
+    """The values of ``c``'s first shape parameter the valley steps through: ``per_decade``
+    points per decade from :data:`VALLEY_DECADES` decades below its upper bound (or its lower
+    bound) to the bound, and the lower bound; empty for a candidate without shape parameters
+    or with an unbounded one.
+
+    >>> from surrogate_rbrdo.discrepancy.candidates import candidate
+    >>> g = valley_grid(candidate("housing", ("front", "rear")), per_decade=2)
+    >>> g.round(3).tolist()
+    [0.0, 0.25, 0.791, 2.5, 7.906, 25.0, 79.057, 250.0]
+    """
+    if not c.shape:
+        return np.zeros(0)
+    a, b = c.shape_bounds[0]
+    if not math.isfinite(b) or b <= 0:
+        return np.zeros(0)
+    lo = max(a, b * 10.0**-VALLEY_DECADES)
+    grid = np.geomspace(lo, b, max(int(per_decade * math.log10(b / lo)), 2) + 1)
+    return np.unique(np.concatenate([[a], grid])) if a < lo else grid
 
 
 @dataclass(frozen=True)
