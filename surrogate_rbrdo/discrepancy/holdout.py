@@ -151,8 +151,8 @@ def gap(problem: Problem, res: list[np.ndarray]) -> Gap:
                float(c.sum() / (2 * c.size)), float(c.sum()), 2 * c.size, per)
 
 
-def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit
-                    ) -> float | tuple[float, ...]:
+def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit, *,
+                    deviance: bool = False) -> float | tuple[float, ...]:
     """χ² of the held-out residuals of ``f`` (fitted on ``train``) against the covariance of
     the prediction error: ``rᵀ (I + J Σ Jᵀ + D (AᵀA)⁻¹ Dᵀ)⁻¹ r`` in whitened units, with ``J``
     the held-out residuals' derivative in the outer parameters (the unbalance re-solved on
@@ -160,6 +160,12 @@ def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit
     ``A`` the whitened unbalance designs of the held-out and training points of each 1x test
     (the unbalance's own uncertainty given the parameters). ``0`` when ``held`` has no points;
     a tuple of held-out problems gives a tuple (the training side computed once).
+
+    With ``deviance`` the predictive deviance ``rᵀ C⁻¹ r + log det C`` (−2 log of the Gaussian
+    predictive density, up to a constant; the noise-only whitening has ``C = I``, log det 0):
+    the log-determinant charges a model for the spread of its predictions, without which a
+    larger model — whose prediction covariance is never smaller — would score better on the
+    same residuals (the held-out check compares deviances, :mod:`.naming`).
     """
     par, x = f.par, f.x
     lo, hi = par.bounds()
@@ -172,13 +178,14 @@ def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit
         train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
         if b.sweep.kind == "unbalance_1x"]
     AtA = [np.linalg.pinv(a.T @ a) for a in A]
-    out = tuple(_predictive(p, par, X, h, unb, S, AtA)
+    out = tuple(_predictive(p, par, X, h, unb, S, AtA, deviance)
                 for p in (held if isinstance(held, tuple) else (held,)))
     return out if isinstance(held, tuple) else out[0]
 
 
 def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarray,
-                unb: tuple[np.ndarray, ...], S: np.ndarray, AtA: list[np.ndarray]) -> float:
+                unb: tuple[np.ndarray, ...], S: np.ndarray, AtA: list[np.ndarray],
+                deviance: bool = False) -> float:
     """:func:`predictive_chi2` on one held-out problem, from the training side's rows ``X``
     (the fit and its finite-difference steps ``h``), their unbalances, ``Σ`` and ``(AᵀA)⁻¹``."""
     R, D = [], []
@@ -201,7 +208,9 @@ def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarra
     for o, Dk, Pk in D:
         n = Dk.shape[0]
         C[o:o + n, o:o + n] += Dk @ Pk @ Dk.T
-    return float(r0 @ np.linalg.solve(C, r0))
+    chi2 = float(r0 @ np.linalg.solve(C, r0))
+    return chi2 + float(np.linalg.slogdet(C)[1]) if deviance else chi2
+
 
 def _whitened_design(W: np.ndarray, G: np.ndarray) -> np.ndarray:
     """Whitened real design ``(2XC, 2L)`` of a 1x block's unbalance (complex ``G`` (X, C, L),
