@@ -20,14 +20,10 @@ from surrogate_rbrdo.discrepancy.synthetic import default_channels
 U = np.array([4e-6 * np.exp(0.7j), 9e-6 * np.exp(-2.0j)])
 
 
-@pytest.mark.slow
-@pytest.mark.known_answer
-def test_predictive_chi2_of_the_true_model_has_the_mean_of_its_dof(spindle):
-    """Known answer: for the true model, Gaussian noise of known covariance and a fit on the
-    training speeds, the held-out residual is (to first order) normal with the covariance of
-    the prediction error, so its predictive χ² is χ²ₘ, mean ``m`` (the held-out real
-    observables). The extrapolated speeds sit beyond the first critical speed, where the plain
-    noise-whitened χ² is larger by what the parameter uncertainty propagates there."""
+def _null_draws(spindle, n, seed=3):
+    """The forward model and ``n`` (training, held-out) problems of the base model's own 1x
+    response at 12 speeds to 24 000 rpm with Gaussian noise of known covariance (1 % of the
+    response per cell), the top two speeds held out (beyond the first critical speed)."""
     sp, g = spindle
     ch = default_channels(g)
     fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
@@ -37,14 +33,28 @@ def test_predictive_chi2_of_the_true_model_has_the_mean_of_its_dof(spindle):
     cov = (sd**2 / 2)[..., None, None] * np.eye(2)     # of [Re, Im]
     held = np.zeros(12, dtype=bool)
     held[-2:] = True
-    m = 2 * 2 * len(ch)
-    rng = np.random.default_rng(3)
-    pred, plain = [], []
-    for _ in range(40):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
         z = sd / np.sqrt(2) * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
         data = MeasuredData((ComplexBlock("unbalance_1x", sw, ch, y + z, cov, KNOWN_DOF),))
-        train = Problem(fm, data, {"unbalance_1x": ~held})
-        ho = Problem(fm, data, {"unbalance_1x": held})
+        out.append((Problem(fm, data, {"unbalance_1x": ~held}),
+                    Problem(fm, data, {"unbalance_1x": held})))
+    return fm, out
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_predictive_chi2_of_the_true_model_has_the_mean_of_its_dof(spindle):
+    """Known answer: for the true model, Gaussian noise of known covariance and a fit on the
+    training speeds, the held-out residual is (to first order) normal with the covariance of
+    the prediction error, so its predictive χ² is χ²ₘ, mean ``m`` (the held-out real
+    observables). The extrapolated speeds sit beyond the first critical speed, where the plain
+    noise-whitened χ² is larger by what the parameter uncertainty propagates there."""
+    fm, draws = _null_draws(spindle, 40)
+    m = 2 * 2 * len(fm.channels)
+    pred, plain = [], []
+    for train, ho in draws:
         f = fit_nuisance(train)
         pred.append(predictive_chi2(train, ho, f))
         r = residuals(ho, f.par, f.x, tuple(u[0] for u in f.evaluation.unbalance))
@@ -62,23 +72,10 @@ def test_the_held_out_deviance_does_not_reward_a_candidate_that_fits_noise(spind
     minority of draws. The predictive χ² alone counts the candidate's wider prediction
     covariance as a gain (a larger model's covariance is never smaller) and improved in 23/40
     (gyroscopics) and 31/40 (softening) draws; its log-determinant charges that spread."""
-    sp, g = spindle
-    ch = default_channels(g)
-    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
-    sw = Sweep.unbalance(np.linspace(2000.0, 24000.0, 12))
-    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ U
-    sd = 0.01 * np.abs(y) + 1e-9
-    cov = (sd**2 / 2)[..., None, None] * np.eye(2)
-    held = np.zeros(12, dtype=bool)
-    held[-2:] = True
+    fm, draws = _null_draws(spindle, 40)
     c = candidate(name, fm.bearing_names)
-    rng = np.random.default_rng(3)
     gains = []
-    for _ in range(40):
-        z = sd / np.sqrt(2) * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
-        data = MeasuredData((ComplexBlock("unbalance_1x", sw, ch, y + z, cov, KNOWN_DOF),))
-        train = Problem(fm, data, {"unbalance_1x": ~held})
-        ho = Problem(fm, data, {"unbalance_1x": held})
+    for train, ho in draws:
         b = fit_nuisance(train)
         par = b.par.with_slots((Slot(c, ()),))
         x0 = par.x0()
