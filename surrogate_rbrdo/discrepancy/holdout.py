@@ -177,24 +177,30 @@ def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit,
     A = [_whitened_design(W, G[0]) for b, W, G in zip(
         train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
         if b.sweep.kind == "unbalance_1x"]
-    AtA = [np.linalg.pinv(a.T @ a) for a in A]
-    out = tuple(_predictive(p, par, X, h, unb, S, AtA, deviance)
+    names = [b.name for b in train.blocks if b.sweep.kind == "unbalance_1x"]
+    # each held-out 1x test takes the unbalance its own training points fix (by name)
+    one_x = {n: (u, np.linalg.pinv(a.T @ a)) for n, u, a in zip(names, unb, A, strict=True)}
+    out = tuple(_predictive(p, par, X, h, one_x, S, deviance)
                 for p in (held if isinstance(held, tuple) else (held,)))
     return out if isinstance(held, tuple) else out[0]
 
 
 def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarray,
-                unb: tuple[np.ndarray, ...], S: np.ndarray, AtA: list[np.ndarray],
+                one_x: dict[str, tuple[np.ndarray, np.ndarray]], S: np.ndarray,
                 deviance: bool = False) -> float:
     """:func:`predictive_chi2` on one held-out problem, from the training side's rows ``X``
-    (the fit and its finite-difference steps ``h``), their unbalances, ``Σ`` and ``(AᵀA)⁻¹``."""
+    (the fit and its finite-difference steps ``h``), ``Σ``, and per 1x test (by block name)
+    the rows' unbalances and ``(AᵀA)⁻¹``."""
     R, D = [], []
-    k = off = 0
+    off = 0
     for b, W, G in zip(held.blocks, held.whiten, held.responses(par.rows(X)), strict=False):
         if b.sweep.kind == "unbalance_1x":
-            pred = np.einsum("bxcl,bl->bxc", G, unb[k])
-            D.append((off, _whitened_design(W, G[0]), AtA[k]))
-            k += 1
+            if b.name not in one_x:
+                raise ValueError(f"held-out 1x test {b.name!r} has no training points: its "
+                                 "unbalance is not fixed by the training fit")
+            unb, AtA = one_x[b.name]
+            pred = np.einsum("bxcl,bl->bxc", G, unb)
+            D.append((off, _whitened_design(W, G[0]), AtA))
         else:
             pred = G.sum(axis=-1)
         R.append(_whitened(b.mean[None] - pred, W))
