@@ -137,12 +137,9 @@ class ForwardModel:
     def model(self, extra: tuple[Effect, ...] = ()) -> SpindleModel:
         """The assembled model with the extra effects (memoised)."""
         key = tuple(extra)
-        if key not in self._models:
-            self._models[key] = build_model(self.geometry, self.effects + key,
-                                            theta_bearings=self.theta_bearings)
-            if len(self._models) > self.cache_size:
-                self._models.popitem(last=False)
-        return self._models[key]
+        return _lru(self._models, key, lambda: build_model(
+            self.geometry, self.effects + key, theta_bearings=self.theta_bearings),
+            self.cache_size)
 
     def node(self, model: SpindleModel, position_mm: float) -> int:
         """The mesh node at ``position_mm``."""
@@ -205,19 +202,13 @@ class ForwardModel:
     def _schur(self, model: SpindleModel, sweep: Sweep, dofs: np.ndarray) -> np.ndarray:
         """The rotor condensed onto ``dofs`` at the sweep's points (memoised: tests that share
         their points — hits in x and in y at one speed — share it)."""
-        key = self._key(model, sweep, dofs.tobytes())
-        if key not in self._schurs:
-            self._schurs[key] = condensed_dynamic_stiffness(model, sweep.spin_rad_s,
-                                                            sweep.freq_rad_s, dofs)
-            if len(self._schurs) > self.cache_size:
-                self._schurs.popitem(last=False)
-        else:
-            self._schurs.move_to_end(key)
-        return self._schurs[key]
+        return _lru(self._schurs, self._key(model, sweep, dofs.tobytes()),
+                    lambda: condensed_dynamic_stiffness(model, sweep.spin_rad_s,
+                                                        sweep.freq_rad_s, dofs),
+                    self.cache_size)
 
     def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
-        key = self._key(model, sweep, sweep.kind, sweep.excitations)
-        if key not in self._condensed:
+        def make() -> _Condensed:
             dofs, out, cpl, F = self.layout(model, sweep)
             S = self._schur(model, sweep, dofs)
             rhs = np.concatenate([F, np.broadcast_to(np.eye(dofs.size)[:, cpl],
@@ -227,14 +218,11 @@ class ForwardModel:
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
-            self._condensed[key] = _Condensed(*(np.ascontiguousarray(a) for a in (
+            return _Condensed(*(np.ascontiguousarray(a) for a in (
                 HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])), system=self._key(
                 model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes()))
-            if len(self._condensed) > self.cache_size:
-                self._condensed.popitem(last=False)
-        else:
-            self._condensed.move_to_end(key)
-        return self._condensed[key]
+        return _lru(self._condensed, self._key(model, sweep, sweep.kind, sweep.excitations),
+                    make, self.cache_size)
 
     @property
     def disks(self) -> tuple:
@@ -370,15 +358,9 @@ class ForwardModel:
     def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
         """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
         a fit's rows share them with its finite-difference rows)."""
-        key = (extra, np.ascontiguousarray(spin, dtype=float).tobytes())
-        hit = self._parts.get(key)
-        if hit is None:
-            hit = self._parts[key] = bearing_parts(self.geometry, self.effects + extra, spin)
-            if len(self._parts) > 4 * self.cache_size:
-                self._parts.popitem(last=False)
-        else:
-            self._parts.move_to_end(key)
-        return hit
+        return _lru(self._parts, (extra, np.ascontiguousarray(spin, dtype=float).tobytes()),
+                    lambda: bearing_parts(self.geometry, self.effects + extra, spin),
+                    4 * self.cache_size)
 
     def bearing_impedance(self, sweep: Sweep, theta: np.ndarray, damping_scale: np.ndarray,
                           extras: Sequence[tuple[Effect, ...]] | None = None) -> np.ndarray:
@@ -391,6 +373,18 @@ class ForwardModel:
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
             sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
             self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
+
+
+def _lru(cache: OrderedDict, key, make, size: int):
+    """``cache[key]``, made by ``make()`` on a miss; the least recently used entry beyond
+    ``size`` is dropped."""
+    if key in cache:
+        cache.move_to_end(key)
+        return cache[key]
+    value = cache[key] = make()
+    if len(cache) > size:
+        cache.popitem(last=False)
+    return value
 
 
 def _stack(conds: list[_Condensed]) -> _Condensed:
