@@ -228,8 +228,7 @@ def interior(problem: Problem, base: Fit, cf: CandidateFit, delta: float, *,
     held = []
     for p, (a, b), starts in zip(c.shape, c.shape_bounds, c.shape_starts, strict=True):
         v = vals.get(p)
-        if p in dict(slot.fixed) or v is None or not any(
-                e != 0 and abs(v - e) <= 1e-6 * abs(e) for e in (a, b)):
+        if p in dict(slot.fixed) or v is None or not _on_bound(v, (a, b)):
             continue
         held.append((p, [s for s in starts if a < s < b or s == 0 == min(abs(a), abs(b))]))
     best: tuple[Fit, Slot] | None = None
@@ -243,6 +242,11 @@ def interior(problem: Problem, base: Fit, cf: CandidateFit, delta: float, *,
     if best is None or best[0].chi2 > f.chi2 + delta:
         return cf
     return describe(c, best[1], best[0], base.chi2)
+
+
+def _on_bound(v: float, bounds: tuple[float, float]) -> bool:
+    """Whether a shape value sits on a bound of its range that is not a natural zero."""
+    return any(e != 0 and abs(v - e) <= 1e-6 * abs(e) for e in bounds)
 
 
 def _fit_candidate(problem: Problem, base: Fit, c: Candidate,
@@ -389,8 +393,7 @@ def slot_estimate(f: Fit, index: int) -> SlotEstimate:
             if c.reciprocal[j]:
                 a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         else:                          # a shape pinned at a bound that is not a natural zero
-            a_s, b_s = c.shape_bounds[c.shape.index(p)]
-            at_bound |= any(e != 0 and abs(x - e) <= 1e-6 * abs(e) for e in (a_s, b_s))
+            at_bound |= _on_bound(x, c.shape_bounds[c.shape.index(p)])
         ci[p] = [a, b] if identified[p] else None
     if slot.scope:
         params["bearings"] = list(slot.scope)
