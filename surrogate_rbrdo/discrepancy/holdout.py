@@ -32,7 +32,7 @@ from surrogate_rbrdo.core.validate import check_int, check_range
 from surrogate_rbrdo.discrepancy.fit import Fit, _fd_rows
 from surrogate_rbrdo.discrepancy.nuisance import Parametrisation
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
-from surrogate_rbrdo.discrepancy.problem import Problem, _real_design, _times_2x2, _whitened
+from surrogate_rbrdo.discrepancy.problem import Problem, _whitened, _whitened_design
 
 
 @dataclass(frozen=True)
@@ -216,9 +216,3 @@ def _predictive(held: Problem, par: Parametrisation, X: np.ndarray, h: np.ndarra
         C[o:o + n, o:o + n] += Dk @ Pk @ Dk.T
     chi2 = float(r0 @ np.linalg.solve(C, r0))
     return chi2 + float(np.linalg.slogdet(C)[1]) if deviance else chi2
-
-
-def _whitened_design(W: np.ndarray, G: np.ndarray) -> np.ndarray:
-    """Whitened real design ``(2XC, 2L)`` of a 1x block's unbalance (complex ``G`` (X, C, L),
-    per-cell whitening ``W`` (X, C, 2, 2))."""
-    return _times_2x2(W, _real_design(G)).reshape(-1, 2 * G.shape[-1])

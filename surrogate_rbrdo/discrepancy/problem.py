@@ -275,11 +275,17 @@ def _real_design(G: np.ndarray) -> np.ndarray:
     return np.stack([top, bot], axis=-2)
 
 
+def _whitened_design(W: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """Whitened real design ``(…, 2XC, 2L)`` of a 1x block's unbalance: complex ``G``
+    ``(…, X, C, L)``, per-cell whitening ``W`` ``(X, C, 2, 2)``."""
+    return _times_2x2(W, _real_design(G)).reshape(G.shape[:-3] + (-1, 2 * G.shape[-1]))
+
+
 def _project_unbalance(G: np.ndarray, y: np.ndarray, W: np.ndarray
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted LS unbalance ``u`` per row and the whitened residual ``W (y − G u)``."""
-    B, X, C, L = G.shape
-    A = _times_2x2(W, _real_design(G)).reshape(B, 2 * X * C, 2 * L)
+    L = G.shape[-1]
+    A = _whitened_design(W, G)
     yw = np.einsum("xcij,xcj->xci", W, np.stack([y.real, y.imag], axis=-1)).reshape(-1)
     Q, R = np.linalg.qr(A)
     coef = np.linalg.solve(R, np.einsum("bnk,n->bk", Q, yw)[..., None])[..., 0]
