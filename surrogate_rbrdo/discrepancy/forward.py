@@ -405,9 +405,31 @@ def _loads_together(conds: list[_Condensed]) -> _Condensed:
                       np.concatenate([d.H_PF for d in conds], -1), c.system)
 
 
+#: bytes of the coupled system's work arrays per block of rows in :func:`_couple` (a
+#: linearisation couples thousands of rows at once: a few hundred MB in one block)
+COUPLE_BLOCK_BYTES = 2**25
+
+
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
     """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
-    and disk changes ``Zd`` (B, X, nd, 4, 4)."""
+    and disk changes ``Zd`` (B, X, nd, 4, 4), in blocks of rows of at most
+    :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the same whatever the
+    block)."""
+    B, X, nb = Z.shape[:3]
+    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2])
+    per_row = 16 * X * n * (3 * n + 2 * c.H_PF.shape[-1])
+    step = max(1, COUPLE_BLOCK_BYTES // max(per_row, 1))
+    if B <= step:
+        return _couple_block(c, Z, Zd)
+    out = np.empty((B, X) + c.H_OF.shape[1:], dtype=complex)
+    for i in range(0, B, step):
+        out[i:i + step] = _couple_block(c, Z[i:i + step],
+                                        None if Zd is None else Zd[i:i + step])
+    return out
+
+
+def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """:func:`_couple` of one block of rows."""
     B, X, nb = Z.shape[:3]
     blocks = [Z[:, :, j] for j in range(nb)]
     if Zd is not None:
