@@ -102,6 +102,7 @@ class ForwardModel:
     _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _prints: dict = field(default_factory=dict, init=False, repr=False)
     _parts: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _plans: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -317,7 +318,7 @@ class ForwardModel:
             rotors.setdefault(tuple(x for x in e if acts_on_rotor(x)), []).append(i)
         for rotor, rows in rotors.items():
             model = self.model(rotor)
-            conds = [self._rotor(model, s) for s in sweeps]
+            plan = self._plan(model, sweeps, n_load)
             Z = np.zeros((len(rows), spin.size, self.n_bearings, 2, 2), dtype=complex)
             groups: dict[tuple[Effect, ...], list[int]] = {}
             for j, i in enumerate(rows):
@@ -330,22 +331,8 @@ class ForwardModel:
                         self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
                         freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
-            # sweeps with the same coupled system (hits in x and in y at one speed) share its
-            # factorisation: their loads are solved together; then one coupled solve per
-            # number of loads (padding loads with zero columns would change the BLAS kernels,
-            # hence the last digits)
-            systems: dict[str, list[int]] = {}
-            for k, c in enumerate(conds):
-                systems.setdefault(c.system, []).append(k)
-            merged = list(systems.values())
-            n_merged = [sum(n_load[k] for k in ks) for ks in merged]
-            for nl in sorted(set(n_merged)):
-                sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
-                pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1])
-                                      for ks in sel])
-                q = _couple(_stack([_loads_together([conds[k] for k in ks]) for ks in sel]),
-                            Z[:, pts], None if Zd is None else Zd[:, pts])
-                at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+            for sel, pts, cond, at in plan:
+                q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts])
                 for j, ks in enumerate(sel):
                     c0 = 0
                     for k in ks:
@@ -354,6 +341,41 @@ class ForwardModel:
         if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
+
+    def _plan(self, model: SpindleModel, sweeps: Sequence[Sweep], n_load: list[int]) -> list:
+        """How the sweeps' points are coupled for one rotor (memoised per model and sweep
+        objects): per number of loads, the sweeps solved together, their points, their
+        condensed rotors stacked and the points' offsets.
+
+        Sweeps with the same coupled system (hits in x and in y at one speed) share its
+        factorisation: their loads are solved together; then one coupled solve per number of
+        loads (padding loads with zero columns would change the BLAS kernels, hence the last
+        digits)."""
+        key = (id(model), tuple(id(s) for s in sweeps))
+        hit = self._plans.get(key)
+        if hit is not None and hit[0] is model and all(
+                a is b for a, b in zip(hit[1], sweeps, strict=True)):
+            self._plans.move_to_end(key)
+            return hit[2]
+        conds = [self._rotor(model, s) for s in sweeps]
+        sizes = [s.freq_rad_s.size for s in sweeps]
+        starts = np.concatenate([[0], np.cumsum(sizes)])
+        systems: dict[str, list[int]] = {}
+        for k, c in enumerate(conds):
+            systems.setdefault(c.system, []).append(k)
+        merged = list(systems.values())
+        n_merged = [sum(n_load[k] for k in ks) for ks in merged]
+        plan = []
+        for nl in sorted(set(n_merged)):
+            sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
+            pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1]) for ks in sel])
+            cond = _stack([_loads_together([conds[k] for k in ks]) for ks in sel])
+            at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+            plan.append((sel, pts, cond, at))
+        self._plans[key] = (model, tuple(sweeps), plan)
+        if len(self._plans) > PLAN_CACHE:
+            self._plans.popitem(last=False)
+        return plan
 
     def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
         """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
@@ -373,6 +395,10 @@ class ForwardModel:
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
             sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
             self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
+
+
+#: rotors whose coupling plan (:meth:`ForwardModel._plan`) is kept
+PLAN_CACHE = 32
 
 
 def _lru(cache: OrderedDict, key, make, size: int):
