@@ -323,13 +323,10 @@ class ForwardModel:
             groups: dict[tuple[Effect, ...], list[int]] = {}
             for j, i in enumerate(rows):
                 groups.setdefault(extras[i], []).append(j)
-            for extra, sub in groups.items():
-                at = np.asarray(rows)[sub]
-                for ks in kinds.values():
-                    pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
-                    Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
-                        self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
-                        freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
+            for ks in kinds.values():
+                pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
+                self._bearings_into(Z, pts, groups, np.asarray(rows), spin[pts], freq[pts],
+                                    theta[ks[0]], ds)
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
             for sel, pts, cond, at in plan:
                 q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts])
@@ -376,6 +373,35 @@ class ForwardModel:
         if len(self._plans) > PLAN_CACHE:
             self._plans.popitem(last=False)
         return plan
+
+    def _bearings_into(self, Z: np.ndarray, pts: np.ndarray, groups: dict, rows: np.ndarray,
+                       spin: np.ndarray, freq: np.ndarray, theta: np.ndarray, ds: np.ndarray
+                       ) -> None:
+        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: extra effects →
+        positions ``sub`` among ``rows``). Groups without a housing stage are evaluated in one
+        call, their θ-free stiffness stacked row by row: the same elementwise arithmetic as
+        one call per group (a linearisation has thousands of one-row groups)."""
+        plain = []
+        for extra, sub in groups.items():
+            parts = self.bearing_parts(extra, spin)
+            if any(sup is not None for sup in parts.supports):
+                at = rows[sub]
+                Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+                    self.geometry, self.effects + extra, self.theta_bearings, spin, freq,
+                    theta[at], ds[at], parts)
+            else:
+                plain.append((sub, parts))
+        if not plain:
+            return
+        sub = np.concatenate([s for s, _ in plain])
+        stiffness = tuple(np.concatenate([np.broadcast_to(p.stiffness[j], (len(s),)
+                                                          + p.stiffness[j].shape[1:])
+                                          for s, p in plain])
+                          for j in range(self.n_bearings))
+        at = rows[sub]
+        Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+            self.geometry, self.effects, self.theta_bearings, spin, freq, theta[at], ds[at],
+            BearingParts(stiffness, plain[0][1].supports))
 
     def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
         """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
