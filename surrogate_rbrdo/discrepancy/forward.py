@@ -76,8 +76,9 @@ class ForwardModel:
         Disks (by name) whose mass and inertias a row may scale.
 
     The instance memoises assembled models (keyed by the effect tuple) and condensed rotors
-    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each; nothing else
-    changes between calls.
+    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each, and the coupling
+    plan of the last :data:`PLAN_CACHE` rotors over a sweep list; nothing else changes between
+    calls.
 
     Examples
     --------
