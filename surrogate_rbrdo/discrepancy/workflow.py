@@ -398,9 +398,10 @@ def _drop_thin_impacts(data: MeasuredData, min_dof: int
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:
     """The experiment that would separate a withheld name: off-synchronous data if the data
     have none (impact tests at speed); else, when the closest rival of the best-separated
-    member is a grounded spring at a bearing's node or beside it (a constant stiffness,
-    which with θ recalibrated spans that bearing's speed law), a thermal soak; else a larger
-    effect or more speeds."""
+    member is a grounded spring beside a bearing — within one shaft diameter of it
+    (:func:`~.generic.beside_bearings`; a constant stiffness there, with θ recalibrated, spans
+    that bearing's speed law), labelled with one bearing or two — a thermal soak; else a
+    larger effect or more speeds."""
     at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
     if not at_speed:
         return RIVAL_SEPARATION

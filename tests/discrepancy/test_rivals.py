@@ -172,6 +172,8 @@ def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
     spring = held("stiffness of shaft element 3", "grounded spring at node 4 beside bearing a")
     assert _rival_separation(standstill, spring) == rivals.RIVAL_SEPARATION
     assert _rival_separation(at_speed, spring) == rivals.RIVAL_SEPARATION_SPRING
+    both = held("mass of disk x", "grounded spring at node 7 beside bearings a and b")
+    assert _rival_separation(at_speed, both) == rivals.RIVAL_SEPARATION_SPRING
     far = held("stiffness of shaft element 3", "grounded spring at node 9")
     assert _rival_separation(at_speed, far) == rivals.RIVAL_SEPARATION_AT_SPEED
     assert _rival_separation(at_speed, held("grounded spring at node 4", "mass of disk x")) \
