@@ -184,6 +184,23 @@ def beside_bearings(model) -> dict[int, tuple[str, ...]]:
     return out
 
 
+def beside_names(label: str) -> tuple[str, ...]:
+    """The bearings a generic parameter's label says it lies beside (the inverse of the
+    labels :func:`generic_labels` writes; empty for none).
+
+    >>> beside_names("grounded spring at node 7 beside bearings a, b and c")
+    ('a', 'b', 'c')
+    >>> beside_names("grounded spring at node 4 beside bearing front"), beside_names("x")
+    (('front',), ())
+    """
+    _, sep, tail = label.partition(f" {BESIDE_BEARING}")
+    if not sep:
+        return ()
+    tail = tail.removeprefix("s").strip()
+    head, _, last = tail.rpartition(" and ")
+    return tuple(n for n in head.split(", ") if n) + (last,) if head else (tail,)
+
+
 def _beside_label(names: tuple[str, ...]) -> str:
     """`` beside bearing a`` / `` beside bearings a and b`` (empty for none)."""
     if not names:
