@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from joblib import Parallel, delayed
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.rng import require_rng
@@ -181,10 +182,13 @@ PHASOR_COLUMNS = ("record", "build", "tool", "run", "speed_rpm", "measured_speed
 
 
 def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
-                 rng: np.random.Generator, progress: Progress | None = None) -> CampaignResult:
+                 rng: np.random.Generator, progress: Progress | None = None,
+                 n_jobs: int = 1) -> CampaignResult:
     """Simulate the campaign into ``out_dir/dataset`` (resumable) and write ``phasors.csv`` and
-    ``summary.json`` into ``out_dir``."""
+    ``summary.json`` into ``out_dir``. ``n_jobs`` worker processes (joblib) simulate the
+    impact records, each from its own seeded stream: the files do not depend on it."""
     require_rng(rng)
+    check_int("n_jobs", n_jobs, minimum=1)
     check_record_lengths(options.duration_s, options.speeds_rpm,
                          options.sensors.daq.sample_rate_hz, options.runup)
     t_start = time.perf_counter()
@@ -229,11 +233,13 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                         count += 1
                         if progress:
                             progress(count, total, rid)
-            for rec_id, make in _extras(truth, st0, options, inst, root_ss, b, tl):
+            extras = _extras(truth, st0, options, inst, root_ss, b, tl)
+            made = _made([make for rec_id, make in extras if rec_id not in done], n_jobs)
+            for rec_id, _ in extras:
                 kind = "impact" if "_hit" in rec_id else "ramp"
                 (impacts if kind == "impact" else ramps).append(rec_id)
                 if rec_id not in done:
-                    writer.write(make(), labels={"build": b, "tool": tl, "run": 0})
+                    writer.write(next(made), labels={"build": b, "tool": tl, "run": 0})
                     written += 1
                 count += 1
                 if progress:
@@ -402,6 +408,16 @@ def _extras(truth, st, options, inst, root_ss, b, tl):
                                           duration_s=options.impact_duration_s,
                                           speed_rpm=speed)))
     return out
+
+
+def _made(thunks: list[Callable[[], Record]], n_jobs: int):
+    """The records the ``thunks`` make, in order: here, or on ``n_jobs`` joblib worker
+    processes (loky) a few at a time (bounded memory). Each thunk draws from its own
+    seeded generator, so the records are the same either way."""
+    if n_jobs == 1 or len(thunks) < 2:
+        return (make() for make in thunks)
+    return iter(Parallel(n_jobs=min(n_jobs, len(thunks)), return_as="generator")(
+        delayed(make)() for make in thunks))
 
 
 def _phasor_rows(rec: Record, b: int, tl: int, r: int) -> list[tuple[Any, ...]]:

@@ -35,6 +35,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.memory import require_memory
+from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, stability_speeds
 from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
@@ -52,6 +53,7 @@ class RigConfig:
     truth: Truth
     options: CampaignOptions
     figures: bool = True
+    n_jobs: int = 1
 
 
 @dataclass(frozen=True)
@@ -84,14 +86,17 @@ class RigTruthTable:
 @dataclass(frozen=True)
 class RigTable(RigTruthTable):
     """A rig campaign's ``[rig]``: the truth, its ``design``, the ``campaign`` (its sensors
-    are ``[rig.sensors]``) and ``figures``."""
+    are ``[rig.sensors]``), ``figures`` and ``n_jobs``: worker processes for the impact
+    records (``rig.campaign.run_campaign``; the records are the same for any value)."""
 
     design: tuple[float, float, float] | None = None
     campaign: CampaignOptions = field(default_factory=CampaignOptions)
     figures: bool = True
+    n_jobs: int = 1
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        check_int("n_jobs", self.n_jobs, minimum=1)
         if self.campaign.sensors != SensorSet():
             raise ValueError("campaign.sensors is not allowed: the sensors are [rig.sensors]")
         if self.design is not None:     # "design span_mm = 900.0 is not allowed: ..."
@@ -101,7 +106,7 @@ class RigTable(RigTruthTable):
         """The truth (at ``design``) and the campaign options with ``sensors``."""
         x = None if self.design is None else np.asarray(self.design, float)
         return RigConfig(self.truth(x), replace(self.campaign, sensors=self.sensors),
-                         self.figures)
+                         self.figures, self.n_jobs)
 
 
 @dataclass(frozen=True, eq=False)

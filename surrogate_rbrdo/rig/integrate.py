@@ -103,6 +103,7 @@ class _System:
         self.out, self.acc, self.P = np.asarray(out_dofs), np.asarray(acc_dofs, int), P
         self.w_corr = 2 * np.pi * correct_below_hz
         self._fo: dict[float, object] = {}
+        self._modes: tuple[float, Modes] | None = None
 
     def form(self, t: float):
         w = float(self.profile.omega(np.array([t]))[0])
@@ -122,8 +123,12 @@ class _System:
         return Segment(modes.lam, modes.W @ fo.B, C @ modes.V, self.P, D, self.w_corr, t_mid)
 
     def modes(self, t: float) -> Modes:
+        """The modes at ``t``'s speed; the last speed's are kept (at constant speed the start
+        and the one segment share them: one eigen-decomposition instead of two)."""
         w = float(self.profile.omega(np.array([t]))[0])
-        return decompose(self.form(t).A, w)
+        if self._modes is None or self._modes[0] != w:
+            self._modes = (w, decompose(self.form(t).A, w))
+        return self._modes[1]
 
 
 def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_dofs: np.ndarray,

@@ -700,7 +700,9 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"rig = 3 is not allowed: " + TAB),
     ("rig_key", G("rig", "colour = 1"), {}, [],
      r"unknown key rig.colour; allowed: \['campaign', 'design', 'effects', 'figures', "
-     r"'sensors', 'variability'\]"),
+     r"'n_jobs', 'sensors', 'variability'\]"),
+    ("rig_n_jobs", G("rig", "n_jobs = 0"), {}, [],
+     r"rig.n_jobs = 0 is not allowed: must be an integer >= 1"),
     ("rig_effects_str", G("rig", "effects = 'none'"), {}, [],
      r"rig.effects = 'none' is not allowed: must be an array of tables"),
     ("rig_effects_item", G("rig", "effects = [3]"), {}, [],

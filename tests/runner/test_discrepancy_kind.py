@@ -86,7 +86,7 @@ def test_a_hidden_housing_stage_is_named_and_the_updated_spindle_loads(housing_r
     model = [e for e in build_spindle(SpindleTable()).effects if not e.is_off]
     assert [e for e in sp.effects if e.name != "housing"] == model   # the model's own kept
     for f in ("candidates.csv", "curves.csv", "figures/residual_map.png",
-              "figures/candidates.png", "figures/gap_unbalance_1x_tool_x.png"):
+              "figures/candidates.png", "figures/gap_unbalance_1x.png"):
         assert (run.path / f).is_file(), f
     summary = json.loads((run.path / "summary.json").read_text())
     assert summary["summary"][0]["verdict"].startswith("named: housing")

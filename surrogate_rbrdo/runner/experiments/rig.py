@@ -34,7 +34,8 @@ def campaign(p: RigPlan, done: Mapping[str, Any], ctx: StageContext) -> Campaign
     """Stage ``campaign`` (also the ``discrepancy`` and ``end_to_end`` kinds')."""
     with ctx.bar("rig campaign", "record") as progress:
         return run_campaign(p.rig.truth, p.rig.options, ctx.run_dir / "campaign",
-                            rng=ctx.stream(0), progress=progress)
+                            rng=ctx.stream(0), progress=progress,
+                            n_jobs=p.rig.n_jobs)
 
 
 register_kind(Kind(
