@@ -58,6 +58,8 @@ SECANT_MAX_NORM = 12.0
 #: GP length scales (fraction of the speed or frequency span) and variances of the structure test
 GP_LENGTHS = (0.03, 0.08, 0.2, 0.5)
 GP_TAUS = tuple(np.geomspace(1e-2, 1e3, 16).tolist())
+#: model rows evaluated at once by :func:`linearise` (bounds its memory, not its answers)
+ROW_BLOCK = 256
 
 
 @dataclass(frozen=True)
@@ -144,15 +146,15 @@ def linearise(problem: Problem, base: Fit, candidates: tuple[Candidate, ...]) ->
                         specs += [(c, scope, shape, np.array([h]), h) for _, h in rows]
                     else:
                         specs.append((c, scope, shape, np.array([h for _, h in rows]), 0.0))
-    nrow = len(ex_rows)
-    fc = np.zeros((0, f.shape[1]))
-    if nrow:
-        rb = par.rows(x[None])
-        rows = replace(rb.repeat(nrow), extras=ex_rows)
+    # in blocks of rows: the model's work arrays for thousands of rows at once are large
+    fc = np.empty((len(ex_rows), f.shape[1]))
+    rb = par.rows(x[None])
+    for i in range(0, len(ex_rows), ROW_BLOCK):
+        ex = ex_rows[i:i + ROW_BLOCK]
         # a candidate leaves the nuisance's prior pseudo-observations as they are at ``x``
-        fc = np.hstack([problem.data_vector(rows, u),
-                        np.broadcast_to(f[0, f.shape[1] - problem.n_prior:],
-                                        (nrow, problem.n_prior))])
+        fc[i:i + len(ex)] = np.hstack([
+            problem.data_vector(replace(rb.repeat(len(ex)), extras=ex), u),
+            np.broadcast_to(f[0, f.shape[1] - problem.n_prior:], (len(ex), problem.n_prior))])
     out: dict[str, list[Variant]] = {}
     k = 0
     for c, scope, shape, steps, secant in specs:
@@ -214,9 +216,13 @@ def _data_whitening(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
     return Wc, 1.0 / sd
 
 
-def _apply(W: tuple[np.ndarray, np.ndarray], M: np.ndarray) -> np.ndarray:
-    """Whiten unwhitened columns ``M`` (n_obs, k) (or a batch (B, n_obs, k) with batched W)."""
+def _apply(W: tuple[np.ndarray, np.ndarray], M: np.ndarray, transpose: bool = False
+           ) -> np.ndarray:
+    """Whiten unwhitened columns ``M`` (n_obs, k) (or a batch (B, n_obs, k) with batched W);
+    with ``transpose`` apply ``Wᵀ``."""
     Wc, wr = W
+    if transpose:
+        Wc = np.swapaxes(Wc, -1, -2)
     nc = 2 * Wc.shape[-3]
     Mc = M[..., :nc, :].reshape(M.shape[:-2] + (nc // 2, 2, M.shape[-1]))
     Yc = (Wc @ Mc).reshape(M.shape[:-2] + (nc, M.shape[-1]))
@@ -326,20 +332,19 @@ class NullDistribution:
 
 def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
                   rng: np.random.Generator, chunk: int = 25) -> NullDistribution:
-    """Draw the statistics ``n_draws`` times under the recalibrated model (see module doc)."""
+    """Draw the statistics ``n_draws`` times under the recalibrated model (see module doc).
+
+    Per draw only the nuisance columns are whitened and factorised; a one-column variant's
+    statistic ``(uᵀr)² / uᵀu`` (``u`` its whitened column less its projection on them) comes
+    from products with the unwhitened columns (:class:`_Singles`), so memory does not grow
+    with the number of variants. Variants with several columns are projected explicitly.
+    """
     rng = require_rng(rng)
     noise = NoiseModel.of(problem, lin.nuisance[:, :lin.n_theta], _data_whitening(problem)[0])
-    cols = [lin.nuisance]
-    index, off = [], 0
-    for c, vs in lin.candidates:
-        for v in vs:
-            index.append((c, v.columns.shape[1], off))
-            cols.append(v.columns)
-            off += v.columns.shape[1]
-    cols.append(lin.generic)
-    M = np.hstack(cols)
-    p = lin.nuisance.shape[1]
-    ng = lin.generic.shape[1]
+    N = lin.nuisance
+    singles = _Singles.of(problem, lin)
+    multi = [(order, v.columns) for order, (c, vs) in enumerate(lin.candidates) for v in vs
+             if v.columns.shape[1] > 1]
     series = problem.series()
     eig = kernel_eigs(series)
     gof, struct, cand, gen = [], [], [], []
@@ -351,19 +356,88 @@ def simulate_null(problem: Problem, lin: Linearisation, *, n_draws: int,
         e, W, wr = noise.draw(B, rng)
         Wb = (W, wr)
         ew = _apply(Wb, e[..., None])[..., 0]
-        Mw = _apply(Wb, np.broadcast_to(M, (B,) + M.shape))
-        Q, _ = np.linalg.qr(Mw[..., :p])            # one factorisation for both projections
+        Q, _ = np.linalg.qr(_apply(Wb, np.broadcast_to(N, (B,) + N.shape)))
         r = ew - _project_on(Q, ew)
-        U = Mw[..., p:] - _project_on(Q, Mw[..., p:])
         gof.append(np.sum(r**2, axis=1))
         struct.append(gp_statistic(r, series, eig))
-        Ug = U[..., U.shape[-1] - ng:]
-        gen.append(_max_single(Ug, r) if ng else np.zeros(B))
-        U = U[..., :U.shape[-1] - ng]
-        cand.append(_candidate_stats(r, U, index, lin))
+        d = singles.statistics(Wb, Q, r)                     # (B, columns)
+        out = np.zeros((B, len(names)))
+        for k, sl in enumerate(singles.candidate_slices):
+            if sl.stop > sl.start:
+                out[:, k] = d[:, sl].max(axis=1)
+        for k, M in multi:
+            U = _apply(Wb, np.broadcast_to(M, (B,) + M.shape))
+            U = U - _project_on(Q, U)
+            out[:, k] = np.maximum(out[:, k], np.einsum("bn,bn->b", r, _project(U, r)))
+        cand.append(out)
+        g = singles.generic_slice
+        gen.append(d[:, g].max(axis=1) if g.stop > g.start else np.zeros(B))
     K = len(names)
     return NullDistribution(np.concatenate(gof), np.concatenate(struct), np.concatenate(gen),
                             np.concatenate(cand) if K else np.zeros((n_draws, 0)), names)
+
+
+@dataclass(frozen=True)
+class _Singles:
+    """The one-column variants (grouped by candidate) and the generic columns, less their
+    projection on the nuisance in the data's whitening, with what the bootstrap needs of them.
+
+    Subtracting a combination of the nuisance columns changes no statistic (each draw projects
+    the nuisance out again); it keeps ``uᵀu = |W m|² − |Qᵀ W m|²`` free of cancellation, since
+    in a draw's whitening ``W m`` is then nearly orthogonal to the nuisance already.
+    ``|W m|²`` is the product of the columns' squares per cell (``m₀², 2 m₀ m₁, m₁²``; ``m²``
+    for a real observable) with the draw's precisions (``WᵀW``); ``Qᵀ W m = (WᵀQ)ᵀ m``.
+    """
+
+    columns: np.ndarray              # (n_obs, k) unwhitened
+    squares: np.ndarray              # (3 nc + nr, k)
+    one_sided: np.ndarray            # (k,) bool: only a positive projection counts
+    candidate_slices: tuple[slice, ...]
+    generic_slice: slice
+
+    @classmethod
+    def of(cls, problem: Problem, lin: Linearisation) -> _Singles:
+        cols, sides, slices = [], [], []
+        for c, vs in lin.candidates:
+            one = [v.columns for v in vs if v.columns.shape[1] == 1]
+            start = sum(m.shape[1] for m in cols)
+            cols += one
+            sides += [c.one_sided[0]] * len(one)
+            slices.append(slice(start, start + len(one)))
+        start = sum(m.shape[1] for m in cols)
+        cols.append(lin.generic)
+        sides += [False] * lin.generic.shape[1]
+        M = np.hstack(cols)
+        W = _data_whitening(problem)
+        Nw = _apply(W, lin.nuisance)
+        scale = np.linalg.norm(Nw, axis=0)
+        scale = np.where(scale > 0, scale, 1.0)
+        Q, R = np.linalg.qr(Nw / scale)
+        beta = np.linalg.lstsq(R, Q.T @ _apply(W, M), rcond=None)[0] / scale[:, None]
+        M = M - lin.nuisance @ beta
+        nc = 2 * W[0].shape[0]
+        Mc = M[:nc].reshape(nc // 2, 2, -1)
+        sq = np.concatenate([Mc[:, 0]**2, 2 * Mc[:, 0] * Mc[:, 1], Mc[:, 1]**2, M[nc:]**2])
+        return cls(M, sq, np.array(sides, dtype=bool), tuple(slices),
+                   slice(start, start + lin.generic.shape[1]))
+
+    def statistics(self, W: tuple[np.ndarray, np.ndarray], Q: np.ndarray, r: np.ndarray
+                   ) -> np.ndarray:
+        """Per draw and column ``(uᵀr)² / uᵀu`` (0 for a one-sided column whose projection is
+        negative): whitening ``W`` (batched), nuisance basis ``Q`` (B, n, p), residuals ``r``
+        (B, n) orthogonal to it."""
+        Wc, wr = W
+        B = r.shape[0]
+        num = _apply(W, r[..., None], transpose=True)[..., 0] @ self.columns
+        P = np.concatenate([Wc[..., 0, 0]**2 + Wc[..., 1, 0]**2,
+                            Wc[..., 0, 0] * Wc[..., 0, 1] + Wc[..., 1, 0] * Wc[..., 1, 1],
+                            Wc[..., 0, 1]**2 + Wc[..., 1, 1]**2, wr**2], axis=1)
+        Z = np.swapaxes(_apply(W, Q, transpose=True), -1, -2)
+        QtM = (np.ascontiguousarray(Z).reshape(-1, Z.shape[-1]) @ self.columns).reshape(
+            B, Z.shape[1], -1)
+        den = P @ self.squares - np.einsum("bpk,bpk->bk", QtM, QtM)
+        d = num**2 / den
+        return np.where(self.one_sided[None] & (num <= 0), 0.0, d)
 
 
 def linear_statistics(problem: Problem, lin: Linearisation, r: np.ndarray) -> np.ndarray:
@@ -419,25 +493,6 @@ def _project_on(Q: np.ndarray, Y: np.ndarray) -> np.ndarray:
     Y = Y[..., None] if vec else Y
     out = Q @ (np.swapaxes(Q, -1, -2) @ Y)
     return out[..., 0] if vec else out
-
-
-def _candidate_stats(r, U, index, lin) -> np.ndarray:
-    """Per draw and candidate the LR statistic, maximised over the candidate's variants."""
-    out = np.zeros((r.shape[0], len(lin.candidates)))
-    order = {c.name: k for k, (c, _) in enumerate(lin.candidates)}
-    for c, ncol, off in index:
-        Uv = U[..., off:off + ncol]
-        if ncol == 1:
-            u = Uv[..., 0]
-            num = np.einsum("bn,bn->b", u, r)
-            d = num**2 / np.einsum("bn,bn->b", u, u)
-            if c.one_sided[0]:
-                d = np.where(num > 0, d, 0.0)
-        else:
-            d = np.einsum("bn,bn->b", r, _project(Uv, r))
-        k = order[c.name]
-        out[:, k] = np.maximum(out[:, k], d)
-    return out
 
 
 def chi2_sf(value: float, dof: int) -> float:

@@ -57,13 +57,45 @@ class Fit:
     def dof(self) -> int:
         return self.n_obs - self.n_params
 
-    def covariance(self, fixed: np.ndarray | None = None) -> np.ndarray:
+    def covariance(self, fixed: np.ndarray | None = None, *, bounded: bool = False
+                   ) -> np.ndarray:
         """Gauss–Newton covariance ``(JᵀJ)⁻¹`` of ``x`` (pseudo-inverse if singular; a
         parameter the residuals do not depend on gets an infinite variance); with
-        ``fixed`` (boolean mask) those parameters are held at their values (zero rows)."""
+        ``fixed`` (boolean mask) those parameters are held at their values (zero rows).
+
+        With ``bounded`` no combination of the parameters is less known than its physical
+        range allows. An estimate confined to ``[a, b]`` (the fit's bounds,
+        :meth:`Parametrisation.bounds`) of a truth in the same range errs by at most ``b − a``,
+        so its error variance is at most ``(b − a)²/4`` (Popoviciu's inequality on variances,
+        1935). In range units ``u = x / s`` with ``s = (b − a)/2`` the covariance's eigenvalues
+        are capped at that bound, 1: ``Σ = S V diag(1/max(μ_k, 1)) Vᵀ S`` with ``μ_k, V`` the
+        eigenpairs of ``S JᵀJ S``. A direction the data determine better keeps its
+        Gauss–Newton variance exactly; a direction the data do not see (``μ = 0``) and one they
+        barely see (``μ`` small) both get the bound — ``1/max(μ, 1)`` is continuous, so the
+        covariance of a prediction (:func:`~.holdout.predictive_chi2`) has no jump between
+        "unseen" and "barely seen" and no infinity. A parameter with an unbounded range is
+        scaled by :meth:`Parametrisation.scales`.
+
+        >>> from types import SimpleNamespace
+        >>> par = SimpleNamespace(bounds=lambda: (np.zeros(2), np.array([1.0, 6.0])),
+        ...                       scales=lambda: np.ones(2))
+        >>> J = np.array([[20.0, 0.0], [0.0, 0.0]])
+        >>> f = Fit(par, np.zeros(2), 0.0, J, None, 2, 2, 0)
+        >>> f.covariance().diagonal().tolist()                  # seen: 1/400; unseen: inf
+        [0.0025, inf]
+        >>> f.covariance(bounded=True).diagonal().round(6).tolist()    # unseen: 6²/4
+        [0.0025, 9.0]
+        """
         keep = np.ones(self.x.size, dtype=bool) if fixed is None else ~np.asarray(fixed)
         cov = np.zeros((self.x.size, self.x.size))
         J = self.jac[:, keep]
+        if bounded:
+            lo, hi = self.par.bounds()
+            s = np.where(np.isfinite(hi - lo), (hi - lo) / 2.0, self.par.scales())
+            s = s[keep]
+            mu, V = np.linalg.eigh((J * s).T @ (J * s))
+            cov[np.ix_(keep, keep)] = (V / np.maximum(mu, 1.0)) @ V.T * np.outer(s, s)
+            return cov
         d = np.linalg.norm(J, axis=0)
         blind = d == 0                         # the data do not see it: unbounded variance
         d = np.where(d > 0, d, 1.0)            # columns scaled: parameters differ by 1e20

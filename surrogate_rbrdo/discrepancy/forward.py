@@ -76,8 +76,9 @@ class ForwardModel:
         Disks (by name) whose mass and inertias a row may scale.
 
     The instance memoises assembled models (keyed by the effect tuple) and condensed rotors
-    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each; nothing else
-    changes between calls.
+    (keyed by the rotor matrices and the sweep), at most ``cache_size`` each, and the coupling
+    plan of the last :data:`PLAN_CACHE` rotors over a sweep list; nothing else changes between
+    calls.
 
     Examples
     --------
@@ -102,6 +103,7 @@ class ForwardModel:
     _schurs: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _prints: dict = field(default_factory=dict, init=False, repr=False)
     _parts: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
+    _plans: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -317,35 +319,18 @@ class ForwardModel:
             rotors.setdefault(tuple(x for x in e if acts_on_rotor(x)), []).append(i)
         for rotor, rows in rotors.items():
             model = self.model(rotor)
-            conds = [self._rotor(model, s) for s in sweeps]
+            plan = self._plan(model, sweeps, n_load)
             Z = np.zeros((len(rows), spin.size, self.n_bearings, 2, 2), dtype=complex)
             groups: dict[tuple[Effect, ...], list[int]] = {}
             for j, i in enumerate(rows):
                 groups.setdefault(extras[i], []).append(j)
-            for extra, sub in groups.items():
-                at = np.asarray(rows)[sub]
-                for ks in kinds.values():
-                    pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
-                    Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
-                        self.geometry, self.effects + extra, self.theta_bearings, spin[pts],
-                        freq[pts], theta[ks[0]][at], ds[at], self.bearing_parts(extra, spin[pts]))
+            for ks in kinds.values():
+                pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
+                self._bearings_into(Z, pts, groups, np.asarray(rows), spin[pts], freq[pts],
+                                    theta[ks[0]], ds)
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
-            # sweeps with the same coupled system (hits in x and in y at one speed) share its
-            # factorisation: their loads are solved together; then one coupled solve per
-            # number of loads (padding loads with zero columns would change the BLAS kernels,
-            # hence the last digits)
-            systems: dict[str, list[int]] = {}
-            for k, c in enumerate(conds):
-                systems.setdefault(c.system, []).append(k)
-            merged = list(systems.values())
-            n_merged = [sum(n_load[k] for k in ks) for ks in merged]
-            for nl in sorted(set(n_merged)):
-                sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
-                pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1])
-                                      for ks in sel])
-                q = _couple(_stack([_loads_together([conds[k] for k in ks]) for ks in sel]),
-                            Z[:, pts], None if Zd is None else Zd[:, pts])
-                at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+            for sel, pts, cond, at in plan:
+                q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts])
                 for j, ks in enumerate(sel):
                     c0 = 0
                     for k in ks:
@@ -354,6 +339,70 @@ class ForwardModel:
         if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
         return out
+
+    def _plan(self, model: SpindleModel, sweeps: Sequence[Sweep], n_load: list[int]) -> list:
+        """How the sweeps' points are coupled for one rotor (memoised per model and sweep
+        objects): per number of loads, the sweeps solved together, their points, their
+        condensed rotors stacked and the points' offsets.
+
+        Sweeps with the same coupled system (hits in x and in y at one speed) share its
+        factorisation: their loads are solved together; then one coupled solve per number of
+        loads (padding loads with zero columns would change the BLAS kernels, hence the last
+        digits)."""
+        key = (id(model), tuple(id(s) for s in sweeps))
+        hit = self._plans.get(key)
+        if hit is not None and hit[0] is model and all(
+                a is b for a, b in zip(hit[1], sweeps, strict=True)):
+            self._plans.move_to_end(key)
+            return hit[2]
+        conds = [self._rotor(model, s) for s in sweeps]
+        sizes = [s.freq_rad_s.size for s in sweeps]
+        starts = np.concatenate([[0], np.cumsum(sizes)])
+        systems: dict[str, list[int]] = {}
+        for k, c in enumerate(conds):
+            systems.setdefault(c.system, []).append(k)
+        merged = list(systems.values())
+        n_merged = [sum(n_load[k] for k in ks) for ks in merged]
+        plan = []
+        for nl in sorted(set(n_merged)):
+            sel = [ks for ks, m in zip(merged, n_merged, strict=True) if m == nl]
+            pts = np.concatenate([np.arange(starts[ks[0]], starts[ks[0] + 1]) for ks in sel])
+            cond = _stack([_loads_together([conds[k] for k in ks]) for ks in sel])
+            at = np.concatenate([[0], np.cumsum([sizes[ks[0]] for ks in sel])])
+            plan.append((sel, pts, cond, at))
+        self._plans[key] = (model, tuple(sweeps), plan)
+        if len(self._plans) > PLAN_CACHE:
+            self._plans.popitem(last=False)
+        return plan
+
+    def _bearings_into(self, Z: np.ndarray, pts: np.ndarray, groups: dict, rows: np.ndarray,
+                       spin: np.ndarray, freq: np.ndarray, theta: np.ndarray, ds: np.ndarray
+                       ) -> None:
+        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: extra effects →
+        positions ``sub`` among ``rows``). Groups without a housing stage are evaluated in one
+        call, their θ-free stiffness stacked row by row: the same elementwise arithmetic as
+        one call per group (a linearisation has thousands of one-row groups)."""
+        plain = []
+        for extra, sub in groups.items():
+            parts = self.bearing_parts(extra, spin)
+            if any(sup is not None for sup in parts.supports):
+                at = rows[sub]
+                Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+                    self.geometry, self.effects + extra, self.theta_bearings, spin, freq,
+                    theta[at], ds[at], parts)
+            else:
+                plain.append((sub, parts))
+        if not plain:
+            return
+        sub = np.concatenate([s for s, _ in plain])
+        stiffness = tuple(np.concatenate([np.broadcast_to(p.stiffness[j], (len(s),)
+                                                          + p.stiffness[j].shape[1:])
+                                          for s, p in plain])
+                          for j in range(self.n_bearings))
+        at = rows[sub]
+        Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+            self.geometry, self.effects, self.theta_bearings, spin, freq, theta[at], ds[at],
+            BearingParts(stiffness, plain[0][1].supports))
 
     def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
         """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
@@ -373,6 +422,10 @@ class ForwardModel:
             self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
             sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
             self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
+
+
+#: rotors whose coupling plan (:meth:`ForwardModel._plan`) is kept
+PLAN_CACHE = 32
 
 
 def _lru(cache: OrderedDict, key, make, size: int):
@@ -405,9 +458,31 @@ def _loads_together(conds: list[_Condensed]) -> _Condensed:
                       np.concatenate([d.H_PF for d in conds], -1), c.system)
 
 
+#: bytes of the coupled system's work arrays per block of rows in :func:`_couple` (a
+#: linearisation couples thousands of rows at once: a few hundred MB in one block)
+COUPLE_BLOCK_BYTES = 2**25
+
+
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
     """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
-    and disk changes ``Zd`` (B, X, nd, 4, 4)."""
+    and disk changes ``Zd`` (B, X, nd, 4, 4), in blocks of rows of at most
+    :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the same whatever the
+    block)."""
+    B, X, nb = Z.shape[:3]
+    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2])
+    per_row = 16 * X * n * (3 * n + 2 * c.H_PF.shape[-1])
+    step = max(1, COUPLE_BLOCK_BYTES // max(per_row, 1))
+    if B <= step:
+        return _couple_block(c, Z, Zd)
+    out = np.empty((B, X) + c.H_OF.shape[1:], dtype=complex)
+    for i in range(0, B, step):
+        out[i:i + step] = _couple_block(c, Z[i:i + step],
+                                        None if Zd is None else Zd[i:i + step])
+    return out
+
+
+def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """:func:`_couple` of one block of rows."""
     B, X, nb = Z.shape[:3]
     blocks = [Z[:, :, j] for j in range(nb)]
     if Zd is not None:

@@ -126,22 +126,88 @@ def generic_labels(model) -> tuple[tuple[str, float, float], ...]:
     for disk in model.geometry.disks:
         out += [(f"mass of disk {disk.name}", *PLAUSIBLE["disk_mass"]),
                 (f"diametral inertia of disk {disk.name}", *PLAUSIBLE["disk_inertia"])]
-    own = dict(zip((int(n) for n in model.bearing_nodes),
-                   (b.name for b in model.geometry.bearings), strict=True))
-    beside = dict(own)                     # a bearing's own node first, then its neighbours
-    for node, name in own.items():
-        for n in (node - 1, node + 1):
-            beside.setdefault(n, name)
-    out += [(f"grounded spring at node {n}"
-             + (f" {BESIDE_BEARING} {beside[n]}" if n in beside else ""), float(lo), float(hi))
-            for n, (lo, hi) in enumerate(node_spring_ranges(model))]
+    beside = beside_bearings(model)
+    out += [(f"grounded spring at node {n}" + _beside_label(beside.get(n, ())), float(lo),
+             float(hi)) for n, (lo, hi) in enumerate(node_spring_ranges(model))]
     return tuple(out)
 
 
-#: the label of a grounded spring at a bearing's node or a neighbour (one element away) ends
-#: with this and the bearing's name: with the bearing's stiffness factor recalibrated such a
-#: spring spans the bearing's speed laws (:func:`node_spring_ranges`)
+#: the label of a grounded spring within one shaft diameter of a bearing (:func:`beside_bearings`)
+#: ends with this and the bearing's name (``beside bearings a and b`` when two qualify): with
+#: the bearing's stiffness factor recalibrated such a spring spans the bearing's speed laws
+#: (:func:`node_spring_ranges`)
 BESIDE_BEARING = "beside bearing"
+
+
+def shaft_diameter_at(geometry, position_mm: float) -> float:
+    """Outer diameter (mm) of the shaft at ``position_mm``: the larger of the two sections'
+    where sections meet there.
+
+    >>> from surrogate_rbrdo.spindle.reference import reference_spindle
+    >>> g = reference_spindle().geometry
+    >>> shaft_diameter_at(g, 100.0), shaft_diameter_at(g, 50.0)
+    (70.0, 70.0)
+    """
+    ends = np.cumsum([0.0] + [s.length_mm for s in geometry.sections])
+    tol = 1e-9 * max(ends[-1], 1.0)
+    ds = [s.outer_diameter_mm for s, a, b in zip(geometry.sections, ends[:-1], ends[1:],
+                                                 strict=True) if a - tol <= position_mm <= b + tol]
+    if not ds:
+        raise ValueError(f"position_mm = {position_mm} is not allowed: must lie on the shaft, "
+                         f"0 to {ends[-1]} mm")
+    return float(max(ds))
+
+
+def beside_bearings(model) -> dict[int, tuple[str, ...]]:
+    """The bearings each node lies beside: within one shaft diameter (at the bearing,
+    :func:`shaft_diameter_at`) of the bearing's centre, by axial distance, not node count.
+
+    The basis is the bearing's seat, not the mesh: a spindle bearing set — one to three
+    angular-contact rows, each about 0.3 bore wide (a 7014 row: 70 mm bore, 20 mm wide; ISO 15
+    / FAG and SKF super-precision catalogues), with its spacers, lock nut and labyrinth — takes
+    about one diameter of shaft either side of its centre, so a grounded stiffness there (a
+    seal, a row the model lacks, a preload the model misses) acts on the bearing's own stretch
+    of shaft. That stretch is stiff against the bearing: a cantilever one diameter ``d`` long
+    has ``3EI/d³ = 3πEd/64`` ≈ 2e9 N/m for steel and d = 65 mm, twenty times a spindle
+    bearing's ≈ 1e8 N/m, so the shaft barely bends between the spring and the bearing and, with
+    the bearing's stiffness factor recalibrated, the spring mimics a change of that bearing's
+    stiffness law (:func:`node_spring_ranges`). A node within one diameter of two bearings (a
+    pair mounted close together) lies beside both, in the geometry's order.
+    """
+    g = model.geometry
+    z_mm = np.asarray(model.z) * 1e3
+    out: dict[int, tuple[str, ...]] = {}
+    for b in g.bearings:
+        reach = shaft_diameter_at(g, b.position_mm)
+        for n in np.flatnonzero(np.abs(z_mm - b.position_mm) <= reach * (1 + 1e-9)):
+            out[int(n)] = out.get(int(n), ()) + (b.name,)
+    return out
+
+
+def beside_names(label: str) -> tuple[str, ...]:
+    """The bearings a generic parameter's label says it lies beside (the inverse of the
+    labels :func:`generic_labels` writes; empty for none).
+
+    >>> beside_names("grounded spring at node 7 beside bearings a, b and c")
+    ('a', 'b', 'c')
+    >>> beside_names("grounded spring at node 4 beside bearing front"), beside_names("x")
+    (('front',), ())
+    """
+    _, sep, tail = label.partition(f" {BESIDE_BEARING}")
+    if not sep:
+        return ()
+    tail = tail.removeprefix("s").strip()
+    head, _, last = tail.rpartition(" and ")
+    return tuple(n for n in head.split(", ") if n) + (last,) if head else (tail,)
+
+
+def _beside_label(names: tuple[str, ...]) -> str:
+    """`` beside bearing a`` / `` beside bearings a and b`` (empty for none)."""
+    if not names:
+        return ""
+    if len(names) == 1:
+        return f" {BESIDE_BEARING} {names[0]}"
+    return f" {BESIDE_BEARING}s {', '.join(names[:-1])} and {names[-1]}"
 
 
 def generic_columns(problem: Problem, fit: Fit) -> np.ndarray:

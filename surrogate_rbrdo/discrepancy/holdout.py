@@ -156,7 +156,11 @@ def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit,
     """χ² of the held-out residuals of ``f`` (fitted on ``train``) against the covariance of
     the prediction error: ``rᵀ (I + J Σ Jᵀ + D (AᵀA)⁻¹ Dᵀ)⁻¹ r`` in whitened units, with ``J``
     the held-out residuals' derivative in the outer parameters (the unbalance re-solved on
-    the training points at every step), ``Σ`` the fit's Gauss–Newton covariance, ``D`` and
+    the training points at every step), ``Σ`` the fit's Gauss–Newton covariance with no
+    direction less known than the parameters' physical ranges allow (``Fit.covariance(
+    bounded=True)``: a parameter training does not see, or barely sees, gets the largest
+    variance an estimate confined to its range can have — the same for both, not ``∞``
+    turned into ``0`` nor ``1/|J_j|²``), ``D`` and
     ``A`` the whitened unbalance designs of the held-out and training points of each 1x test
     (the unbalance's own uncertainty given the parameters). ``0`` when ``held`` has no points;
     a tuple of held-out problems gives a tuple (the training side computed once).
@@ -172,8 +176,7 @@ def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit,
     rows, h = _fd_rows(x, par, lo, hi)
     X = np.vstack([x[None], rows])
     unb = train.evaluate(par, X).unbalance
-    S = f.covariance()
-    S = np.where(np.isfinite(S), S, 0.0)        # a parameter training does not see at all
+    S = f.covariance(bounded=True)   # an unseen parameter: known to its physical range only
     A = [_whitened_design(W, G[0]) for b, W, G in zip(
         train.blocks, train.whiten, train.responses(par.rows(x[None])), strict=False)
         if b.sweep.kind == "unbalance_1x"]

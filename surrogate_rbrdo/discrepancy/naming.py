@@ -40,6 +40,7 @@ from surrogate_rbrdo.discrepancy.calibration import (
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit
 from surrogate_rbrdo.discrepancy.holdout import predictive_chi2
+from surrogate_rbrdo.discrepancy.holds import interior
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
@@ -145,8 +146,9 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             continue
         if warm is None:                 # the 1x-only recalibration, once per stage
             warm = (warm_base(problem, base, max_nfev=max_nfev),)
-        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0],
-                           interior_delta=confound_delta)
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
+        if cf.at_bound:                  # a shape on a bound the data may not prefer
+            cf = interior(problem, base, cf, confound_delta, max_nfev=max_nfev)
         p = float(tails[k].sf(cf.delta_chi2))
         ho = holdout.chi2(cf.fit, problem)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
@@ -157,9 +159,9 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
             "holdout": (gain["interleaved"] + gain["extrapolated"] > 0
                         and min(gain.values()) >= -holdout_tolerance),
         }
-        # a shape held inside by search.interior was chosen from the data: it counts as free
+        # a shape held inside by holds.interior was chosen from the data: it counts as free
         rt = rival_test(problem, lin, base.chi2, r, cf.fit.chi2, cf.fit.evaluation.residuals[0],
-                        cf.fit.jac, len(cf.slot.free) + len(cf.slot.fixed), confound_delta, law)
+                        cf.fit.jac, cf.n_fitted, confound_delta, law)
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
                               rt))
     return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)

@@ -71,6 +71,9 @@ class CandidateFit:
     significant : bool
         Some strength's interval, conditional on the fitted shapes, excludes the off state
         (the effect is on).
+    held : tuple of str
+        Shape parameters :func:`~.holds.interior` held inside their range (in ``slot.fixed``): their
+        values were chosen from the data.
     """
 
     name: str
@@ -81,6 +84,13 @@ class CandidateFit:
     ci: dict
     at_bound: bool
     significant: bool
+    held: tuple[str, ...] = ()
+
+    @property
+    def n_fitted(self) -> int:
+        """Parameters chosen from the data: the free ones and the shapes held by
+        :func:`~.holds.interior` (a likelihood-ratio threshold's degrees of freedom)."""
+        return len(self.slot.free) + len(self.held)
 
     @property
     def effect(self):
@@ -195,63 +205,17 @@ def transfer(src, x: np.ndarray, dst, fill: np.ndarray) -> np.ndarray:
     return np.array([d.get(n, f) for n, f in zip(dst.names, fill, strict=True)], dtype=float)
 
 
-def fit_candidate(problem: Problem, base: Fit, c: Candidate,
-                  extra_starts: list[tuple[Slot, dict[str, float]]] = (),
-                  *, max_nfev: int = 60, warm: Warm | None = None,
-                  interior_delta: float | None = None) -> CandidateFit:
-    """Best fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one more
-    start comes from the candidate's fit on the 1x blocks alone; with ``interior_delta`` a
-    shape parameter that ends on a bound is tried inside (:func:`interior`)."""
-    cf = _fit_candidate(problem, base, c, extra_starts, max_nfev=max_nfev, warm=warm)
-    if interior_delta is None or not cf.at_bound:
-        return cf
-    return interior(problem, base, cf, interior_delta, max_nfev=max_nfev)
-
-
-def interior(problem: Problem, base: Fit, cf: CandidateFit, delta: float, *,
-             max_nfev: int = 60) -> CandidateFit:
-    """``cf``, or a fit with its bound shape parameters held inside their range when that fits
-    within ``delta`` of it.
-
-    A shape parameter on a bound other than a natural zero makes a fit unphysical
-    (:class:`CandidateFit` ``at_bound``: the law is stretched) — but only if the bound binds.
-    A shape the data hardly see drifts to a bound as well as anywhere: a housing stage stiff
-    enough that its mode lies far above the measured band acts as a series spring whatever its
-    mass, and its fit can end at the largest mass with a χ² no better than at 20 kg. So each
-    such parameter is held at each of its start values inside the range (its
-    :data:`~.candidates.SHAPE_STARTS`; a natural zero counts as inside) and the rest refitted;
-    if the best of these is within ``delta`` (the confounding margin, χ²₁ 99 %) of ``cf``, the
-    data do not prefer the bound and that fit is the candidate's (its ``Δχ²`` is the smaller
-    one, and the held shape is reported as fixed, without an interval)."""
-    c, slot, f = cf.slot.candidate, cf.slot, cf.fit
-    vals = f.par.slot_values(f.x)[-1]
-    held = []
-    for p, (a, b), starts in zip(c.shape, c.shape_bounds, c.shape_starts, strict=True):
-        v = vals.get(p)
-        if p in dict(slot.fixed) or v is None or not _on_bound(v, (a, b)):
-            continue
-        held.append((p, [s for s in starts if a < s < b or s == 0 == min(abs(a), abs(b))]))
-    best: tuple[Fit, Slot] | None = None
-    for p, inside in held:
-        for v in inside:
-            s2 = Slot(c, slot.scope, slot.fixed + ((p, float(v)),))
-            par = base.par.with_slots(base.par.slots + (s2,))
-            f2 = fit(problem, par, transfer(f.par, f.x, par, par.x0()), max_nfev=max_nfev)
-            if best is None or f2.chi2 < best[0].chi2:
-                best = (f2, s2)
-    if best is None or best[0].chi2 > f.chi2 + delta:
-        return cf
-    return describe(c, best[1], best[0], base.chi2)
-
-
-def _on_bound(v: float, bounds: tuple[float, float]) -> bool:
+def on_bound(v: float, bounds: tuple[float, float]) -> bool:
     """Whether a shape value sits on a bound of its range that is not a natural zero."""
     return any(e != 0 and abs(v - e) <= 1e-6 * abs(e) for e in bounds)
 
 
-def _fit_candidate(problem: Problem, base: Fit, c: Candidate,
-                   extra_starts: list[tuple[Slot, dict[str, float]]] = (),
-                   *, max_nfev: int = 60, warm: Warm | None = None) -> CandidateFit:
+def fit_candidate(problem: Problem, base: Fit, c: Candidate,
+                  extra_starts: list[tuple[Slot, dict[str, float]]] = (),
+                  *, max_nfev: int = 60, warm: Warm | None = None) -> CandidateFit:
+    """Best fit of candidate ``c`` on top of ``base`` (see module doc); with ``warm`` one more
+    start comes from the candidate's fit on the 1x blocks alone. A fit whose shape ends on a
+    bound is tried inside by :func:`~.holds.interior`."""
     starts, seen = [], set()
     par0 = base.par
 
@@ -393,7 +357,7 @@ def slot_estimate(f: Fit, index: int) -> SlotEstimate:
             if c.reciprocal[j]:
                 a, b = (math.inf if b <= 0 else 1 / b), (math.inf if a <= 0 else 1 / a)
         else:                          # a shape pinned at a bound that is not a natural zero
-            at_bound |= _on_bound(x, c.shape_bounds[c.shape.index(p)])
+            at_bound |= on_bound(x, c.shape_bounds[c.shape.index(p)])
         ci[p] = [a, b] if identified[p] else None
     if slot.scope:
         params["bearings"] = list(slot.scope)

@@ -38,7 +38,7 @@ from surrogate_rbrdo.discrepancy.candidates import (
 )
 from surrogate_rbrdo.discrepancy.fit import Fit, fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
-from surrogate_rbrdo.discrepancy.generic import BESIDE_BEARING
+from surrogate_rbrdo.discrepancy.generic import beside_names
 from surrogate_rbrdo.discrepancy.gp import gp_correction
 from surrogate_rbrdo.discrepancy.holdout import Gap, Split, gap, masks_for, residuals, split_speeds
 from surrogate_rbrdo.discrepancy.naming import (
@@ -397,15 +397,29 @@ def _drop_thin_impacts(data: MeasuredData, min_dof: int
 
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:
     """The experiment that would separate a withheld name: off-synchronous data if the data
-    have none (impact tests at speed); else, when the closest rival of the best-separated
-    member is a grounded spring at a bearing's node or beside it (a constant stiffness,
-    which with θ recalibrated spans that bearing's speed law), a thermal soak; else a larger
-    effect or more speeds."""
+    have none (impact tests at speed); else a thermal soak when the best-separated member
+    drifts with temperature at a fixed speed (:data:`TEMPERATURE_DRIFT`) and its closest
+    rival is a grounded spring beside a bearing it acts on — within one shaft diameter of it
+    (:func:`~.generic.beside_bearings`; a constant stiffness there, with θ recalibrated, spans
+    that bearing's speed law; a member on all bearings acts on every one); else a larger
+    effect or more speeds (a soak does not separate a spring from an effect that does not
+    drift, nor from one at the other bearing)."""
     at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
     if not at_speed:
         return RIVAL_SEPARATION
-    rt = max((a.rival for a in withheld if a.rival is not None), key=lambda t: t.statistic,
-             default=None)
-    if rt is not None and rt.rival.startswith("grounded spring") and BESIDE_BEARING in rt.rival:
+    a = max((a for a in withheld if a.rival is not None), key=lambda a: a.rival.statistic,
+            default=None)
+    if a is None or a.name not in TEMPERATURE_DRIFT or not a.rival.rival.startswith(
+            "grounded spring"):
+        return RIVAL_SEPARATION_AT_SPEED
+    beside = beside_names(a.rival.rival)
+    scope = a.fit.slot.scope if a.fit is not None else ()
+    if beside and (not scope or set(scope) & set(beside)):
         return RIVAL_SEPARATION_SPRING
     return RIVAL_SEPARATION_AT_SPEED
+
+
+#: effects whose signature drifts as the spindle warms at a fixed speed (a preload growth
+#: follows the rings' temperature difference), which a thermal soak separates from a constant
+#: stiffness (``rivals.RIVAL_SEPARATION_SPRING``)
+TEMPERATURE_DRIFT = ("thermal_preload",)

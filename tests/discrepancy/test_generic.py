@@ -15,10 +15,12 @@ from surrogate_rbrdo.discrepancy.generic import (
     generic_columns,
     generic_labels,
     node_spring_ranges,
+    shaft_diameter_at,
 )
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.truth_effects import magnetic_pull
 from surrogate_rbrdo.spindle.assembly import build_model
+from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 from .conftest import baseline_1x
 
@@ -67,15 +69,56 @@ def test_a_grounded_spring_may_be_negative_only_at_the_motor(spindle):
                   == PLAUSIBLE["node_spring"][0])
 
 
-def test_springs_at_or_next_to_a_bearing_are_labelled_with_it(spindle):
-    """The reference spindle's bearings sit at 100 and 600 mm: the springs at their nodes and
-    one element either side carry the bearing's name, no other spring does."""
+def _beside(labels):
+    """Node -> the bearings its grounded spring's label names (parsed from the label)."""
+    out = {}
+    for lb in (lb for lb, _, _ in labels if lb.startswith("grounded spring")):
+        head, _, tail = lb.partition(" beside bearing")
+        node = int(head.split()[-1])
+        names = tail.removeprefix("s").strip().replace(" and ", ", ").split(", ")
+        out[node] = tuple(n for n in names if n)
+    return out
+
+
+@pytest.mark.known_answer
+def test_springs_within_a_shaft_diameter_of_a_bearing_are_labelled_with_it(spindle):
+    """The reference spindle's bearings sit at 100 mm (nose 70 mm meets span 65 mm: reach
+    70 mm) and 600 mm (span 65 mm meets rear 50 mm: reach 65 mm); computed here from the node
+    positions: the springs within that axial distance carry the bearing's name, none other."""
     sp, g = spindle
     m = build_model(g)
-    springs = [lb for lb, _, _ in generic_labels(m) if lb.startswith("grounded spring")]
-    assert len(springs) == m.n_nodes
-    for name, z_mm in (("front", 100.0), ("rear", 600.0)):
-        n = int(np.argmin(np.abs(m.z - z_mm * 1e-3)))
-        assert [i for i, lb in enumerate(springs) if lb.endswith(f"beside bearing {name}")] \
-            == [n - 1, n, n + 1]
-    assert sum("beside bearing" in lb for lb in springs) == 6
+    got = _beside(generic_labels(m))
+    assert len(got) == m.n_nodes
+    z_mm = m.z * 1e3
+    for name, z_b, d in (("front", 100.0, 70.0), ("rear", 600.0, 65.0)):
+        want = np.flatnonzero(np.abs(z_mm - z_b) <= d + 1e-6).tolist()
+        assert [n for n, b in got.items() if b == (name,)] == want
+    assert sum(bool(b) for b in got.values()) == 8          # 4 per bearing on this mesh
+
+
+def test_beside_is_a_distance_not_a_node_count():
+    """A shaft of 60 mm diameter: one 300 mm element, then ten of 10 mm; bearings a at 300 mm
+    and b at 400 mm. The node one element before a is 300 mm away (node count would call it
+    beside a: it is not); nodes three to six elements after a are within 60 mm (node count
+    would not); those within 60 mm of both bearings (340-360 mm) name both."""
+    law = {"type": "constant", "k_N_per_m": 1e8}
+    g = SpindleGeometry.from_dict({
+        "sections": [{"length_mm": 300, "outer_diameter_mm": 60, "elements": 1},
+                     {"length_mm": 100, "outer_diameter_mm": 60, "elements": 10}],
+        "bearings": [{"name": "a", "position_mm": 300, "law": law},
+                     {"name": "b", "position_mm": 400, "law": law}],
+        "tool_tip_mm": 0.0})
+    m = build_model(g)
+    z = np.round(m.z * 1e3, 6).tolist()
+    got = {z[n]: b for n, b in _beside(generic_labels(m)).items()}
+    assert got[0.0] == ()
+    assert [k for k, b in got.items() if b == ("a",)] == [300.0, 310.0, 320.0, 330.0]
+    assert [k for k, b in got.items() if b == ("a", "b")] == [340.0, 350.0, 360.0]
+    assert [k for k, b in got.items() if b == ("b",)] == [370.0, 380.0, 390.0, 400.0]
+    assert any(lb.endswith("beside bearings a and b") for lb, _, _ in generic_labels(m))
+
+
+def test_an_unknown_position_has_no_shaft_diameter(spindle):
+    _, g = spindle
+    with pytest.raises(ValueError, match="position_mm = 2000"):
+        shaft_diameter_at(g, 2000.0)

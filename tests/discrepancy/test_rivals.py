@@ -178,22 +178,32 @@ def test_a_one_sided_spring_cannot_mimic_what_needs_it_negative():
 
 def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
     """The experiment a withheld name carries: off-synchronous excitation without impact tests
-    at speed; with them, a thermal soak when the closest rival is a grounded spring (it spans a
-    bearing's speed law, no excitation separates it) at or beside a bearing, else a larger
-    effect or more speeds."""
+    at speed; with them, a thermal soak when the best-separated member drifts with temperature
+    (a preload growth) and its closest rival is a grounded spring beside a bearing it acts on
+    (the spring spans that bearing's speed law, no excitation separates them); else a larger
+    effect or more speeds — also for a member that does not drift (a soak cannot separate a
+    housing from a spring) or one at the other bearing."""
     ch = (Channel("t", 0.0, "x"),)
     one_x = SimpleNamespace(sweep=Sweep.unbalance([1000.0, 4000.0]))
     at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))))
     standstill = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch))))
 
-    def held(*labels):
-        return tuple(SimpleNamespace(rival=RivalTest(float(i), 9.2, lb, 1.0))
+    def held(name, scope, *labels):
+        fit = SimpleNamespace(slot=SimpleNamespace(scope=scope))
+        return tuple(SimpleNamespace(name=name, fit=fit, rival=RivalTest(float(i), 9.2, lb, 1.0))
                      for i, lb in enumerate(labels))
 
-    spring = held("stiffness of shaft element 3", "grounded spring at node 4 beside bearing a")
-    assert _rival_separation(standstill, spring) == rivals.RIVAL_SEPARATION
-    assert _rival_separation(at_speed, spring) == rivals.RIVAL_SEPARATION_SPRING
-    far = held("stiffness of shaft element 3", "grounded spring at node 9")
-    assert _rival_separation(at_speed, far) == rivals.RIVAL_SEPARATION_AT_SPEED
-    assert _rival_separation(at_speed, held("grounded spring at node 4", "mass of disk x")) \
-        == rivals.RIVAL_SEPARATION_AT_SPEED
+    spring = ("stiffness of shaft element 3", "grounded spring at node 4 beside bearing a")
+    assert _rival_separation(standstill, held("thermal_preload", (), *spring)) \
+        == rivals.RIVAL_SEPARATION
+    soak, more = rivals.RIVAL_SEPARATION_SPRING, rivals.RIVAL_SEPARATION_AT_SPEED
+    assert _rival_separation(at_speed, held("thermal_preload", (), *spring)) == soak
+    assert _rival_separation(at_speed, held("thermal_preload", ("a",), *spring)) == soak
+    assert _rival_separation(at_speed, held("thermal_preload", ("b",), *spring)) == more
+    assert _rival_separation(at_speed, held("housing", (), *spring)) == more
+    both = ("mass of disk x", "grounded spring at node 7 beside bearings a and b")
+    assert _rival_separation(at_speed, held("thermal_preload", ("b",), *both)) == soak
+    far = ("stiffness of shaft element 3", "grounded spring at node 9")
+    assert _rival_separation(at_speed, held("thermal_preload", (), *far)) == more
+    assert _rival_separation(at_speed, held("thermal_preload", (), "grounded spring at node 4",
+                                            "mass of disk x")) == more
