@@ -323,6 +323,8 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
                            if sv != "not_run" else "not_run"),
         "statistic": res.test["statistic"], "p_value": res.test["p_value"],
         "gap_before_chi2": res.gap_before.chi2_dof, "gap_after_chi2": res.gap_after.chi2_dof,
+        "gof_p": res.residual_test["gof_p"],
+        "parameters": "; ".join(f"{a.name} {a.fit.parameters}" for a in res.effects if a.fit),
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
