@@ -31,6 +31,7 @@ import math
 import resource
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
@@ -43,7 +44,7 @@ from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.holdout import masks_for, split_speeds
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
-from surrogate_rbrdo.discrepancy.rivals import best_rival, damping_law_columns
+from surrogate_rbrdo.discrepancy.rivals import damping_law_columns, rival_refit
 from surrogate_rbrdo.discrepancy.synthetic import (
     Assembly,
     Campaign,
@@ -208,9 +209,11 @@ def strength(ctx: Context, hidden: tuple[tuple[Hidden, float], ...], noise: str)
 def separable_strength(ctx: Context, hidden: tuple[tuple[Hidden, float], ...], noise: str
                        ) -> tuple[float, float, str]:
     """``(z, z_sep, rival)``: the strength and the part of it no single generic local change
-    explains, ``z_sep = √(z² − g)`` with ``g`` the largest first-order χ² reduction of one
-    generic rival of :mod:`.rivals` (inside its plausible range and sign, the nuisance
-    refitted with it, a damping speed law included) on the noise-free truth's residual.
+    explains — ``z_sep`` is the norm of the data's whitened residual left after the first-order
+    refit of the generic rival of :mod:`.rivals` that reduces the χ² most (inside its plausible
+    range and sign, the nuisance refitted with it, a damping speed law included), on the
+    noise-free truth. Like ``z``, it counts the data rows only (the priors' pseudo-observations
+    move with the refit but are not signal).
 
     A hidden effect with small ``z_sep`` is one the workflow's encompassing test cannot
     tell from that rival whatever its ``z`` (a preload growth beside a passive spring at its
@@ -220,22 +223,31 @@ def separable_strength(ctx: Context, hidden: tuple[tuple[Hidden, float], ...], n
     """
     prob, f, z = _recalibrated(ctx, hidden, noise)
     lin = linearise(prob, f, ())
-    gain, rival = best_rival(prob, lin, f.evaluation.residuals[0],
-                             damping_law_columns(prob, lin, f.par.names))
-    return z, math.sqrt(max(z * z - gain, 0.0)), rival
+    _, rival, left = rival_refit(prob, lin, f.evaluation.residuals[0],
+                                 damping_law_columns(prob, lin, f.par.names))
+    return z, float(np.linalg.norm(left[:prob.n_data])), rival
+
+
+def separable(ctx: Context, hidden: tuple[tuple[Hidden, float], ...], noise: str) -> float:
+    """``z_sep`` of :func:`separable_strength` alone (a ``measure`` for :func:`calibrate`)."""
+    return separable_strength(ctx, hidden, noise)[1]
 
 
 def calibrate(ctx: Context, h: Hidden, target: float, noise: str,
-              *, tol: float = 0.05) -> tuple[float, float]:
+              *, tol: float = 0.05,
+              measure: Callable[[Context, tuple[tuple[Hidden, float], ...], str], float]
+              = strength) -> tuple[float, float]:
     """Knob value whose strength is ``target`` (bisection on the strength coordinate) and the
-    strength reached; the physical extreme if even that is weaker."""
+    strength reached; the physical extreme if even that is weaker. ``measure`` is what
+    "strength" means: :func:`strength` (``z``, the default) or :func:`separable` (``z_sep``,
+    the part of ``z`` no generic rival explains)."""
     lo, hi = 0.0, 1.0
-    z = strength(ctx, ((h, h.value(hi)),), noise)
+    z = measure(ctx, ((h, h.value(hi)),), noise)
     if z <= target:
         return h.value(hi), z
     for _ in range(30):
         mid = 0.5 * (lo + hi)
-        z = strength(ctx, ((h, h.value(mid)),), noise)
+        z = measure(ctx, ((h, h.value(mid)),), noise)
         if abs(z - target) <= tol * target:
             return h.value(mid), z
         lo, hi = (mid, hi) if z < target else (lo, mid)
@@ -311,6 +323,8 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
                            if sv != "not_run" else "not_run"),
         "statistic": res.test["statistic"], "p_value": res.test["p_value"],
         "gap_before_chi2": res.gap_before.chi2_dof, "gap_after_chi2": res.gap_after.chi2_dof,
+        "gof_p": res.residual_test["gof_p"],
+        "parameters": "; ".join(f"{a.name} {a.fit.parameters}" for a in res.effects if a.fit),
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }

@@ -7,7 +7,10 @@ unbalance error with the unbalance unknown, once, as ``absorbed``); *confounded 
 candidate hidden at the strength where it is separated from its twin by only ``z_sep = 1.5``
 noise units, for every pair whose signatures' cosine (same sign for one-sided strengths) is at
 least ``min_cos``; *two effects at once* (both strong); and effects *outside the library*
-(``marginal`` and ``strong``) — each at every noise level and seed.
+(``marginal`` and ``strong``) — each at every noise level and seed. On request, every library
+effect alone at ``separable`` strength too: where the part of its strength no generic local
+change explains reaches a target (:func:`calibrate_grid`), so that "strong" means nameable
+rather than merely visible.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from surrogate_rbrdo.discrepancy.blind import (
     Context,
     Scenario,
     calibrate,
+    separable,
     separable_strength,
 )
 from surrogate_rbrdo.discrepancy.calibration import _apply, _data_whitening, linearise
@@ -70,9 +74,17 @@ class Calibration:
 
 
 def calibrate_grid(ctx: Context, names: tuple[str, ...], noises: tuple[str, ...],
-                   strengths: dict[str, float] = STRENGTHS) -> Calibration:
+                   strengths: dict[str, float] = STRENGTHS, *,
+                   separable_target: float | None = None) -> Calibration:
     """Bisect every (effect, strength, noise) to its target strength; the separable part of
-    every strong cell's strength."""
+    every strong cell's strength.
+
+    With ``separable_target``, every library effect (not the outside ones) also gets a
+    ``separable`` cell: the knob at which the part of its strength no generic rival explains,
+    ``z_sep`` (:func:`~.blind.separable_strength`), reaches the target — the strength at which
+    the workflow's encompassing test can name it — or its physical extreme if even that falls
+    short (the cell's recorded ``z_sep`` says so). Its ``z`` is the total strength there.
+    """
     knob, z, sep = {}, {}, {}
     for n in names:
         for s, target in strengths.items():
@@ -81,6 +93,13 @@ def calibrate_grid(ctx: Context, names: tuple[str, ...], noises: tuple[str, ...]
                 if s == "strong":
                     sep[(n, s, nz)] = separable_strength(
                         ctx, ((HIDDEN[n], knob[(n, s, nz)]),), nz)[1:]
+        if separable_target is None or HIDDEN[n].truth_only:
+            continue
+        for nz in noises:
+            k = (n, "separable", nz)
+            knob[k], _ = calibrate(ctx, HIDDEN[n], separable_target, nz, measure=separable)
+            z[k], zs, rival = separable_strength(ctx, ((HIDDEN[n], knob[k]),), nz)
+            sep[k] = (zs, rival)
     return Calibration(knob, z, sep)
 
 
@@ -123,8 +142,9 @@ def build_grid(ctx: Context, cal: Calibration, noises: tuple[str, ...], seeds: i
             if cal.z[(n, "strong", nz)] < 0.5:          # absorbed entirely
                 add(f"single: {n}", "absorbed", ((HIDDEN[n], cal.knob[(n, "strong", nz)]),), nz)
                 continue
-            for s in STRENGTHS:
-                add(f"single: {n}", s, ((HIDDEN[n], cal.knob[(n, s, nz)]),), nz)
+            for s in (*STRENGTHS, "separable"):
+                if (n, s, nz) in cal.knob:
+                    add(f"single: {n}", s, ((HIDDEN[n], cal.knob[(n, s, nz)]),), nz)
         for a, b, c in pairs:
             target = z_sep / math.sqrt(max(1 - c * c, 1e-12))
             if target <= STRENGTHS["strong"] * 3:

@@ -6,8 +6,9 @@ any data are seen):
 1. **likelihood ratio**: its ``Δχ²`` over the current model has a family-wise adjusted p-value
    ``≤ α`` (bootstrap min-p over every candidate tried, :mod:`.calibration`);
 2. **significant**: the 95 % interval of a strength parameter excludes the off state;
-3. **physical**: no strength parameter sits on its physical bound, no shape parameter on a
-   bound other than a natural zero;
+3. **physical**: no strength parameter sits on its physical bound with the data wanting it
+   beyond (a score test at χ²₁ 99 %, :func:`~.search.bound_score`: a truth at the end of its
+   range is inside it), no shape parameter on a bound other than a natural zero;
 4. **held-out speeds improve**: the held-out predictive deviance (parameters and unbalance
    from training; residuals against the noise plus the training fit's prediction
    uncertainty, with the log-determinant of that covariance, :func:`~.holdout.predictive_chi2`)

@@ -159,15 +159,16 @@ def damping_law_columns(problem: Problem, lin: Linearisation, names: tuple[str, 
     return cols, labels, np.tile(DAMPING_EXPONENT, (len(idx), 1))
 
 
-def _bounded_gain(U: np.ndarray, r: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+def _bounded_fit(U: np.ndarray, r: np.ndarray, bounds: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Per column ``u`` the χ² reduction of the best multiple ``c u`` of it with ``c`` inside
-    its ``bounds``: ``2 c uᵀr − c² uᵀu`` (a quadratic in ``c``: its bounded minimiser is the
-    clipped free one). A column the projection left empty gains nothing."""
+    its ``bounds``, ``2 c uᵀr − c² uᵀu`` (a quadratic in ``c``: its bounded minimiser is the
+    clipped free one), and that ``c``. A column the projection left empty gains nothing."""
     uu = np.einsum("nk,nk->k", U, U)
     ur = U.T @ r
     live = uu > 0
     c = np.clip(np.where(live, ur / np.where(live, uu, 1.0), 0.0), bounds[:, 0], bounds[:, 1])
-    return np.where(live, 2 * c * ur - c * c * uu, 0.0)
+    return np.where(live, 2 * c * ur - c * c * uu, 0.0), c
 
 
 def _rivals(problem: Problem, lin: Linearisation,
@@ -199,13 +200,27 @@ def best_rival(problem: Problem, lin: Linearisation, r: np.ndarray,
     nuisance refitted with it) gives on whitened residuals ``r`` of a fit at ``lin``'s base,
     and that rival's label (``(0.0, "")`` without rivals). What is left, ``rᵀr −`` the gain,
     is the part of a discrepancy no generic local change explains."""
+    gain, label, _ = rival_refit(problem, lin, r, extra)
+    return gain, label
+
+
+def rival_refit(problem: Problem, lin: Linearisation, r: np.ndarray,
+                extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
+                ) -> tuple[float, str, np.ndarray]:
+    """:func:`best_rival`'s gain and label, and the whitened residuals after that rival's
+    first-order refit (nuisance refitted with it): ``P⊥r − c u``, ``u`` the rival's column
+    with the nuisance projected out and ``c`` its bounded coefficient. Rows keep ``r``'s
+    order, so the data rows and the priors' rows can be told apart (``r`` itself, nuisance
+    projected out, without rivals)."""
     rv = _rivals(problem, lin, extra)
     if rv is None:
-        return 0.0, ""
+        return 0.0, "", r.copy()
     N, _, U, labels, bounds, live = rv
-    gain = np.where(live, _bounded_gain(U, _orth(N, r[:, None])[:, 0], bounds), 0.0)
+    rp = _orth(N, r[:, None])[:, 0]
+    gain, c = _bounded_fit(U, rp, bounds)
+    gain = np.where(live, gain, 0.0)
     j = int(np.argmax(gain))
-    return float(gain[j]), labels[j]
+    return float(gain[j]), labels[j], rp - c[j] * U[:, j]
 
 
 def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: np.ndarray,
@@ -240,11 +255,11 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     if rv is None:
         return RivalTest(np.inf, threshold, "", 0.0, level, k)
     N, G, U, labels, bounds, live = rv
-    gain = _bounded_gain(U, _orth(N, base_r[:, None])[:, 0], bounds)       # rival alone
+    gain = _bounded_fit(U, _orth(N, base_r[:, None])[:, 0], bounds)[0]    # rival alone
     gg = np.einsum("nk,nk->k", G, G)
     V = _orth(np.hstack([N, fit_jac]), G)
     V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
-    both = fit_chi2 - _bounded_gain(V, fit_r, bounds)                     # rival + candidate
+    both = fit_chi2 - _bounded_fit(V, fit_r, bounds)[0]                  # rival + candidate
     stat = np.where(live, (base_chi2 - gain) - both, np.inf)
     j = int(np.argmin(stat))
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),

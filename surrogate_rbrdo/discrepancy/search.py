@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2
 
 from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit, fit, fit_batch
@@ -65,7 +66,8 @@ class CandidateFit:
     ci : dict
         95 % Wald intervals of the fitted parameters (own units).
     at_bound : bool
-        A strength parameter sits on its physical bound (not the off state), or a shape
+        A strength parameter sits on its physical bound (not the off state) and the data
+        want it beyond (:func:`bound_score` above :data:`BOUND_SCORE`), or a shape
         parameter on a bound other than a natural zero (a massless, undamped housing is
         physical; a softening exponent at the end of its range means the law is stretched).
     significant : bool
@@ -351,7 +353,8 @@ def slot_estimate(f: Fit, index: int) -> SlotEstimate:
             j = c.strength.index(p)
             off, lo, hi = c.off[j], c.lower[j], c.upper[j]
             edge = hi if x > off else lo
-            at_bound |= bool(edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30))
+            if edge != off and abs(x - edge) <= 1e-6 * max(abs(edge), 1e-30):
+                at_bound |= bound_score(f, k0 + i, 1.0 if edge > off else -1.0) > BOUND_SCORE
             significant |= not (lo_s[k0 + i] <= off <= hi_s[k0 + i])
             identified[p] = not (a <= off <= b)
             if c.reciprocal[j]:
@@ -362,6 +365,37 @@ def slot_estimate(f: Fit, index: int) -> SlotEstimate:
     if slot.scope:
         params["bearings"] = list(slot.scope)
     return SlotEstimate(params, ci, identified, at_bound, significant)
+
+
+#: χ²₁ 99 %: a strength on its physical bound makes a fit unphysical only if relaxing the
+#: bound would lower χ² by more than this (:func:`bound_score`)
+BOUND_SCORE = float(chi2.isf(0.01, 1))
+
+
+def bound_score(f: Fit, k: int, outward: float) -> float:
+    """The score (Lagrange-multiplier) statistic of parameter ``k`` of ``f``, held on a bound
+    whose outside lies in direction ``outward`` (±1): ``g_k² V_kk`` when the χ² slope
+    ``g = Jᵀr`` points outside, else 0 — to first order the χ² reduction if the bound were
+    relaxed, the other parameters refitted (Silvey 1959, *Ann. Math. Stat.* 30:389; for an
+    inequality constraint Gouriéroux, Holly & Monfort 1982, *Econometrica* 50:63).
+
+    A truth on (or within noise of) the end of a physical range — full gyroscopic coupling
+    where the model has none, a preload grown to its largest — puts half of all fits on the
+    bound; only data that want to go beyond it make the fit unphysical. A parameter the data
+    do not see scores 0.
+
+    >>> from types import SimpleNamespace
+    >>> J = np.array([[1.0], [1.0]]); r = np.array([-1.0, -1.0])   # data want x larger
+    >>> f = SimpleNamespace(jac=J, evaluation=SimpleNamespace(residuals=r[None]),
+    ...                     covariance=lambda: np.linalg.inv(J.T @ J))
+    >>> bound_score(f, 0, +1.0), bound_score(f, 0, -1.0)
+    (2.0, 0.0)
+    """
+    g = f.jac[:, k] @ f.evaluation.residuals[0]
+    if g * outward >= 0:
+        return 0.0
+    v = f.covariance()[k, k]
+    return float(g * g * v) if np.isfinite(v) else 0.0
 
 
 def describe(c: Candidate, slot: Slot, f: Fit, base_chi2: float) -> CandidateFit:

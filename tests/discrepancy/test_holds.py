@@ -13,6 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy.optimize import lsq_linear
 from scipy.special import log_ndtr
 from scipy.stats import chi2
 
@@ -24,7 +25,14 @@ from surrogate_rbrdo.discrepancy.holds import held_options, hold_threshold, inte
 from surrogate_rbrdo.discrepancy.nuisance import Slot
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import RivalTest
-from surrogate_rbrdo.discrepancy.search import CandidateFit, describe, fit_nuisance, transfer
+from surrogate_rbrdo.discrepancy.search import (
+    BOUND_SCORE,
+    CandidateFit,
+    bound_score,
+    describe,
+    fit_nuisance,
+    transfer,
+)
 from surrogate_rbrdo.spindle.effects import EFFECTS
 
 from .conftest import campaign_data
@@ -188,3 +196,28 @@ def test_the_rival_test_counts_a_held_shape_as_fitted(monkeypatch):
                              max_nfev=1, confound_delta=DELTA)
     assert stage.assessments[0].fit is held
     assert len(held.slot.free) == 2 and seen["n_free"] == 3
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("true_beta, expect_binds", [(2.0, True), (1.0, False)])
+def test_the_bound_score_is_the_exact_chi2_gain_of_relaxing_a_linear_bound(true_beta,
+                                                                             expect_binds):
+    """Linear least squares with β₁ ≤ 1: at the constrained optimum the score statistic
+    ``g² V`` equals the χ² gained by dropping the bound (an independent unconstrained fit):
+    large when the truth lies beyond the bound, within noise when it lies on it."""
+    rng = np.random.default_rng(7)
+    A = rng.standard_normal((80, 3))
+    y = A @ np.array([0.5, true_beta, -1.0]) + 0.2 * rng.standard_normal(80)
+    Aw, yw = A / 0.2, y / 0.2
+    con = lsq_linear(Aw, yw, bounds=([-np.inf, -np.inf, -np.inf], [np.inf, 1.0, np.inf]))
+    assert con.x[1] == pytest.approx(1.0) or not expect_binds
+    r = Aw @ con.x - yw
+    free = np.linalg.lstsq(Aw, yw, rcond=None)[0]
+    gain = float(r @ r - np.sum((Aw @ free - yw) ** 2))
+    f = SimpleNamespace(jac=Aw, evaluation=SimpleNamespace(residuals=r[None]),
+                        covariance=lambda: np.linalg.inv(Aw.T @ Aw))
+    score = bound_score(f, 1, +1.0)
+    if con.x[1] >= 1.0 - 1e-9:
+        assert score == pytest.approx(gain, rel=1e-6)
+    assert (score > BOUND_SCORE) == expect_binds
+    assert bound_score(f, 1, -1.0) == 0.0          # the data do not want it below

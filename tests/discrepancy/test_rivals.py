@@ -88,6 +88,27 @@ def test_a_rival_needing_an_implausible_size_is_held_to_its_range():
 
 
 @pytest.mark.known_answer
+@pytest.mark.parametrize("limit", [np.inf, 1.0])
+def test_the_residual_after_the_best_rival_is_that_of_its_bounded_least_squares_fit(limit):
+    """Truth along generic column g1 plus noise: the rival left is g1, and the residual after it
+    equals the nuisance + g1 least-squares residual (free range) or, with g1 held to at most 1
+    where the data need 3, the nuisance refitted with g1 fixed at 1 — an independent fit."""
+    rng = np.random.default_rng(5)
+    lin, nuis, gen = _setup(rng)
+    lin = Linearisation(nuis, (), (), gen, 0, ("g0", "g1", "g2"),
+                        np.tile([-limit, limit], (3, 1)))
+    y = 3.0 * gen[:, 1] + 0.1 * rng.standard_normal(nuis.shape[0])
+    r0 = _ls_residual(nuis, y)
+    gain, label, left = rivals.rival_refit(_problem(), lin, r0)
+    want = (_ls_residual(np.hstack([nuis, gen[:, 1:2]]), y) if np.isinf(limit)
+            else _ls_residual(nuis, y - limit * gen[:, 1]))
+    assert label == "g1"
+    np.testing.assert_allclose(left, want, atol=1e-9)
+    assert gain == pytest.approx(float(r0 @ r0 - want @ want), rel=1e-9)
+    assert rivals.best_rival(_problem(), lin, r0) == (gain, label)
+
+
+@pytest.mark.known_answer
 def test_damping_speed_law_refers_every_test_to_one_speed():
     """``c ∝ (Ω/Ω_ref)^p``: ∂/∂p at p = 0 is ``ln(Ω/Ω_ref)`` times the damping factor's column,
     with Ω_ref the 1x speeds' geometric mean for every test — an impact block at speed sees the
