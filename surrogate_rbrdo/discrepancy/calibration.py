@@ -391,6 +391,7 @@ class _Singles:
 
     columns: np.ndarray              # (n_obs, k) unwhitened
     squares: np.ndarray              # (3 nc + nr, k)
+    whole: np.ndarray                # (k,) |W m|² of the columns before the reduction
     one_sided: np.ndarray            # (k,) bool: only a positive projection counts
     candidate_slices: tuple[slice, ...]
     generic_slice: slice
@@ -413,18 +414,20 @@ class _Singles:
         scale = np.linalg.norm(Nw, axis=0)
         scale = np.where(scale > 0, scale, 1.0)
         Q, R = np.linalg.qr(Nw / scale)
-        beta = np.linalg.lstsq(R, Q.T @ _apply(W, M), rcond=None)[0] / scale[:, None]
+        Mw = _apply(W, M)
+        beta = np.linalg.lstsq(R, Q.T @ Mw, rcond=None)[0] / scale[:, None]
+        whole = np.einsum("nk,nk->k", Mw, Mw)
         M = M - lin.nuisance @ beta
         nc = 2 * W[0].shape[0]
         Mc = M[:nc].reshape(nc // 2, 2, -1)
         sq = np.concatenate([Mc[:, 0]**2, 2 * Mc[:, 0] * Mc[:, 1], Mc[:, 1]**2, M[nc:]**2])
-        return cls(M, sq, np.array(sides, dtype=bool), tuple(slices),
+        return cls(M, sq, whole, np.array(sides, dtype=bool), tuple(slices),
                    slice(start, start + lin.generic.shape[1]))
 
     def statistics(self, W: tuple[np.ndarray, np.ndarray], Q: np.ndarray, r: np.ndarray
                    ) -> np.ndarray:
         """Per draw and column ``(uᵀr)² / uᵀu`` (0 for a one-sided column whose projection is
-        negative): whitening ``W`` (batched), nuisance basis ``Q`` (B, n, p), residuals ``r``
+        negative, and for a column the nuisance absorbs): whitening ``W`` (batched), nuisance basis ``Q`` (B, n, p), residuals ``r``
         (B, n) orthogonal to it."""
         Wc, wr = W
         B = r.shape[0]
@@ -436,7 +439,10 @@ class _Singles:
         QtM = (np.ascontiguousarray(Z).reshape(-1, Z.shape[-1]) @ self.columns).reshape(
             B, Z.shape[1], -1)
         den = P @ self.squares - np.einsum("bpk,bpk->bk", QtM, QtM)
-        d = num**2 / den
+        # a column the nuisance absorbs (what is left below 1e-12 of it, the rule of
+        # rivals._rivals) explains nothing; its 0/0 would be rounding
+        live = den > 1e-12 * self.whole[None]
+        d = np.where(live, num**2 / np.where(live, den, 1.0), 0.0)
         return np.where(self.one_sided[None] & (num <= 0), 0.0, d)
 
 

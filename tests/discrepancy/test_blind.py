@@ -120,3 +120,16 @@ def test_calibrating_to_a_separable_strength_where_everything_is_separable(spind
     k_z, z = calibrate(ctx, HIDDEN["anisotropy"], 8.0, "default")
     assert abs(z_sep - 8.0) <= 0.4 and abs(z - 8.0) <= 0.4
     assert k_sep == pytest.approx(k_z, rel=0.1)
+
+
+@pytest.mark.known_answer
+def test_a_hidden_generic_change_is_separable_only_far_above_its_visibility(spindle):
+    """A seal beside a bearing is its own closest rival (z_sep ≈ 0 while it is linear): only its
+    nonlinearity in size separates it, so the knob that makes z_sep = 8 is many times the one
+    that makes z = 8 — and ``calibrate`` bisects the measure it is given, not z."""
+    ctx = _synthetic_ctx(spindle)
+    h = HIDDEN["bearing_seal"]
+    k_z, _ = calibrate(ctx, h, 8.0, "default")
+    k_sep, z_sep = calibrate(ctx, h, 8.0, "default", measure=separable)
+    assert abs(z_sep - 8.0) <= 0.4
+    assert k_sep > 5 * k_z

@@ -4,6 +4,8 @@ block."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -55,8 +57,10 @@ def _direct(prob, lin, n_draws, seed, chunk):
                 if M.shape[1] > 1:
                     Qu, _ = np.linalg.qr(U)
                     return float(np.sum((Qu.T @ r) ** 2))
-                num = float(U[:, 0] @ r)
-                return 0.0 if one_sided and num <= 0 else num**2 / float(U[:, 0] @ U[:, 0])
+                num, uu = float(U[:, 0] @ r), float(U[:, 0] @ U[:, 0])
+                if uu <= 1e-12 * float(np.sum(_apply(Wb, M) ** 2)):   # absorbed: nothing
+                    return 0.0
+                return 0.0 if one_sided and num <= 0 else num**2 / uu
 
             cand.append([max(lr(v.columns, c.one_sided[0]) for v in vs)
                          for c, vs in lin.candidates])
@@ -90,3 +94,26 @@ def test_blocked_evaluations_equal_one_block(linearised, monkeypatch):
         assert c.name == c2.name and len(vs) == len(vs2)
         for v, v2 in zip(vs, vs2, strict=True):
             assert np.array_equal(v.columns, v2.columns)
+
+
+@pytest.mark.known_answer
+def test_a_generic_column_the_nuisance_absorbs_explains_nothing(linearised):
+    """A generic column in the span of the nuisance (3 N₀ + N₁) adds nothing once the nuisance
+    is refitted: its statistic is 0 in every draw (not the rounding of a 0/0); nudged out of
+    the span by 1e-3 of another column it is a statistic again, equal to the direct one."""
+    prob, _, lin = linearised
+    N = lin.nuisance
+    for eps, zero in ((0.0, True), (1e-3, False)):
+        g0 = lin.generic[:, [0]] * np.linalg.norm(N[:, 0]) / np.linalg.norm(lin.generic[:, 0])
+        extra = 3.0 * N[:, [0]] + N[:, [1]] + eps * g0
+        l2 = replace(lin, generic=extra, generic_labels=("dup",),
+                     generic_bounds=None if lin.generic_bounds is None
+                     else np.array([[-np.inf, np.inf]]))
+        null = simulate_null(prob, l2, n_draws=20, rng=np.random.default_rng(4), chunk=7)
+        _, gen = _direct(prob, l2, 20, 4, 7)
+        assert np.all(np.isfinite(null.generic))
+        if zero:
+            assert np.all(null.generic == 0.0) and np.all(gen == 0.0)
+        else:
+            assert np.all(null.generic > 0.0)
+            assert np.allclose(null.generic, gen, rtol=1e-6)

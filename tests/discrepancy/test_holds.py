@@ -30,6 +30,7 @@ from surrogate_rbrdo.discrepancy.search import (
     CandidateFit,
     bound_score,
     describe,
+    fit_candidate,
     fit_nuisance,
     transfer,
 )
@@ -221,3 +222,32 @@ def test_the_bound_score_is_the_exact_chi2_gain_of_relaxing_a_linear_bound(true_
         assert score == pytest.approx(gain, rel=1e-6)
     assert (score > BOUND_SCORE) == expect_binds
     assert bound_score(f, 1, -1.0) == 0.0          # the data do not want it below
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("name, truth, narrowed_upper, flagged", [
+    ("gyroscopics", dict(g=0.3), 0.1, True),                 # truth beyond a narrowed bound
+    ("gyroscopics", dict(g=1.0), None, False),               # truth on the range's end
+    ("housing", dict(k_N_per_m=1e6, m_kg=0.0), 2e-7, True),  # compliance: k >= 5e6 N/m allowed
+])
+def test_a_strength_on_its_bound_is_unphysical_iff_the_truth_lies_beyond(spindle, name, truth,
+                                                                          narrowed_upper,
+                                                                          flagged):
+    """Through ``describe``: the fit ends on the strength's upper bound either way; it is
+    flagged ``at_bound`` only when the truth lies beyond that bound (a narrowed range), not when
+    the truth is the range's end itself. Covers the index, the outward direction and a
+    reciprocal strength (the housing's compliance 1/k, whose upper bound is the softest k; with
+    the outward direction inverted no fit on a bound would ever be flagged)."""
+    sp, g = spindle
+    data, _ = campaign_data(spindle, (EFFECTS[name](**truth),), seed=3)
+    prob = Problem(ForwardModel(g, sp.effects, data.channels, (0.0, 350.0)), data)
+    base = fit_nuisance(prob)
+    c = candidate(name, prob.forward.bearing_names)
+    if narrowed_upper is not None:
+        c = replace(c, upper=(narrowed_upper,) + c.upper[1:])
+    if name == "housing":                     # the mass and damping the truth has: held
+        c = replace(c, shape=(), shape_bounds=(), shape_starts=())
+    cf = fit_candidate(prob, base, c)
+    k = cf.fit.par.names.index(f"{name}.{c.strength[0]}")
+    assert cf.fit.x[k] == pytest.approx(c.upper[0], rel=1e-6)      # on the bound either way
+    assert cf.at_bound == flagged
