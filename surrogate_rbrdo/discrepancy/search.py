@@ -20,7 +20,9 @@ and the best scope ended at χ² 1 079 (rear bearing alone), while from the nuis
 the softening on both bearings reaches χ² 358 at ``a = 0.201``, exponent 2.00. So when the
 base is stretched every scope's best start is also screened with the nuisance at its prior
 mean (nothing projected out) and short-fitted from there, as the recalibration itself is
-started (:func:`fit_nuisance`); an unstretched base costs nothing more.
+started (:func:`fit_nuisance`); an unstretched base costs nothing more. With a stretched 1x
+recalibration the continuation in the data carries every scope's 1x fit, each with its valley
+(:func:`warm_fits`): the 1x data of a strong effect often fit one bearing as well as both.
 
 **Continuation in the data** (:class:`Warm`). When the data hold sharper observables than the
 1x responses — impact FRFs, whose lightly damped peaks sit between lines 40 Hz apart — the χ²
