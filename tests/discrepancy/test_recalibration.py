@@ -18,10 +18,15 @@ from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions, Slot
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
-from surrogate_rbrdo.discrepancy.search import fit_candidate, fit_nuisance, stretched
+from surrogate_rbrdo.discrepancy.search import (
+    fit_candidate,
+    fit_nuisance,
+    stretched,
+    warm_base,
+)
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
 from surrogate_rbrdo.rig.impacts import ImpactPlan
-from surrogate_rbrdo.spindle.effects import SpeedSoftening
+from surrogate_rbrdo.spindle.effects import HousingFlexibility, SpeedSoftening
 
 
 def _truth_x(par, source, g, effects, seed, channels, noise="high"):
@@ -131,3 +136,36 @@ def test_a_strong_softening_on_the_rig_is_named_alone(spindle):
     assert abs(est.parameters["exponent"] - 2.0) < 0.2
     assert "bearings" not in est.parameters
     assert res.residual_test["gof_p"] > res.residual_test["threshold"]
+
+
+@pytest.mark.slow
+@pytest.mark.known_answer
+def test_a_strong_housing_on_both_bearings_is_carried_from_every_scope(spindle):
+    """A 6e8 N/m, 20 kg housing stage on both bearings, the rig's data with the impact plan:
+    the 1x data fit it on the front bearing alone as well as on both (397.8 and 398.5 on 445
+    observations), the FRFs do not (16 023 and 2 494 on 2 585). The candidate's fit must reach
+    the χ² of the fit started at the truth (its housing and nuisance draws), on both
+    bearings, near the truth's k and m (it ended on the front bearing alone at χ² 16 014 when
+    only the 1x data's best scope was carried to all the data)."""
+    sp, g = spindle
+    effects = sp.effects + (HousingFlexibility(k_N_per_m=6e8, m_kg=20.0),)
+    src = RigSource(tuple(np.linspace(1000.0, 24000.0, 50).tolist()), 20, FACTORS,
+                    impacts=ImpactPlan())
+    data = src.measure(g, effects, "default", 12)
+    data = MeasuredData(data.blocks, None, data.provenance)
+    nuis = NuisanceOptions.probe_chain()
+    fm = ForwardModel(g, sp.effects, data.channels, (0.0, 350.0), None, nuis.mass_disks)
+    split = split_speeds(data.blocks[0].mean.shape[0], 5, 0.1)
+    train = Problem(fm, data, masks_for(data, split, "train"), nuis)
+    base = fit_nuisance(train, max_nfev=150)
+    c = candidate("housing", fm.bearing_names)
+    par = base.par.with_slots((Slot(c, ()),))
+    x0 = _truth_x(par, src, g, effects, 12, data.channels, "default")
+    for p, v in (("k_N_per_m", 1 / 6e8), ("m_kg", 20.0), ("c_Ns_per_m", 0.0)):
+        x0[par.names.index(f"housing.{p}")] = v
+    at_truth = fit(train, par, x0, max_nfev=150)
+    got = fit_candidate(train, base, c, max_nfev=150, warm=warm_base(train, base, max_nfev=150))
+    assert got.fit.chi2 <= at_truth.chi2 + 1.0, (got.fit.chi2, at_truth.chi2)
+    assert got.slot.scope == (), (got.parameters, got.fit.chi2, at_truth.chi2)
+    assert abs(got.parameters["k_N_per_m"] / 6e8 - 1) < 0.05, got.parameters
+    assert abs(got.parameters["m_kg"] - 20.0) < 2.0, got.parameters
