@@ -427,8 +427,8 @@ class _Singles:
     def statistics(self, W: tuple[np.ndarray, np.ndarray], Q: np.ndarray, r: np.ndarray
                    ) -> np.ndarray:
         """Per draw and column ``(uᵀr)² / uᵀu`` (0 for a one-sided column whose projection is
-        negative, and for a column the nuisance absorbs): whitening ``W`` (batched), nuisance basis ``Q`` (B, n, p), residuals ``r``
-        (B, n) orthogonal to it."""
+        negative, and for a column the nuisance absorbs): whitening ``W`` (batched), nuisance
+        basis ``Q`` (B, n, p), residuals ``r`` (B, n) orthogonal to it."""
         Wc, wr = W
         B = r.shape[0]
         num = _apply(W, r[..., None], transpose=True)[..., 0] @ self.columns
