@@ -27,20 +27,16 @@ import time
 import numpy as np
 
 from surrogate_rbrdo.discrepancy import calibration, naming
-from surrogate_rbrdo.discrepancy.blind import Context
+from surrogate_rbrdo.discrepancy.blind import rig_context
 from surrogate_rbrdo.discrepancy.candidates import library
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.holdout import split_speeds
-from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
-from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
+from surrogate_rbrdo.discrepancy.rig_source import FACTORS
 from surrogate_rbrdo.discrepancy.workflow import (
-    DiscrepancyOptions,
     _drop_thin_impacts,
     _recalibrate,
 )
-from surrogate_rbrdo.rig.impacts import ImpactPlan
-from surrogate_rbrdo.spindle.reference import reference_spindle
 
 
 def main() -> None:
@@ -52,13 +48,8 @@ def main() -> None:
     ap.add_argument("--level", type=float, default=0.01, help="marginal level of the check")
     ap.add_argument("--impacts", choices=("plan", "none"), default="plan")
     args = ap.parse_args()
-    sp = reference_spindle()
-    g = sp.geometry_for(sp.baseline)
-    speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
-    source = RigSource(speeds, 20, FACTORS,
-                       impacts=ImpactPlan() if args.impacts == "plan" else None)
-    opts = DiscrepancyOptions(nuisance=NuisanceOptions.probe_chain(), n_draws=args.draws)
-    ctx = Context(g, sp.effects, source, opts)
+    ctx = rig_context(impacts=args.impacts == "plan", n_draws=args.draws)
+    g, effects, opts = ctx.geometry, ctx.effects, ctx.options
     naming.REFIT_FRACTION = 0.0                   # every candidate gets its nonlinear fit
     timing: list[float] = []
 
@@ -94,7 +85,7 @@ def main() -> None:
         one_x = [b for b in data.blocks if b.sweep.kind == "unbalance_1x"]
         split = split_speeds(one_x[0].mean.shape[0], opts.holdout_every,
                              opts.extrapolate_fraction)
-        fm = ForwardModel(g, sp.effects, data.channels,
+        fm = ForwardModel(g, effects, data.channels,
                           tuple(u.position_mm for u in g.unbalances), None,
                           opts.nuisance.mass_disks)
         train, ho, _, base, _ = _recalibrate(fm, data, split, opts)

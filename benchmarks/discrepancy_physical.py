@@ -36,12 +36,8 @@ import os
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context, Scenario, run_scenario
-from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
-from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
-from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
-from surrogate_rbrdo.rig.impacts import ImpactPlan
-from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.discrepancy.blind import HIDDEN, Scenario, rig_context, run_scenario
+from surrogate_rbrdo.discrepancy.rig_source import FACTORS
 
 #: (effect, knob value) pairs: module doc
 SIZES = (("speed_softening", 0.2), ("thermal_preload", 0.5), ("housing", 6e8),
@@ -59,13 +55,7 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--out", default="")
     args = ap.parse_args()
-    sp = reference_spindle()
-    g = sp.geometry_for(sp.baseline)
-    speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
-    source = RigSource(speeds, 20, FACTORS,
-                       impacts=ImpactPlan() if args.impacts == "plan" else None)
-    ctx = Context(g, sp.effects, source, DiscrepancyOptions(
-        nuisance=NuisanceOptions.probe_chain(), n_draws=args.draws))
+    ctx = rig_context(impacts=args.impacts == "plan", n_draws=args.draws)
     ss = np.random.SeedSequence(args.base_seed)
     sizes = [(n, v) for n, v in SIZES if not args.effects or n in args.effects]
     rows = []

@@ -42,8 +42,10 @@ from surrogate_rbrdo.discrepancy.calibration import linearise
 from surrogate_rbrdo.discrepancy.fit import Fit, fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.holdout import masks_for, split_speeds
+from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.rivals import damping_law_columns, rival_refit
 from surrogate_rbrdo.discrepancy.synthetic import (
     Assembly,
@@ -56,8 +58,10 @@ from surrogate_rbrdo.discrepancy.synthetic import (
 )
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
+from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.spindle.effects import EFFECTS, Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
+from surrogate_rbrdo.spindle.reference import reference_spindle
 
 #: target strengths z (whitened norm of what the recalibration cannot absorb)
 STRENGTHS = {"sub-noise": 1.0, "marginal": 4.0, "strong": 12.0}
@@ -184,6 +188,18 @@ class Context:
     def forward(self, data: MeasuredData) -> ForwardModel:
         return ForwardModel(self.geometry, self.effects, data.channels, self.planes,
                             mass_disks=self.options.nuisance.mass_disks)
+
+
+def rig_context(*, impacts: bool = True, n_draws: int = 400) -> Context:
+    """The benchmarks' rig context: the reference spindle at its baseline design as the model,
+    the virtual rig's data (:class:`~.rig_source.RigSource`: 50 speeds 1 000–24 000 rpm, 20
+    runs, the noise levels of :data:`~.rig_source.FACTORS`; the impact plan unless
+    ``impacts=False``) and the probe-chain nuisance."""
+    sp = reference_spindle()
+    speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
+    source = RigSource(speeds, 20, FACTORS, impacts=ImpactPlan() if impacts else None)
+    return Context(sp.geometry_for(sp.baseline), sp.effects, source, DiscrepancyOptions(
+        nuisance=NuisanceOptions.probe_chain(), n_draws=n_draws))
 
 
 def _recalibrated(ctx: Context, hidden: tuple[tuple[Hidden, float], ...], noise: str
