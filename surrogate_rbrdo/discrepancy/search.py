@@ -128,22 +128,23 @@ def screen_values(c: Candidate) -> np.ndarray:
     return np.concatenate([pos, neg])
 
 
-def screen(problem: Problem, base: Fit, c: Candidate, at: np.ndarray | None = None
-           ) -> list[tuple[float, Slot, dict[str, float]]]:
+def screen(problem: Problem, base: Fit, c: Candidate, at: np.ndarray | None = None,
+           scope: tuple[str, ...] | None = None) -> list[tuple[float, Slot, dict[str, float]]]:
     """χ² of every (scope, shape start, strength) with the nuisance at ``base`` and what its
     recalibration absorbs to first order projected out (the residual orthogonal to the base
     fit's Jacobian): returns ``(χ², slot, start values)`` sorted, best first. With ``at``
     (values of ``base``'s parameters, :func:`cold_start`) the nuisance is held there instead
-    and nothing is projected out (the recalibration's absorption is what ``at`` undoes)."""
+    and nothing is projected out (the recalibration's absorption is what ``at`` undoes); with
+    ``scope`` only that bearing scope is screened."""
     par0 = base.par
     xb = base.x if at is None else at
     rows, meta = [], []
     shapes = [[]]
     for p, starts in zip(c.shape, c.shape_starts, strict=True):
         shapes = [s + [(p, v)] for s in shapes for v in starts]
-    for scope in c.scopes:
+    for sc in (c.scopes if scope is None else (scope,)):
         for shape in shapes:
-            slot = Slot(c, scope)
+            slot = Slot(c, sc)
             par = par0.with_slots(par0.slots + (slot,))
             for v in screen_values(c):
                 start = {f"{slot.label}.{p}": val for p, val in shape}
@@ -250,8 +251,8 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
 
     def best_per_scope(at: np.ndarray | None) -> list[tuple[Slot, np.ndarray]]:
         out, seen = [], set()
-        for _, s, st in screen(problem, base, c, at=at):
-            if s.scope not in seen and scope in (None, s.scope):
+        for _, s, st in screen(problem, base, c, at=at, scope=scope):
+            if s.scope not in seen:
                 seen.add(s.scope)
                 out.append(at_base(s, st, base.x if at is None else at))
         return out
