@@ -193,25 +193,16 @@ def _rivals(problem: Problem, lin: Linearisation,
     return N, G, U, labels, bounds, live
 
 
-def best_rival(problem: Problem, lin: Linearisation, r: np.ndarray,
-               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
-               ) -> tuple[float, str]:
-    """The largest first-order χ² reduction one generic rival (inside its plausible range,
-    nuisance refitted with it) gives on whitened residuals ``r`` of a fit at ``lin``'s base,
-    and that rival's label (``(0.0, "")`` without rivals). What is left, ``rᵀr −`` the gain,
-    is the part of a discrepancy no generic local change explains."""
-    gain, label, _ = rival_refit(problem, lin, r, extra)
-    return gain, label
-
-
 def rival_refit(problem: Problem, lin: Linearisation, r: np.ndarray,
                 extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
                 ) -> tuple[float, str, np.ndarray]:
-    """:func:`best_rival`'s gain and label, and the whitened residuals after that rival's
-    first-order refit (nuisance refitted with it): ``P⊥r − c u``, ``u`` the rival's column
-    with the nuisance projected out and ``c`` its bounded coefficient. Rows keep ``r``'s
-    order, so the data rows and the priors' rows can be told apart (``r`` itself, nuisance
-    projected out, without rivals)."""
+    """The generic rival (inside its plausible range, nuisance refitted with it) that reduces
+    the χ² of whitened residuals ``r`` of a fit at ``lin``'s base most, to first order: that
+    reduction, the rival's label (``(0.0, "")`` without rivals) and the residuals after its
+    refit, ``P⊥r − c u`` (``u`` the rival's column with the nuisance projected out, ``c`` its
+    bounded coefficient; ``r`` itself without rivals). Rows keep ``r``'s order, so the data
+    rows and the priors' rows can be told apart: what is left is the part of a discrepancy no
+    generic local change explains."""
     rv = _rivals(problem, lin, extra)
     if rv is None:
         return 0.0, "", r.copy()
