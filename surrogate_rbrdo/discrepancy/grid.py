@@ -26,7 +26,6 @@ from surrogate_rbrdo.discrepancy.blind import (
     Context,
     Scenario,
     calibrate,
-    separable,
     separable_strength,
 )
 from surrogate_rbrdo.discrepancy.calibration import _apply, _data_whitening, linearise
@@ -86,6 +85,14 @@ def calibrate_grid(ctx: Context, names: tuple[str, ...], noises: tuple[str, ...]
     short (the cell's recorded ``z_sep`` says so). Its ``z`` is the total strength there.
     """
     knob, z, sep = {}, {}, {}
+    measured: dict = {}
+
+    def sep_of(c, hidden, nz):          # separable_strength, once per knob and noise
+        key = (tuple((h.name, v) for h, v in hidden), nz)
+        if key not in measured:
+            measured[key] = separable_strength(c, hidden, nz)
+        return measured[key]
+
     for n in names:
         for s, target in strengths.items():
             for nz in noises:
@@ -97,8 +104,9 @@ def calibrate_grid(ctx: Context, names: tuple[str, ...], noises: tuple[str, ...]
             continue
         for nz in noises:
             k = (n, "separable", nz)
-            knob[k], _ = calibrate(ctx, HIDDEN[n], separable_target, nz, measure=separable)
-            z[k], zs, rival = separable_strength(ctx, ((HIDDEN[n], knob[k]),), nz)
+            knob[k], _ = calibrate(ctx, HIDDEN[n], separable_target, nz,
+                                   measure=lambda c, hd, v: sep_of(c, hd, v)[1])
+            z[k], zs, rival = sep_of(ctx, ((HIDDEN[n], knob[k]),), nz)
             sep[k] = (zs, rival)
     return Calibration(knob, z, sep)
 
