@@ -18,21 +18,12 @@ import sys
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.blind import HIDDEN, Context
-from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
-from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
-from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
-from surrogate_rbrdo.rig.impacts import ImpactPlan
-from surrogate_rbrdo.spindle.reference import reference_spindle
+from surrogate_rbrdo.discrepancy.blind import HIDDEN, rig_context
+from surrogate_rbrdo.discrepancy.workflow import find_discrepancy
 
 
 def main(name: str, noise: str, seed: int, knob: float, plan: str) -> None:
-    sp = reference_spindle()
-    g = sp.geometry_for(sp.baseline)
-    speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
-    source = RigSource(speeds, 20, FACTORS, impacts=ImpactPlan() if plan == "plan" else None)
-    ctx = Context(g, sp.effects, source,
-                  DiscrepancyOptions(nuisance=NuisanceOptions.probe_chain(), n_draws=400))
+    ctx = rig_context(impacts=plan == "plan", n_draws=400)
     data = ctx.source.measure(*ctx.truth(((HIDDEN[name], knob),)), noise, seed)
     res = find_discrepancy(data, ctx.geometry, ctx.effects, options=ctx.options,
                            rng=np.random.default_rng([seed, 7]))
