@@ -63,8 +63,9 @@ class Fit:
         parameter the residuals do not depend on gets an infinite variance); with
         ``fixed`` (boolean mask) those parameters are held at their values (zero rows).
 
-        With ``bounded`` no combination of the parameters is less known than its physical
-        range allows. An estimate confined to ``[a, b]`` (the fit's bounds,
+        With ``bounded`` no direction of the parameters is less known than one parameter's
+        physical range allows (a regulariser: Popoviciu would allow a mixed direction up to
+        ``(Σ|v_i|)²`` in range units, up to ``n``). An estimate confined to ``[a, b]`` (the fit's bounds,
         :meth:`Parametrisation.bounds`) of a truth in the same range errs by at most ``b − a``,
         so its error variance is at most ``(b − a)²/4`` (Popoviciu's inequality on variances,
         1935). In range units ``u = x / s`` with ``s = (b − a)/2`` the covariance's eigenvalues
