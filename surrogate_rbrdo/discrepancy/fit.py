@@ -63,19 +63,18 @@ class Fit:
         parameter the residuals do not depend on gets an infinite variance); with
         ``fixed`` (boolean mask) those parameters are held at their values (zero rows).
 
-        With ``bounded`` no direction of the parameters is less known than one parameter's
-        physical range allows (a regulariser: Popoviciu would allow a mixed direction up to
-        ``(Σ|v_i|)²`` in range units, up to ``n``). An estimate confined to ``[a, b]`` (the fit's bounds,
-        :meth:`Parametrisation.bounds`) of a truth in the same range errs by at most ``b − a``,
-        so its error variance is at most ``(b − a)²/4`` (Popoviciu's inequality on variances,
-        1935). In range units ``u = x / s`` with ``s = (b − a)/2`` the covariance's eigenvalues
-        are capped at that bound, 1: ``Σ = S V diag(1/max(μ_k, 1)) Vᵀ S`` with ``μ_k, V`` the
-        eigenpairs of ``S JᵀJ S``. A direction the data determine better keeps its
-        Gauss–Newton variance exactly; a direction the data do not see (``μ = 0``) and one they
-        barely see (``μ`` small) both get the bound — ``1/max(μ, 1)`` is continuous, so the
-        covariance of a prediction (:func:`~.holdout.predictive_chi2`) has no jump between
-        "unseen" and "barely seen" and no infinity. A parameter with an unbounded range is
-        scaled by :meth:`Parametrisation.scales`.
+        With ``bounded`` no direction of the parameters is less known than one parameter's physical
+        range allows (a regulariser: Popoviciu would allow a mixed direction up to ``(Σ|v_i|)²`` in
+        range units, up to ``n``). An estimate confined to ``[a, b]`` (the fit's bounds,
+        :meth:`Parametrisation.bounds`) of a truth in the same range errs by at most ``b − a``, so
+        its error variance is at most ``(b − a)²/4`` (Popoviciu's inequality on variances, 1935).
+        In range units ``u = x / s`` with ``s = (b − a)/2`` the covariance's eigenvalues are capped
+        at that bound, 1: ``Σ = S V diag(1/max(μ_k, 1)) Vᵀ S`` with ``μ_k, V`` the eigenpairs of
+        ``S JᵀJ S``. A direction the data determine better keeps its Gauss–Newton variance exactly;
+        a direction the data do not see (``μ = 0``) and one they barely see (``μ`` small) both get
+        the bound — ``1/max(μ, 1)`` is continuous, so the covariance of a prediction
+        (:func:`~.holdout.predictive_chi2`) has no jump between "unseen" and "barely seen" and no
+        infinity. A parameter with an unbounded range is scaled by :meth:`Parametrisation.scales`.
 
         >>> from types import SimpleNamespace
         >>> par = SimpleNamespace(bounds=lambda: (np.zeros(2), np.array([1.0, 6.0])),
