@@ -24,7 +24,8 @@ wrong.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -97,7 +98,10 @@ def masks_for(data: MeasuredData, split: Split, which: str) -> dict[str, np.ndar
 @dataclass(frozen=True)
 class Gap:
     """Held-out agreement: RMSE and largest |residual| (µm), χ² per real observable, and per
-    channel the same (the 1x blocks only)."""
+    channel the same (the 1x blocks only); from :func:`held_out_gap` also the predictive χ²
+    per real observable (against the noise *and* the training fit's prediction uncertainty,
+    :func:`predictive_chi2`; NaN where not computed) and the same figures per part of the
+    held-out speeds (``parts``: interleaved, extrapolated)."""
 
     rmse: float
     max_abs: float
@@ -105,9 +109,14 @@ class Gap:
     chi2: float
     n: int
     per_channel: dict
+    predictive_chi2_dof: float = math.nan
+    parts: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {"rmse": self.rmse, "max_abs": self.max_abs, "chi2_dof": self.chi2_dof}
+        out = {"rmse": self.rmse, "max_abs": self.max_abs, "chi2_dof": self.chi2_dof,
+               "predictive_chi2_dof": self.predictive_chi2_dof}
+        out.update({k: g.to_dict() for k, g in self.parts.items()})
+        return out
 
 
 def residuals(problem: Problem, par: Parametrisation, x: np.ndarray,
@@ -149,6 +158,35 @@ def gap(problem: Problem, res: list[np.ndarray]) -> Gap:
     m, c = np.concatenate(mods), np.concatenate(chis)
     return Gap(float(np.sqrt(np.mean(m**2)) * 1e6), float(m.max() * 1e6),
                float(c.sum() / (2 * c.size)), float(c.sum()), 2 * c.size, per)
+
+
+def held_out_gap(train: Problem, held: Problem, parts: dict[str, Problem], f: Fit, *,
+                 correction: Callable[[Problem], list[np.ndarray]] | None = None) -> Gap:
+    """The gap of ``f`` (fitted on ``train``) on the held-out 1x speeds of ``held`` and of
+    each of ``parts`` (named subsets of them: the interleaved and the extrapolated speeds),
+    with the unbalance its training points fix.
+
+    Beside the noise-only χ² per real observable it gives the predictive χ² per real
+    observable (:func:`predictive_chi2`): a speed beyond the training range on a resonance's
+    flank is predicted poorly even by the true model, and there the noise-only χ² is large
+    while the predictive one is about 1. ``correction(problem)`` (a GP's correction, for
+    prediction only) is added to the model; the predictive χ² then is NaN (it has no
+    covariance for the GP's own prediction error).
+    """
+    u = tuple(x[0] for x in f.evaluation.unbalance)
+    one_x = {k: p.only("unbalance_1x") for k, p in {"held": held, **parts}.items()}
+
+    def part(p: Problem, pred: float) -> Gap:
+        g = gap(p, residuals(p, f.par, f.x, u, None if correction is None
+                             else correction(p)))
+        return replace(g, predictive_chi2_dof=pred / g.n if correction is None and g.n
+                       else math.nan)
+
+    names = tuple(one_x)
+    preds = ((math.nan,) * len(names) if correction is not None
+             else predictive_chi2(train, tuple(one_x.values()), f))
+    gaps = {k: part(one_x[k], pr) for k, pr in zip(names, preds, strict=True)}
+    return replace(gaps.pop("held"), parts=gaps)
 
 
 def predictive_chi2(train: Problem, held: Problem | tuple[Problem, ...], f: Fit, *,

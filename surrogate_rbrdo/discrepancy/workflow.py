@@ -40,7 +40,7 @@ from surrogate_rbrdo.discrepancy.fit import Fit, fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
 from surrogate_rbrdo.discrepancy.generic import beside_names
 from surrogate_rbrdo.discrepancy.gp import gp_correction
-from surrogate_rbrdo.discrepancy.holdout import Gap, Split, gap, masks_for, residuals, split_speeds
+from surrogate_rbrdo.discrepancy.holdout import Gap, Split, held_out_gap, masks_for, split_speeds
 from surrogate_rbrdo.discrepancy.naming import (
     Assessment,
     HoldoutProblems,
@@ -311,7 +311,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             confounded = group
         else:
             named.append(group[0])
-    res = _conclude(data, train, held, split, base, current, tuple(stages), tuple(named),
+    res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), tuple(named),
                     tuple(confounded), withheld, options, one_x[0].coord,
                     time.perf_counter() - t0)
     everything = _problem(fm, data, None, options.nuisance, runs)
@@ -325,8 +325,10 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
                    dropped_blocks=dropped, seconds=time.perf_counter() - t0)
 
 
-def _conclude(data, train, held, split, base, final, stages, named, confounded, withheld,
+def _conclude(data, train, holdout, split, base, final, stages, named, confounded, withheld,
               options, speeds, seconds) -> DiscrepancyResult:
+    held, ho = holdout
+    parts = {"interleaved": ho.interleaved, "extrapolated": ho.extrapolated}
     last = stages[-1]
     level = options.alpha_residual / 3
     residual = {"gof_chi2": final.chi2, "gof_dof": final.dof, "gof_p": last.gof_p,
@@ -336,16 +338,15 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
           "generic": (last.generic, last.generic_p)}
     worst = min(ps, key=lambda k: ps[k][1])
     unexplained = ps[worst][1] <= level or bool(withheld)
-    u = tuple(x[0] for x in base.evaluation.unbalance)
-    before = gap(held, residuals(held, base.par, base.x, u))
+    before = held_out_gap(train, held, parts, base)
     first = stages[0]
     partial: tuple[str, ...] = ()
     if unexplained:
         verdict = "unnamed_residual"
         partial = tuple(a.name for a in named + confounded + withheld)
-        corr = gp_correction(train, final.evaluation.residuals[0], held)
-        fu = tuple(x[0] for x in final.evaluation.unbalance)
-        after = gap(held, residuals(held, final.par, final.x, fu, corr))
+        r_train = final.evaluation.residuals[0]
+        after = held_out_gap(train, held, parts, final,
+                             correction=lambda p: gp_correction(train, r_train, p))
         test = {"statistic": ps[worst][0], "p_value": ps[worst][1], "threshold": level,
                 "kind": f"residual lack of fit ({worst})"}
         if withheld:
@@ -355,8 +356,7 @@ def _conclude(data, train, held, split, base, final, stages, named, confounded, 
                             f"(encompassing test; closest: {rt.rival})"}
         effects, conf = (), ()
     else:
-        fu = tuple(x[0] for x in final.evaluation.unbalance)
-        after = gap(held, residuals(held, final.par, final.x, fu))
+        after = held_out_gap(train, held, parts, final)
         if confounded:
             verdict, effects, conf = "confounded", confounded, tuple(a.name for a in confounded)
         elif named:

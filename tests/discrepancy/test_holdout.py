@@ -11,7 +11,7 @@ import pytest
 from surrogate_rbrdo.discrepancy.candidates import candidate
 from surrogate_rbrdo.discrepancy.fit import fit
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
-from surrogate_rbrdo.discrepancy.holdout import predictive_chi2, residuals
+from surrogate_rbrdo.discrepancy.holdout import held_out_gap, predictive_chi2, residuals
 from surrogate_rbrdo.discrepancy.nuisance import Slot
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import KNOWN_DOF, Problem, _whitened
@@ -136,3 +136,43 @@ def test_unseen_and_barely_seen_parameters_give_the_same_predictive_deviance(spi
     assert dev[0.0] == pytest.approx(dev[1e-6], rel=1e-4)
     # and the column matters when it is seen: the comparison is not vacuous
     assert abs(dev[1.0] - dev[0.0]) > 1e-3
+
+
+@pytest.mark.known_answer
+def test_the_held_out_gap_splits_into_its_parts(spindle):
+    """Known answers for :func:`held_out_gap` on the base model's own 1x response with noise:
+    the noise-only χ² and the observation count of all held-out speeds are the sums of the
+    interleaved and extrapolated parts'; the predictive χ² of each part is at most its
+    noise-only χ² (the prediction covariance ``I + J Σ Jᵀ + …`` is ``≥ I``); a correction that
+    is the residual itself leaves no gap, and then no predictive χ² is claimed."""
+    sp, g = spindle
+    ch = default_channels(g)
+    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
+    sw = Sweep.unbalance(np.linspace(2000.0, 24000.0, 12))
+    y = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)))[0] @ U
+    sd = 0.01 * np.abs(y) + 1e-9
+    cov = (sd**2 / 2)[..., None, None] * np.eye(2)
+    rng = np.random.default_rng(5)
+    z = sd / np.sqrt(2) * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
+    data = MeasuredData((ComplexBlock("unbalance_1x", sw, ch, y + z, cov, KNOWN_DOF),))
+    inter, extra = np.zeros(12, bool), np.zeros(12, bool)
+    inter[[2, 6]], extra[-2:] = True, True
+    train = Problem(fm, data, {"unbalance_1x": ~(inter | extra)})
+    parts = {"interleaved": Problem(fm, data, {"unbalance_1x": inter}),
+             "extrapolated": Problem(fm, data, {"unbalance_1x": extra})}
+    held = Problem(fm, data, {"unbalance_1x": inter | extra})
+    f = fit_nuisance(train)
+    g_all = held_out_gap(train, held, parts, f)
+    gi, ge = g_all.parts["interleaved"], g_all.parts["extrapolated"]
+    assert g_all.n == gi.n + ge.n == 2 * 4 * len(ch)
+    assert g_all.chi2 == pytest.approx(gi.chi2 + ge.chi2, rel=1e-12)
+    for p in (gi, ge):
+        assert p.predictive_chi2_dof <= p.chi2_dof * (1 + 1e-12)
+    d = g_all.to_dict()
+    assert set(d) >= {"rmse", "max_abs", "chi2_dof", "predictive_chi2_dof", "interleaved",
+                      "extrapolated"}
+    u = tuple(v[0] for v in f.evaluation.unbalance)
+    exact = held_out_gap(train, held, parts, f,
+                         correction=lambda p: residuals(p, f.par, f.x, u))
+    assert exact.rmse == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(exact.predictive_chi2_dof)

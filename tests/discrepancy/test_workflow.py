@@ -76,7 +76,13 @@ def test_findings_and_updated_spindle_load_back(housing_result, spindle, tmp_pat
     f = json.loads(paths["findings"].read_text())
     assert f["verdict"] == "named" and f["effects"][0]["name"] == "housing"
     assert set(f["test"]) >= {"statistic", "p_value", "threshold"}
-    assert set(f["gap"]["before"]) == set(f["gap"]["after"]) == {"rmse", "max_abs", "chi2_dof"}
+    keys = {"rmse", "max_abs", "chi2_dof", "predictive_chi2_dof"}
+    assert set(f["gap"]["before"]) == set(f["gap"]["after"]) == keys | {"interleaved",
+                                                                       "extrapolated"}
+    assert set(f["gap"]["after"]["extrapolated"]) == keys
+    # the named housing predicts the held-out speeds within its uncertainty, the base not
+    assert f["gap"]["after"]["predictive_chi2_dof"] < 3.0 < f["gap"]["before"][
+        "predictive_chi2_dof"]
     assert set(f["effects"][0]["ci"]) == {"k_N_per_m", "m_kg", "c_Ns_per_m"}
     table = tomllib.loads(paths["spindle"].read_text())["spindle"]
     updated = build_spindle(parse(SpindleTable, table, "spindle"))
