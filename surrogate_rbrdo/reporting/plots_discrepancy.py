@@ -154,7 +154,8 @@ def verdict_line(res: Any) -> str:
             "confounded": " | ".join(res.confounded_with)}.get(res.verdict, "")
     return (f"{res.verdict}{': ' + what if what else ''} (statistic {t['statistic']:.4g}, "
             f"p {t['p_value']:.3g}, threshold {t['threshold']:g}); held-out RMSE "
-            f"{b.rmse:.4g} -> {a.rmse:.4g} um, chi2/dof {b.chi2_dof:.3g} -> {a.chi2_dof:.3g}")
+            f"{b.rmse:.4g} -> {a.rmse:.4g} um, chi2/dof {b.chi2_dof:.3g} -> {a.chi2_dof:.3g} "
+            f"(predictive {b.predictive_chi2_dof:.3g} -> {a.predictive_chi2_dof:.3g})")
 
 
 def write_discrepancy_run(out_dir: str | Path, p: DiscrepancyPlan, res: Any, data: Any
