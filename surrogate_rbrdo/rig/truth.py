@@ -144,6 +144,14 @@ class Truth:
 
     ``effects`` are those the model has too; ``hidden`` are added on top (the discrepancy the
     workflow should find); ``random_phase``: unbalance phases drawn per build (else as given).
+    A hidden effect of a kind the model has switched *off* (the reference model's
+    ``Gyroscopics(g=0)``) replaces that switch instead of adding a second one: hiding
+    ``{"name": "gyroscopics", "g": 0.5}`` means the truth has half the gyroscopic coupling.
+
+    >>> from surrogate_rbrdo.spindle.effects import Gyroscopics
+    >>> t = reference_truth(hidden=[{"name": "gyroscopics", "g": 0.5}])
+    >>> [e.g for e in t.all_effects if isinstance(e, Gyroscopics)]
+    [0.5]
     """
 
     geometry: SpindleGeometry
@@ -171,7 +179,10 @@ class Truth:
 
     @property
     def all_effects(self) -> tuple[Effect, ...]:
-        return self.effects + self.hidden
+        """The model's effects (less those off of a kind ``hidden`` has) and the hidden."""
+        kinds = {type(h) for h in self.hidden}
+        return tuple(e for e in self.effects
+                     if not (type(e) in kinds and e.is_off)) + self.hidden
 
     def _plane_shares(self, model: SpindleModel) -> np.ndarray:
         """Permissible residual per plane (kg m) under ``variability.unbalance_allocation``."""

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
+from surrogate_rbrdo.rig.config import RigTruthTable
 from surrogate_rbrdo.rig.truth import Truth, Variability, reference_truth, spindle_truth
 from surrogate_rbrdo.spindle.assembly import build_model
-from surrogate_rbrdo.spindle.effects import CrossCoupling
+from surrogate_rbrdo.spindle.effects import CrossCoupling, Gyroscopics, SpeedSoftening
 from surrogate_rbrdo.spindle.reference import credible_spindle
 
 
@@ -85,3 +86,29 @@ def test_iso_allocation_needs_two_planes_and_the_tool_disk():
                                                 tool_disk="no_such_disk"))
     with pytest.raises(ValueError, match="unbalance_magnitude"):
         Variability(unbalance_magnitude="gauss")
+
+
+def test_a_hidden_switch_replaces_the_models_off_switch():
+    """The reference model has gyroscopics switched off (``Gyroscopics(g=0)``); hiding
+    gyroscopics in the truth switches it on at the hidden value (one switch, not two — a
+    second raised "at most one 'gyroscopics' effect" from the [rig] table), while a hidden
+    effect of a kind the model has on (a bearing softening) is added to the model's own. The
+    truth's model scales the gyroscopic matrix as a model built with that switch does."""
+    base = reference_truth()
+    tr = reference_truth(hidden=[{"name": "gyroscopics", "g": 0.5},
+                                 {"name": "speed_softening", "a": 0.1, "exponent": 2.0}])
+    gyro = [e for e in tr.all_effects if isinstance(e, Gyroscopics)]
+    assert [e.g for e in gyro] == [0.5]
+    soft = [e for e in tr.all_effects if isinstance(e, SpeedSoftening)]
+    assert len(soft) == 1 + sum(isinstance(e, SpeedSoftening) for e in base.effects)
+    st = tr.state(np.random.SeedSequence(0), build=0, tool=0, run=0)
+    own = tuple(e for e in base.effects if not isinstance(e, Gyroscopics))
+    ref = build_model(st.geometry, own + (Gyroscopics(g=0.5),
+                                          SpeedSoftening(a=0.1, exponent=2.0)),
+                      theta_bearings=st.theta_bearings)
+    off = build_model(st.geometry, own + (Gyroscopics(g=0.0),
+                                          SpeedSoftening(a=0.1, exponent=2.0)),
+                      theta_bearings=st.theta_bearings)
+    assert st.model().gyro_scale == ref.gyro_scale == 1.5 and off.gyro_scale == 1.0
+    cfg = RigTruthTable(effects=({"name": "gyroscopics", "g": 0.5},))
+    assert [e.g for e in cfg.truth().all_effects if isinstance(e, Gyroscopics)] == [0.5]
