@@ -41,6 +41,8 @@ from surrogate_rbrdo.spindle.modal import modal_analysis
 
 #: ramps: error-controlled segments, Ritz basis below 10 kHz (docs/rig.md)
 RAMP_OPTIONS = IntegratorOptions()
+#: impacts: constant speed, exact (the free decay after the hit in closed form)
+IMPACT_OPTIONS = IntegratorOptions()
 
 
 @dataclass(frozen=True)
@@ -257,11 +259,12 @@ class ImpactResponse:
 
 def impact_response(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
                     inst: Installation, *, direction: str = "x", duration_s: float = 1.0,
-                    t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0
-                    ) -> ImpactResponse:
+                    t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0,
+                    options: IntegratorOptions = IMPACT_OPTIONS) -> ImpactResponse:
     """Simulate the :class:`ImpactResponse` of a 1 N-peak hit at the tool tip in
-    ``direction`` at ``speed_rpm``: integrated exactly at ``oversample`` × the sample rate,
-    decimated through a linear-phase anti-aliasing filter, through the drivers and delays."""
+    ``direction`` at ``speed_rpm``: integrated exactly at ``oversample`` × the sample rate
+    (``options``: :func:`~.integrate.simulate`'s), decimated through a linear-phase
+    anti-aliasing filter, through the drivers and delays."""
     layout = ProbeLayout.of(model)
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
@@ -272,7 +275,8 @@ def impact_response(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
     acc_dofs = np.array([tool, tool + 1])[:len(sensors.accel_channels)]
     sim = simulate(model, SpeedProfile.constant(speed_rpm), tf, layout.dofs(sensors),
                    theta=theta,
-                   unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs)
+                   unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs,
+                   options=options)
     # anti-aliasing: linear-phase FIR, zero phase (the delay is compensated, as in DSA boards)
     # the force the integrator applied is the first-order hold of the fine samples; the
     # recorded force and the accelerations' direct (mass) term are that force, band-limited

@@ -1,13 +1,10 @@
 """The exact stepper's closed form for stretches without input (``rig.stepping``)."""
 
-import functools
-
 import numpy as np
 import pytest
 from scipy.signal import lsim
 
-from surrogate_rbrdo.rig import integrate
-from surrogate_rbrdo.rig.integrate import SpeedProfile, simulate
+from surrogate_rbrdo.rig.integrate import IntegratorOptions, SpeedProfile, simulate
 from surrogate_rbrdo.rig.simulate import ProbeLayout, hammer_pulse
 from surrogate_rbrdo.rig.stepping import Segment, free_outputs, run_segment
 from surrogate_rbrdo.spindle import reference_spindle
@@ -52,7 +49,7 @@ def test_free_outputs_is_the_damped_sine_for_any_block_length():
 
 
 @pytest.mark.parametrize("speed_rpm", [0.0, 20_000.0])
-def test_hit_on_the_spindle_equals_the_recurrence(monkeypatch, speed_rpm):
+def test_hit_on_the_spindle_equals_the_recurrence(speed_rpm):
     """A hammer hit at the tool of the reference spindle (168 modes, 40 000 fine steps): the
     closed-form free decay against the step-by-step recurrence: ≤ 1e-9 of the record's RMS."""
     sp = reference_spindle()
@@ -63,13 +60,16 @@ def test_hit_on_the_spindle_equals_the_recurrence(monkeypatch, speed_rpm):
     f = hammer_pulse(tf, 0.05, 300.0, 0.4e-3)[:, None]
     tool = 4 * m.tool_node
 
-    def run():
+    def run(closed_form):
         return simulate(m, SpeedProfile.constant(speed_rpm), tf, dofs, unbalance=False,
-                        force_dofs=np.array([tool]), force=f, acc_dofs=np.array([tool]))
+                        force_dofs=np.array([tool]), force=f, acc_dofs=np.array([tool]),
+                        options=IntegratorOptions(closed_form=closed_form))
 
-    new = run()
-    monkeypatch.setattr(integrate, "run_segment",
-                        functools.partial(run_segment, closed_form=False))
-    old = run()
+    new, old = run(True), run(False)
     for a, b in ((new.q, old.q), (new.acc, old.acc)):
         assert np.max(np.abs(a - b)) <= 1e-9 * np.sqrt(np.mean(b**2))
+
+
+def test_closed_form_option_is_checked():
+    with pytest.raises(ValueError, match="closed_form = 1 is not allowed"):
+        IntegratorOptions(closed_form=1)
