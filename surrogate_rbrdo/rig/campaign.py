@@ -38,8 +38,10 @@ from surrogate_rbrdo.rig.integrate import SpeedProfile, unbalance_pattern
 from surrogate_rbrdo.rig.records import Record
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.simulate import (
+    ImpactResponse,
     check_stable,
     impact_record,
+    impact_response,
     runup_record,
     steady_records,
 )
@@ -186,7 +188,9 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                  n_jobs: int = 1) -> CampaignResult:
     """Simulate the campaign into ``out_dir/dataset`` (resumable) and write ``phasors.csv`` and
     ``summary.json`` into ``out_dir``. ``n_jobs`` worker processes (joblib) simulate the
-    impact records, each from its own seeded stream: the files do not depend on it."""
+    ramps, each from its own seeded stream: the files do not depend on it. The impact records
+    are made here: the hits of one speed and direction share one simulation
+    (:class:`~.simulate.ImpactResponse`, the model is linear in the hit's peak force)."""
     require_rng(rng)
     check_int("n_jobs", n_jobs, minimum=1)
     check_record_lengths(options.duration_s, options.speeds_rpm,
@@ -234,12 +238,14 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                         if progress:
                             progress(count, total, rid)
             extras = _extras(truth, st0, options, inst, root_ss, b, tl)
-            made = _made([make for rec_id, make in extras if rec_id not in done], n_jobs)
-            for rec_id, _ in extras:
+            made = _made([make for rec_id, make in extras
+                          if rec_id not in done and "_hit" not in rec_id], n_jobs)
+            for rec_id, make in extras:
                 kind = "impact" if "_hit" in rec_id else "ramp"
                 (impacts if kind == "impact" else ramps).append(rec_id)
                 if rec_id not in done:
-                    writer.write(next(made), labels={"build": b, "tool": tl, "run": 0})
+                    rec = make() if kind == "impact" else next(made)
+                    writer.write(rec, labels={"build": b, "tool": tl, "run": 0})
                     written += 1
                 count += 1
                 if progress:
@@ -380,7 +386,8 @@ def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False
 
 
 def _extras(truth, st, options, inst, root_ss, b, tl):
-    """(id, thunk) of the run-up/run-down and impact records of one tool (on its run 0)."""
+    """(id, thunk) of the run-up/run-down and impact records of one tool (on its run 0); the
+    impact thunks of one speed and direction share one simulation (made by the first)."""
     model = st.model()
     base = _provenance(truth, st, inst, root_ss, b, tl, 0)
     out = []
@@ -393,6 +400,15 @@ def _extras(truth, st, options, inst, root_ss, b, tl):
                 model, st.theta, SpeedProfile.ramp(s0, s1, d), options.sensors, inst,
                 np.random.default_rng(_child(root_ss, 4, b, tl, k)), rid=rid,
                 provenance={**base, "seed_key": [4, b, tl, k]})))
+    shared: dict[tuple[float, str], ImpactResponse] = {}
+
+    def response(speed: float, direction: str) -> ImpactResponse:
+        if (speed, direction) not in shared:       # simulated once, at the first hit made
+            shared[speed, direction] = impact_response(
+                model, st.theta, options.sensors, inst, direction=direction,
+                duration_s=options.impact_duration_s, speed_rpm=speed)
+        return shared[speed, direction]
+
     for k, speed in enumerate(options.impact_speeds_rpm):
         # standstill hits keep their ids and seeds; hits at speed are named by it
         tag, key = ("", ()) if speed == 0 else (f"_{speed:.0f}rpm", (k,))
@@ -406,7 +422,8 @@ def _extras(truth, st, options, inst, root_ss, b, tl):
                                           provenance={**base, "seed_key": list(sk)},
                                           direction=direction,
                                           duration_s=options.impact_duration_s,
-                                          speed_rpm=speed)))
+                                          speed_rpm=speed,
+                                          response=response(speed, direction))))
     return out
 
 

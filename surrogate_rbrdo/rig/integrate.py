@@ -48,7 +48,10 @@ class IntegratorOptions:
 
     ``segment_s``: a fixed segment length; ``None`` (default) chooses each segment by the error
     estimate, up to ``max_segment_s``, keeping it below ``tol``; ``f_cut_hz``: modes kept in
-    the Ritz basis (``None``: all DOFs); ``oversample``: integrator steps per output sample.
+    the Ritz basis (``None``: all DOFs); ``oversample``: integrator steps per output sample;
+    ``closed_form``: stretches without input at constant speed in closed form
+    (:func:`~.stepping.free_outputs`; False: stepped by the recurrence — the same values to
+    round-off, the reference the closed form is tested and benchmarked against).
     """
 
     segment_s: float | None = None
@@ -58,8 +61,11 @@ class IntegratorOptions:
     max_segment_s: float = 0.1
     basis_speeds: int = 3
     correct_below_hz: float | None = None
+    closed_form: bool = True
 
     def __post_init__(self) -> None:
+        if not isinstance(self.closed_form, bool):
+            raise ValueError(f"closed_form = {self.closed_form!r} is not allowed: true or false")
         if self.segment_s is not None:
             check_positive("segment_s", self.segment_s)
         if self.f_cut_hz is not None:
@@ -195,7 +201,8 @@ def simulate(model: SpindleModel, profile: SpeedProfile, t_s: np.ndarray, out_do
             sys, grid[0], t_mid, grid[-1])
         y, eta, sweeps = run_segment(modes.W @ z, sys.segment(t_mid, modes, corr), profile,
                                      grid, None if fine_force is None else fine_force[a:b + 1],
-                                     force_dofs, tol=options.tol)
+                                     force_dofs, tol=options.tol,
+                                     closed_form=options.closed_form)
         if sweeps < 0:
             ctl.reject(a, b, grid)
             continue

@@ -11,7 +11,9 @@
 * :func:`impact_record` — a hammer hit at the tool, at standstill or at a constant speed (then
   the record holds the response to the hit only: the synchronous response, which the
   keyphasor's 1x phasor removes, is left out), integrated exactly at ``oversample`` × the
-  sample rate and decimated through a linear-phase anti-aliasing filter.
+  sample rate and decimated through a linear-phase anti-aliasing filter. The model is linear
+  and hits differ by their peak force only: :func:`impact_response` (a 1 N hit) is simulated
+  once per speed and direction and scaled by each hit's drawn peak.
 
 Each channel then goes through its sensor (gain, driver low-pass, gap), the ADC's timing (known
 delay + unknown skew), noise and quantisation/clipping (``rig.sensors``).
@@ -39,6 +41,8 @@ from surrogate_rbrdo.spindle.modal import modal_analysis
 
 #: ramps: error-controlled segments, Ritz basis below 10 kHz (docs/rig.md)
 RAMP_OPTIONS = IntegratorOptions()
+#: impacts: constant speed, exact (the free decay after the hit in closed form)
+IMPACT_OPTIONS = IntegratorOptions()
 
 
 @dataclass(frozen=True)
@@ -236,27 +240,43 @@ def held_force(f: np.ndarray, fs_hz: float) -> np.ndarray:
     return np.fft.irfft(F * np.sinc(np.fft.rfftfreq(f.size, 1.0 / fs_hz) / fs_hz) ** 2, f.size)
 
 
-def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
-                  inst: Installation, rng: np.random.Generator, *, rid: str,
-                  provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
-                  t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0) -> Record:
-    """A hammer hit at the tool tip in ``direction`` at ``speed_rpm`` (default standstill):
-    all probes, the tool's accelerometers and the force. At speed the gyroscopic coupling and
-    the bearings at that speed act; the synchronous response is not in the record (module
-    doc)."""
+@dataclass(frozen=True)
+class ImpactResponse:
+    """The noise-free channel signals ``x`` (n_ch, n) of an impact record — the probes'
+    displacements (m), the accelerations (m/s²) and the force (N) after the anti-aliasing
+    filter, the drivers and the channels' delays — for a hit of **1 N peak**, and what they
+    were simulated for. The model is linear and the hits of a test differ by their peak force
+    only, so one simulation serves every hit at the same speed and direction:
+    :func:`impact_record` scales ``x`` by its drawn peak."""
+
+    x: np.ndarray
+    direction: str
+    speed_rpm: float
+    duration_s: float
+    t_hit_s: float
+    oversample: int
+
+
+def impact_response(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
+                    inst: Installation, *, direction: str = "x", duration_s: float = 1.0,
+                    t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0,
+                    options: IntegratorOptions = IMPACT_OPTIONS) -> ImpactResponse:
+    """Simulate the :class:`ImpactResponse` of a 1 N-peak hit at the tool tip in
+    ``direction`` at ``speed_rpm``: integrated exactly at ``oversample`` × the sample rate
+    (``options``: :func:`~.integrate.simulate`'s), decimated through a linear-phase
+    anti-aliasing filter, through the drivers and delays."""
     layout = ProbeLayout.of(model)
     fs = sensors.daq.sample_rate_hz
     n = int(round(duration_s * fs))
     tf = np.arange(n * oversample) / (fs * oversample)
-    hm = sensors.hammer
-    peak = hm.peak_N * (1 + (rng.normal(0, hm.peak_sd) if sensors.noise else 0.0))
-    f = hammer_pulse(tf, t_hit_s, peak, hm.pulse_ms * 1e-3)
+    f = hammer_pulse(tf, t_hit_s, 1.0, sensors.hammer.pulse_ms * 1e-3)
     tool = 4 * layout.nodes["tool"]
     fdof = np.array([tool + (direction == "y")])
     acc_dofs = np.array([tool, tool + 1])[:len(sensors.accel_channels)]
     sim = simulate(model, SpeedProfile.constant(speed_rpm), tf, layout.dofs(sensors),
                    theta=theta,
-                   unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs)
+                   unbalance=False, force_dofs=fdof, force=f[:, None], acc_dofs=acc_dofs,
+                   options=options)
     # anti-aliasing: linear-phase FIR, zero phase (the delay is compensated, as in DSA boards)
     # the force the integrator applied is the first-order hold of the fine samples; the
     # recorded force and the accelerations' direct (mass) term are that force, band-limited
@@ -266,8 +286,38 @@ def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
     fine = np.vstack([sim.q.T, acc_t, held[None, :]])
     coarse = decimate(fine, oversample, ftype="fir", axis=1, zero_phase=True)
     names = sensors.channel_names("impact")
-    tau = _channel_delays(sensors, inst, "impact")
-    x = _dynamics(sensors, inst, names, coarse, fs, tau)
+    x = _dynamics(sensors, inst, names, coarse, fs, _channel_delays(sensors, inst, "impact"))
+    return ImpactResponse(x, direction, float(speed_rpm), float(duration_s), float(t_hit_s),
+                          int(oversample))
+
+
+def impact_record(model: SpindleModel, theta: np.ndarray, sensors: SensorSet,
+                  inst: Installation, rng: np.random.Generator, *, rid: str,
+                  provenance: dict[str, Any], direction: str = "x", duration_s: float = 1.0,
+                  t_hit_s: float = 0.05, oversample: int = 4, speed_rpm: float = 0.0,
+                  response: ImpactResponse | None = None) -> Record:
+    """A hammer hit at the tool tip in ``direction`` at ``speed_rpm`` (default standstill):
+    all probes, the tool's accelerometers and the force. At speed the gyroscopic coupling and
+    the bearings at that speed act; the synchronous response is not in the record (module
+    doc). ``response``: the :func:`impact_response` of these arguments, if already simulated
+    (the hits of one speed and direction share it); ``None``: simulated here."""
+    args = (direction, float(speed_rpm), float(duration_s), float(t_hit_s), int(oversample))
+    if response is None:
+        response = impact_response(model, theta, sensors, inst, direction=direction,
+                                   duration_s=duration_s, t_hit_s=t_hit_s,
+                                   oversample=oversample, speed_rpm=speed_rpm)
+    got = (response.direction, response.speed_rpm, response.duration_s, response.t_hit_s,
+           response.oversample)
+    if got != args:
+        raise ValueError(f"impact_record {rid}: response was simulated for (direction, "
+                         f"speed_rpm, duration_s, t_hit_s, oversample) = {got}: must be {args}")
+    layout = ProbeLayout.of(model)
+    fs = sensors.daq.sample_rate_hz
+    hm = sensors.hammer
+    peak = hm.peak_N * (1 + (rng.normal(0, hm.peak_sd) if sensors.noise else 0.0))
+    x = peak * response.x
+    n = x.shape[1]
+    names = sensors.channel_names("impact")
     n_p, n_a = len(sensors.probe_channels), len(sensors.accel_channels)
     volts = _volts(sensors, inst, names[:n_p], x[:n_p], rng)
     acc = sensors.accelerometer

@@ -14,7 +14,7 @@ from surrogate_rbrdo.rig.impacts import (
     sample_frfs,
 )
 from surrogate_rbrdo.rig.sensors import SensorSet
-from surrogate_rbrdo.rig.simulate import ProbeLayout, impact_record
+from surrogate_rbrdo.rig.simulate import ProbeLayout, impact_record, impact_response
 from surrogate_rbrdo.rig.truth import reference_truth
 
 
@@ -105,3 +105,26 @@ def test_frf_exact_is_reciprocal_at_standstill_and_gyroscopic_at_speed(state):
     assert np.allclose(xx0, yx0, rtol=1e-9, atol=1e-20)
     assert np.max(np.abs(xx0)) < 1e-6 * np.max(np.abs(frf_exact(
         model, state.theta, 0.0, f, tool, np.array([tool]))))
+
+
+def test_hits_share_one_simulation_and_it_must_match(state):
+    """Hits of one speed and direction differ by their peak force only: a record made from a
+    shared :func:`impact_response` is the record simulated on its own (same stream), and a
+    response of another direction or speed is refused."""
+    sensors = SensorSet()
+    inst = sensors.install(np.random.default_rng(0))
+    model = state.model()
+    shared = impact_response(model, state.theta, sensors, inst, direction="y",
+                             speed_rpm=10_000.0, duration_s=0.2)
+    for seed in (1, 2):
+        kw = dict(rid="hit", provenance={}, direction="y", speed_rpm=10_000.0, duration_s=0.2)
+        alone = impact_record(model, state.theta, sensors, inst, np.random.default_rng(seed),
+                              **kw)
+        made = impact_record(model, state.theta, sensors, inst, np.random.default_rng(seed),
+                             response=shared, **kw)
+        assert np.array_equal(alone.data, made.data)
+        assert alone.provenance["peak_N"] == made.provenance["peak_N"]
+    with pytest.raises(ValueError, match="response was simulated for"):
+        impact_record(model, state.theta, sensors, inst, np.random.default_rng(1), rid="hit",
+                      provenance={}, direction="x", speed_rpm=10_000.0, duration_s=0.2,
+                      response=shared)
