@@ -115,6 +115,7 @@ class DiscrepancyTable:
     use_impacts: bool = _D.use_impacts
     min_impact_dof: int = _D.min_impact_dof
     max_nfev: int = _D.max_nfev
+    n_jobs: int = _D.n_jobs
 
     def __post_init__(self) -> None:
         self.options()

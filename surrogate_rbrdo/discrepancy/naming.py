@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from joblib import Parallel, delayed
 
 from surrogate_rbrdo.discrepancy.calibration import (
     NullDistribution,
@@ -120,8 +121,9 @@ class HoldoutProblems:
 def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
               holdout: HoldoutProblems, *, alpha: float, n_draws: int,
               holdout_tolerance: float, rng: np.random.Generator, max_nfev: int,
-              confound_delta: float) -> Stage:
-    """Calibrate, fit and check every candidate on top of ``base``."""
+              confound_delta: float, n_jobs: int = 1) -> Stage:
+    """Calibrate, fit and check every candidate on top of ``base``; the candidates' fits on
+    ``n_jobs`` worker processes (:func:`fit_all`)."""
     lin = linearise(problem, base, candidates)
     null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
     r = base.evaluation.residuals[0]
@@ -137,19 +139,21 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     lin_stat = linear_statistics(problem, lin, r) if lin.candidates else np.zeros(0)
     base_ho = holdout.chi2(base, problem)
     law = damping_law_columns(problem, lin, base.par.names)
-    out, warm = [], None
+    screened = [quiet and lin_stat[k] < REFIT_FRACTION * tails[k].isf(p_crit)
+                for k in range(len(lin.candidates))]
+    todo = [c for (c, _), s in zip(lin.candidates, screened, strict=True) if not s]
+    # the 1x-only recalibration, once per stage, then every candidate's fit (independent)
+    warm = warm_base(problem, base, max_nfev=max_nfev) if todo else None
+    fits = iter(fit_all(problem, base, todo, warm, max_nfev=max_nfev,
+                        confound_delta=confound_delta, n_jobs=n_jobs))
+    out = []
     for k, (c, _) in enumerate(lin.candidates):
-        threshold = tails[k].isf(p_crit)
-        if quiet and lin_stat[k] < REFIT_FRACTION * threshold:
+        if screened[k]:
             p = float(tails[k].sf(lin_stat[k]))
             out.append(Assessment(c.name, float(lin_stat[k]), p, null.adjusted(p), None, {},
                                   {"likelihood_ratio": False}))
             continue
-        if warm is None:                 # the 1x-only recalibration, once per stage
-            warm = (warm_base(problem, base, max_nfev=max_nfev),)
-        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm[0])
-        if cf.at_bound:                  # a shape on a bound the data may not prefer
-            cf = interior(problem, base, cf, confound_delta, max_nfev=max_nfev)
+        cf = next(fits)
         p = float(tails[k].sf(cf.delta_chi2))
         ho = holdout.chi2(cf.fit, problem)
         gain = {"interleaved": base_ho[0] - ho[0], "extrapolated": base_ho[1] - ho[1]}
@@ -166,6 +170,30 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
                               rt))
     return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
+
+
+def fit_one(problem: Problem, base: Fit, c: Candidate, warm, *, max_nfev: int,
+            confound_delta: float) -> CandidateFit:
+    """One candidate's fit on top of ``base`` (:func:`~.search.fit_candidate` from the
+    stage's 1x-only recalibration ``warm``), held inside if a shape ends on a bound the data
+    may not prefer (:func:`~.holds.interior`)."""
+    cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm)
+    if cf.at_bound:
+        cf = interior(problem, base, cf, confound_delta, max_nfev=max_nfev)
+    return cf
+
+
+def fit_all(problem: Problem, base: Fit, candidates: list[Candidate], warm, *,
+            max_nfev: int, confound_delta: float, n_jobs: int = 1) -> list[CandidateFit]:
+    """:func:`fit_one` of every candidate, in order. The fits are independent and draw no
+    random numbers, so with ``n_jobs > 1`` they run on that many joblib (loky) worker
+    processes with the same results: the candidate search is most of a stage's CPU, and on
+    two idle cores it takes half the wall time (``[discrepancy] n_jobs``)."""
+    kw = {"max_nfev": max_nfev, "confound_delta": confound_delta}
+    if n_jobs == 1 or len(candidates) < 2:
+        return [fit_one(problem, base, c, warm, **kw) for c in candidates]
+    return Parallel(n_jobs=min(n_jobs, len(candidates)))(
+        delayed(fit_one)(problem, base, c, warm, **kw) for c in candidates)
 
 
 def decide(stage: Stage, delta: float) -> list[Assessment]:

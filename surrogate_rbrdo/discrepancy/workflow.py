@@ -111,6 +111,10 @@ class DiscrepancyOptions:
         a resonance. The default campaign's 5 hits at standstill (ν = 4) are not used.
     max_nfev : int
         Residual evaluations per candidate fit.
+    n_jobs : int
+        Worker processes for the candidate fits of a stage (:func:`~.naming.fit_all`; the
+        same answers for any value). 1 in the blind harness, which runs whole scenarios in
+        parallel instead.
     """
 
     library: tuple[str, ...] = DEFAULT_LIBRARY
@@ -127,6 +131,7 @@ class DiscrepancyOptions:
     use_impacts: bool = True
     min_impact_dof: int = 9
     max_nfev: int = 150
+    n_jobs: int = 1
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "library", check_library(self.library))
@@ -140,6 +145,7 @@ class DiscrepancyOptions:
         check_range("extrapolate_fraction", self.extrapolate_fraction, 0.0, 0.5)
         check_int("max_effects", self.max_effects, minimum=1)
         check_int("max_nfev", self.max_nfev, minimum=5)
+        check_int("n_jobs", self.n_jobs, minimum=1)
         check_int("min_impact_dof", self.min_impact_dof, minimum=4)
         check_positive("confound_delta", self.confound_delta)
         check_positive("holdout_tolerance", self.holdout_tolerance, allow_zero=True)
@@ -295,7 +301,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         st = run_stage(train, current, left[:n_left], ho, alpha=options.alpha,
                        n_draws=options.n_draws, holdout_tolerance=options.holdout_tolerance,
                        rng=rng.spawn(1)[0], max_nfev=options.max_nfev,
-                       confound_delta=options.confound_delta)
+                       confound_delta=options.confound_delta, n_jobs=options.n_jobs)
         stages.append(st)
         group = decide(st, options.confound_delta) if n_left else []
         if group and not any(a.separable for a in group):

@@ -1074,6 +1074,8 @@ CORPUS: list[tuple[str, str, dict[str, str], list[str], str]] = [
      r"discrepancy.alpha = '0.01' is not allowed: " + NUM),
     ("disc_n_draws", _sub(DISC, "n_draws = 100", "n_draws = 10"), {}, [],
      r"discrepancy.n_draws = 10 is not allowed: must be an integer >= 100"),
+    ("disc_n_jobs", D("discrepancy", "n_jobs = 0"), {}, [],
+     r"discrepancy.n_jobs = 0 is not allowed: must be an integer >= 1"),
     ("disc_library_unknown", D("discrepancy", "library = ['housing', 'warp']"), {}, [],
      r"discrepancy.library\[1\] = 'warp' is not allowed: must be one of \[.*'housing'"),
     ("disc_library_empty", D("discrepancy", "library = []"), {}, [],
