@@ -8,7 +8,8 @@ workers'), and the machine's load average (other jobs inflate the wall times, no
     PYTHONPATH=$PWD python3 benchmarks/discrepancy_shipped.py --out /tmp/<you>/shipped \
         [--config experiments/discrepancy.toml] [--n-jobs N]
 
-``--n-jobs`` replaces ``[rig] n_jobs`` (the config's by default). The run folder under
+``--n-jobs`` replaces ``[discrepancy] n_jobs`` (the config's by default): the worker processes
+of the candidate fits. The run folder under
 ``--out`` holds what the runner writes (campaign/, findings.json, tables, figures/), so
 ``diff`` against a ``rbrdo run`` folder checks the answers. No timed asserts: it prints.
 """
@@ -50,9 +51,8 @@ def main() -> None:
     print(f"load average at start {os.getloadavg()}")
     prep = prepare(args.config)
     p = prep.plan
-    if p.rig is not None and args.n_jobs is not None:
-        p = dataclasses.replace(p, rig=dataclasses.replace(
-            p.rig, rig=dataclasses.replace(p.rig.rig, n_jobs=args.n_jobs)))
+    if args.n_jobs is not None:
+        p = dataclasses.replace(p, options=dataclasses.replace(p.options, n_jobs=args.n_jobs))
     ctx = StageContext(seed=prep.experiment.seed, progress=False, label="bench",
                        cache_dir=out / "_fe_cache", run_dir=out)
     done: dict = {}
@@ -73,7 +73,7 @@ def main() -> None:
     figs = phase("figures", lambda: plot_all(res, _mkdir(out / "figures")))
     wall = time.perf_counter() - w_all
     print(verdict_line(res))
-    print(f"{len(figs)} figures; rig n_jobs = {p.rig.rig.n_jobs if p.rig else '-'}")
+    print(f"{len(figs)} figures; discrepancy n_jobs = {p.options.n_jobs}")
     print(f"{'phase':<10} {'CPU s':>8} {'wall s':>8}")
     for name, cpu, w in rows:
         print(f"{name:<10} {cpu:8.2f} {w:8.2f}")
