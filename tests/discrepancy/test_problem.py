@@ -242,3 +242,34 @@ def test_a_fit_finished_from_its_start_evaluates_nothing_twice(model):
     assert np.array_equal(seeded.jac, again.jac)
     assert again.nfev - seeded.nfev == 1 + par.x0().size
     assert np.allclose(np.exp(seeded.x[:2]), [1.1, 0.9], rtol=1e-4)
+
+
+@pytest.mark.known_answer
+def test_rows_solved_in_a_recent_call_are_not_solved_again(model, monkeypatch):
+    """A Jacobian's rows that move only a channel gain share the point's physics: solved for
+    the point's residual, they are taken from the problem's recent rows — the same numbers
+    as a problem that solves everything afresh, with fewer rows solved."""
+    data = _with_frf(model, np.array([0.95, 1.03]))
+    opts = NuisanceOptions(gain_sd=0.02)
+    prob, fresh = Problem(model, data, nuisance=opts), Problem(model, data, nuisance=opts)
+    par = prob.parametrisation()
+    assert par.names[4].startswith("log_gain")
+    x = par.x0() + 0.01
+    solved = []
+    real = type(model).responses
+
+    def counting(self, sweeps, theta, *a, **k):
+        solved.append(theta[0].shape[0])
+        return real(self, sweeps, theta, *a, **k)
+
+    prob.evaluate(par, x[None])
+    X = np.vstack([x[None], x[None] + 0.02 * np.eye(x.size)[:6]])   # θ, damping, gains
+    monkeypatch.setattr(type(model), "responses", counting)
+    ev = prob.evaluate(par, X)
+    assert solved == [4]                    # θ (2), damping (2); x's own physics is known
+    monkeypatch.undo()
+    ref = fresh.evaluate(par, X)
+    np.testing.assert_array_equal(ev.residuals, ref.residuals)
+    for a, b in zip(ev.predictions, ref.predictions, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert prob.only("unbalance_1x").__dict__.get("_recent") is None
