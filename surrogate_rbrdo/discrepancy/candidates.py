@@ -9,7 +9,12 @@ alone — its ``bounds`` (the physical range) and ``off_params`` (the off state)
   one-sided (softening ``a ≥ 0``), else two-sided (cross-coupling ``κ``);
 * **shape** parameters are the other bounded fields (an exponent, a housing mass); they are
   fitted too, from the start values of :data:`SHAPE_STARTS` (or the middle of their range);
-* **scopes**: an effect with a ``bearings`` field is tried on all bearings and on each alone.
+* **scopes**: an effect that acts per bearing (its class overrides a hook of
+  :class:`~surrogate_rbrdo.spindle.effects.Effect` called per bearing,
+  :data:`PER_BEARING_HOOKS`) is tried on all bearings and on each alone. Every effect has a
+  ``bearings`` field, but one acting on the rotor or the load alone (gyroscopics, a tool
+  interface, an unbalance error) ignores it: its scoped variants are the same model, so they
+  are not tried again.
 
 So adding a candidate is registering one effect class; :data:`SHAPE_STARTS` only helps the
 fit start well. Which effects are candidates is an explicit list
@@ -30,6 +35,7 @@ fit start well. Which effects are candidates is an explicit list
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -184,12 +190,32 @@ def candidate(name: str, bearings: tuple[str, ...]) -> Candidate:
     shape_bounds = tuple(tuple(map(float, bounds[p])) for p in shape)
     shape_starts = tuple(
         tuple(starts.get(p, (_default_start(cls, p, bounds[p]),))) for p in shape)
-    has_scope = any(f.name == "bearings" for f in dataclasses.fields(cls))
     scopes: tuple[tuple[str, ...], ...] = ((),)
-    if has_scope and len(bearings) > 1:
+    if acts_per_bearing(cls) and len(bearings) > 1:
         scopes = ((),) + tuple((b,) for b in bearings)
     return Candidate(name, cls, tuple(strength), tuple(one_sided), tuple(recip), tuple(offv),
                      tuple(lo), tuple(hi), shape, shape_bounds, shape_starts, scopes)
+
+
+#: the hooks of :class:`~surrogate_rbrdo.spindle.effects.Effect` called once per bearing (those
+#: with a ``bearing`` argument, but ``applies_to``, the scope test itself): only through them
+#: does an effect's ``bearings`` field act
+PER_BEARING_HOOKS: tuple[str, ...] = tuple(
+    n for n, f in vars(Effect).items() if n != "applies_to"
+    and inspect.isfunction(f) and "bearing" in inspect.signature(f).parameters)
+
+
+def acts_per_bearing(cls: type) -> bool:
+    """Whether effect class ``cls`` overrides a hook called per bearing
+    (:data:`PER_BEARING_HOOKS`), so that its ``bearings`` field changes the model.
+
+    >>> PER_BEARING_HOOKS
+    ('preload', 'bearing', 'support')
+    >>> acts_per_bearing(EFFECTS.get("speed_softening")), acts_per_bearing(
+    ...     EFFECTS.get("gyroscopics"))
+    (True, False)
+    """
+    return any(getattr(cls, n) is not getattr(Effect, n) for n in PER_BEARING_HOOKS)
 
 
 def _default_start(cls: type, p: str, bound: tuple[float, float]) -> float:

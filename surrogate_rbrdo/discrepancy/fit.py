@@ -136,8 +136,8 @@ def jacobian(problem: Problem, par: Parametrisation, x: np.ndarray,
     return ((R - r0[None]) / h[:, None]).T, rows.shape[0]
 
 
-def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int = 60
-        ) -> Fit:
+def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int = 60,
+        start: Fit | None = None) -> Fit:
     """Minimise the whitened χ² over the outer parameters within their bounds.
 
     Parameters
@@ -148,25 +148,47 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
         Start (clipped into the bounds).
     max_nfev : int
         Most residual evaluations of the trust-region solver.
+    start : Fit, optional
+        A fit of ``problem`` in ``par`` ending at ``x0`` (a short fit finished): its
+        evaluation and Jacobian are used at ``x0`` instead of being computed again (the same
+        numbers: the same rows, the same ``r0``).
     """
     lo, hi = par.bounds()
     x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
-    cache: dict[str, object] = {}
+    # evaluations by point since the last accepted one, and that point's Jacobian: the solver
+    # asks for the Jacobian of its last evaluation, and it ends at its last accepted point.
+    # Jacobians are kept as :func:`jacobian` makes them (column-major) and the result's as
+    # before (a row-major copy when the solver ended on its last evaluation): the solver's and
+    # the covariances' BLAS sums then run in the same order, so the digits are the same.
+    evs: dict[bytes, object] = {}
+    jacs: dict[bytes, np.ndarray] = {}
+    if start is not None and start.par is par and np.array_equal(start.x, x0):
+        evs[x0.tobytes()] = start.evaluation
+        jacs[x0.tobytes()] = np.asfortranarray(start.jac)
     count = [0]
+    last = [b""]
+
+    def evaluate(x: np.ndarray):
+        key = x.tobytes()
+        if key not in evs:
+            evs[key] = problem.evaluate(par, x[None])
+            count[0] += 1
+        return evs[key]
 
     def fun(x: np.ndarray) -> np.ndarray:
-        ev = problem.evaluate(par, x[None])
-        count[0] += 1
-        cache["x"], cache["r"], cache["ev"] = x.copy(), ev.residuals[0], ev
-        return ev.residuals[0]
+        last[0] = x.tobytes()
+        return evaluate(x).residuals[0]
 
     def jac(x: np.ndarray) -> np.ndarray:
-        hit = np.array_equal(cache.get("x"), x)
-        J, n = jacobian(problem, par, x, cache["r"] if hit else None)
-        count[0] += n
-        # the solver ends at a point whose Jacobian it has asked for: kept for the result
-        cache["jx"], cache["J"] = (x.copy(), J.copy()) if hit else (None, None)
-        return J
+        key = x.tobytes()
+        if key not in jacs:
+            J, n = jacobian(problem, par, x, evaluate(x).residuals[0])
+            count[0] += n
+            ev = evs[key]
+            evs.clear()
+            jacs.clear()
+            evs[key], jacs[key] = ev, J
+        return jacs[key].copy(order="F")
 
     if x0.size:
         sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac",
@@ -174,15 +196,17 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
         x = sol.x
     else:
         x = x0
-    if x.size and np.array_equal(cache.get("x"), x) and np.array_equal(cache.get("jx"), x):
-        # the same evaluation and Jacobian as recomputing them here (same rows, same r0)
-        ev, J, n = cache["ev"], cache["J"], -1
+    key = x.tobytes()
+    ev = evaluate(x)
+    if key in jacs:
+        J = jacs[key].copy() if key == last[0] else jacs[key]
+    elif x.size:
+        J, n = jacobian(problem, par, x, ev.residuals[0])
+        count[0] += n
     else:
-        ev = problem.evaluate(par, x[None])
-        J, n = jacobian(problem, par, x, ev.residuals[0]) if x.size else (
-            np.zeros((ev.residuals.shape[1], 0)), 0)
+        J = np.zeros((ev.residuals.shape[1], 0))
     return Fit(par, x, float(ev.chi2[0]), J, ev, problem.n_obs, x.size + problem.n_inner,
-               count[0] + n + 1)
+               count[0])
 
 
 def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: int = 6
@@ -194,7 +218,8 @@ def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: 
 
     Each step solves ``(JᵀJ + λ diag JᵀJ) δ = −Jᵀr`` per row (columns scaled, Marquardt
     1963, *SIAM J. Appl. Math.* 11:431), keeps it if χ² falls (λ / 3) and otherwise raises
-    λ tenfold.
+    λ tenfold. A row whose step was refused stays where it was, and so does its Jacobian:
+    only the rows that moved are differentiated again.
     """
     lo, hi = par.bounds()
     X = np.clip(np.array(X, dtype=float), lo, hi)
@@ -203,10 +228,13 @@ def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: 
     chi = np.sum(r**2, axis=1)
     lam = np.full(B, 1e-3)
     eye = np.eye(n)
+    J = np.empty((B, n, r.shape[1]))
+    moved = np.ones(B, dtype=bool)
     for _ in range(n_iter):
-        rows, h = _fd_rows(X, par, lo, hi)
-        J = (problem.evaluate(par, rows.reshape(-1, n)).residuals.reshape(B, n, -1)
-             - r[:, None]) / h[..., None]
+        if moved.any():
+            rows, h = _fd_rows(X[moved], par, lo, hi)
+            J[moved] = (problem.evaluate(par, rows.reshape(-1, n)).residuals.reshape(
+                -1, n, r.shape[1]) - r[moved][:, None]) / h[..., None]
         A = np.einsum("bio,bjo->bij", J, J)
         g = np.einsum("bio,bo->bi", J, r)
         d = np.sqrt(np.maximum(np.einsum("bii->bi", A), 1e-300))
@@ -215,7 +243,7 @@ def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: 
         Xn = np.clip(X + step, lo, hi)
         rn = problem.evaluate(par, Xn).residuals
         cn = np.sum(rn**2, axis=1)
-        ok = cn < chi
-        X[ok], r[ok], chi[ok] = Xn[ok], rn[ok], cn[ok]
-        lam = np.where(ok, lam / 3, lam * 10)
+        moved = cn < chi
+        X[moved], r[moved], chi[moved] = Xn[moved], rn[moved], cn[moved]
+        lam = np.where(moved, lam / 3, lam * 10)
     return X, chi

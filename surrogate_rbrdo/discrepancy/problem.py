@@ -12,6 +12,7 @@ parameters: a finite-difference Jacobian is one call.
 from __future__ import annotations
 
 import copy
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,6 +98,7 @@ class Problem:
         stiffness); its parametrisation drops what only the other blocks see (the force
         channel of impact tests)."""
         sub = copy.copy(self)
+        sub.__dict__.pop("_recent", None)      # its own recent rows (other blocks)
         keep = [i for i, b in enumerate(self.blocks) if b.sweep.kind == kind]
         sub.blocks = [self.blocks[i] for i in keep]
         sub.channel_index = [self.channel_index[i] for i in keep]
@@ -141,10 +143,7 @@ class Problem:
             at: dict = {}
             inv = np.array([at.setdefault(k, len(at)) for k in keys])
             u = np.unique(inv, return_index=True)[1]
-            th_u = {k: t[u] for k, t in thetas.items()}
-            G_all = self.forward.responses([b.sweep for b in self.blocks],
-                                           [th_u[b.sweep.kind] for b in self.blocks],
-                                           ds[u], [extras[i] for i in u], mass[u])
+            G_all = self._unit_responses([keys[i] for i in u], u, thetas, ds, extras, mass)
         for b, idx, off, G in zip(self.blocks, self.channel_index, self.run_offset,
                                   G_all, strict=True):
             G = G[inv][:, :, idx]
@@ -162,6 +161,36 @@ class Problem:
             j = [names.index(n) for n in ib.bearings]
             out.append(np.stack([Z[:, :, j, 0, 0].real, Z[:, :, j, 1, 1].real], axis=-1))
         return out
+
+    def _unit_responses(self, keys: list, u: np.ndarray, thetas: dict, ds: np.ndarray,
+                        extras: list, mass: np.ndarray) -> list[np.ndarray]:
+        """The forward model's unit responses per block for the distinct physical rows ``u``
+        (``keys`` theirs), those solved in recent calls taken from :attr:`_recent` (a
+        Jacobian's rows that move a channel gain are the point's own physics, solved for the
+        residual just before). Each row is solved on its own (the forward model's arithmetic
+        per row does not depend on the rows beside it), so the numbers are the same."""
+        recent = self.__dict__.setdefault("_recent", OrderedDict())
+        sweeps = tuple(id(b.sweep) for b in self.blocks)
+        tags = [(sweeps, k) for k in keys]
+        hits = {j: recent[t] for j, t in enumerate(tags) if t in recent}
+        new = [j for j in range(len(tags)) if j not in hits]
+        G: list[np.ndarray] = []
+        if new:
+            v = u[new]
+            G = self.forward.responses([b.sweep for b in self.blocks],
+                                       [thetas[b.sweep.kind][v] for b in self.blocks],
+                                       ds[v], [extras[i] for i in v], mass[v])
+        for j in hits:
+            recent.move_to_end(tags[j])
+        for n, j in enumerate(new):
+            recent[tags[j]] = [g[n].copy() for g in G]
+            if len(recent) > RECENT_ROWS:
+                recent.popitem(last=False)
+        if not hits:
+            return G
+        fresh = {j: n for n, j in enumerate(new)}
+        return [np.stack([G[k][fresh[j]] if j in fresh else hits[j][k]
+                          for j in range(len(tags))]) for k in range(len(self.blocks))]
 
     def evaluate(self, par: Parametrisation, X: np.ndarray) -> Evaluation:
         """Residuals (unbalance solved per row and 1x block) for outer rows ``X`` (B, n)."""
@@ -248,6 +277,10 @@ class Problem:
             off += 2 * X * C
         return out
 
+
+#: distinct physical rows whose unit responses a problem keeps (:meth:`Problem._unit_responses`;
+#: a few tens of kB each)
+RECENT_ROWS = 64
 
 #: degrees of freedom standing for a variance known exactly (a prior's unit SD)
 KNOWN_DOF = 10**9

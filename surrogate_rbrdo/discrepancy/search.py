@@ -274,7 +274,7 @@ def fit_candidate(problem: Problem, base: Fit, c: Candidate,
         if best is None or f.chi2 < best.chi2:
             best, best_slot = f, slot
     if len(starts) > 1:                              # finish the best start
-        best = fit(problem, best.par, best.x, max_nfev=max_nfev)
+        best = fit(problem, best.par, best.x, max_nfev=max_nfev, start=best)
     return describe(c, best_slot, best, base.chi2)
 
 

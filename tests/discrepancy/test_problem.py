@@ -180,3 +180,96 @@ def test_fit_batch_walks_every_start_back_to_the_truth(model):
     X, chi = fit_batch(prob, par, X0, n_iter=12)
     assert np.allclose(np.exp(X[:, :2]), [0.93, 1.04], rtol=1e-4)
     assert np.all(chi < 1e-3 * prob.evaluate(par, X0).chi2)
+
+
+def _reference_lm(prob, par, X, n_iter):
+    """Levenberg–Marquardt as :func:`fit_batch` documents it, in the same batched arithmetic
+    but with every row's Jacobian recomputed at every step (what it did before it kept the
+    Jacobians of rows that did not move)."""
+    lo, hi = par.bounds()
+    X = np.clip(np.array(X, dtype=float), lo, hi)
+    B, n = X.shape
+    r = prob.evaluate(par, X).residuals
+    chi = np.sum(r**2, axis=1)
+    lam, eye = np.full(B, 1e-3), np.eye(n)
+    refused = 0
+    for _ in range(n_iter):
+        J = np.stack([jacobian(prob, par, X[b], r[b])[0].T for b in range(B)])
+        A = np.einsum("bio,bjo->bij", J, J)
+        g = np.einsum("bio,bo->bi", J, r)
+        d = np.sqrt(np.maximum(np.einsum("bii->bi", A), 1e-300))
+        M = A / (d[:, :, None] * d[:, None, :]) + lam[:, None, None] * eye[None]
+        step = -np.linalg.solve(M + 1e-12 * eye[None], (g / d)[..., None])[..., 0] / d
+        Xn = np.clip(X + step, lo, hi)
+        rn = prob.evaluate(par, Xn).residuals
+        cn = np.sum(rn**2, axis=1)
+        ok = cn < chi
+        refused += int(np.sum(~ok))
+        X[ok], r[ok], chi[ok] = Xn[ok], rn[ok], cn[ok]
+        lam = np.where(ok, lam / 3, lam * 10)
+    return X, chi, refused
+
+
+@pytest.mark.known_answer
+def test_fit_batch_equals_steps_with_every_jacobian_recomputed(model):
+    """A row whose step is refused keeps its Jacobian: the rows and χ² are those of the
+    method with every Jacobian recomputed (enough steps that some are refused at the
+    optimum)."""
+    data = _data(model, Sweep.unbalance(np.linspace(2000, 24000, 12)), np.array([0.93, 1.04]),
+                 noise=1e-8)
+    prob = Problem(model, data)
+    par = prob.parametrisation()
+    X0 = par.x0()[None].repeat(3, axis=0)
+    X0[:, :2] += np.array([[0.6, -0.5], [-0.4, 0.45], [0.35, 0.6]])
+    X, chi = fit_batch(prob, par, X0, n_iter=14)
+    Xr, chir, refused = _reference_lm(prob, par, X0, 14)
+    assert refused > 0
+    np.testing.assert_array_equal(X, Xr)
+    np.testing.assert_array_equal(chi, chir)
+
+
+@pytest.mark.known_answer
+def test_a_fit_finished_from_its_start_evaluates_nothing_twice(model):
+    """``fit(start=f)`` from a short fit's end point reaches the same point as a fit that
+    evaluates that point again, with one residual row and one Jacobian fewer."""
+    sw = Sweep.unbalance(np.linspace(2000, 24000, 9))
+    prob = Problem(model, _data(model, sw, np.array([1.1, 0.9]), noise=1e-9, seed=4))
+    par = prob.parametrisation()
+    short = fit(prob, par, par.x0(), max_nfev=3)
+    again = fit(prob, par, short.x, max_nfev=40)
+    seeded = fit(prob, par, short.x, max_nfev=40, start=short)
+    assert np.array_equal(seeded.x, again.x) and seeded.chi2 == again.chi2
+    assert np.array_equal(seeded.jac, again.jac)
+    assert again.nfev - seeded.nfev == 1 + par.x0().size
+    assert np.allclose(np.exp(seeded.x[:2]), [1.1, 0.9], rtol=1e-4)
+
+
+@pytest.mark.known_answer
+def test_rows_solved_in_a_recent_call_are_not_solved_again(model, monkeypatch):
+    """A Jacobian's rows that move only a channel gain share the point's physics: solved for
+    the point's residual, they are taken from the problem's recent rows — the same numbers
+    as a problem that solves everything afresh, with fewer rows solved."""
+    data = _with_frf(model, np.array([0.95, 1.03]))
+    opts = NuisanceOptions(gain_sd=0.02)
+    prob, fresh = Problem(model, data, nuisance=opts), Problem(model, data, nuisance=opts)
+    par = prob.parametrisation()
+    assert par.names[4].startswith("log_gain")
+    x = par.x0() + 0.01
+    solved = []
+    real = type(model).responses
+
+    def counting(self, sweeps, theta, *a, **k):
+        solved.append(theta[0].shape[0])
+        return real(self, sweeps, theta, *a, **k)
+
+    prob.evaluate(par, x[None])
+    X = np.vstack([x[None], x[None] + 0.02 * np.eye(x.size)[:6]])   # θ, damping, gains
+    monkeypatch.setattr(type(model), "responses", counting)
+    ev = prob.evaluate(par, X)
+    assert solved == [4]                    # θ (2), damping (2); x's own physics is known
+    monkeypatch.undo()
+    ref = fresh.evaluate(par, X)
+    np.testing.assert_array_equal(ev.residuals, ref.residuals)
+    for a, b in zip(ev.predictions, ref.predictions, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert prob.only("unbalance_1x").__dict__.get("_recent") is None
