@@ -295,7 +295,8 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         st = run_stage(train, current, left[:n_left], ho, alpha=options.alpha,
                        n_draws=options.n_draws, holdout_tolerance=options.holdout_tolerance,
                        rng=rng.spawn(1)[0], max_nfev=options.max_nfev,
-                       confound_delta=options.confound_delta)
+                       confound_delta=options.confound_delta,
+                       residual_level=options.alpha_residual / 3)
         stages.append(st)
         group = decide(st, options.confound_delta) if n_left else []
         if group and not any(a.separable for a in group):
