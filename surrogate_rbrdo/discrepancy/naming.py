@@ -45,7 +45,6 @@ from surrogate_rbrdo.discrepancy.holds import interior
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
-from surrogate_rbrdo.discrepancy.sequential import residual_p_values
 
 #: a candidate is refitted when its first-order statistic exceeds this fraction of its threshold
 #: — or whenever a lack-of-fit test of the stage's base model has a p-value below QUIET_P
@@ -121,18 +120,15 @@ class HoldoutProblems:
 def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
               holdout: HoldoutProblems, *, alpha: float, n_draws: int,
               holdout_tolerance: float, rng: np.random.Generator, max_nfev: int,
-              confound_delta: float, residual_level: float = 0.01 / 3) -> Stage:
-    """Calibrate, fit and check every candidate on top of ``base``; the residual tests'
-    p-values are refined by further draws where they lie near ``residual_level``
-    (:mod:`.sequential`)."""
+              confound_delta: float) -> Stage:
+    """Calibrate, fit and check every candidate on top of ``base``."""
     lin = linearise(problem, base, candidates)
     null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
     r = base.evaluation.residuals[0]
     struct = float(gp_statistic(r, problem.series()))
     gen = generic_statistic(problem, lin, r)
-    ps = residual_p_values(problem, lin, null, {"gof": base.chi2, "structure": struct,
-                                                "generic": gen}, level=residual_level, rng=rng)
-    gof_p, struct_p, gen_p = ps["gof"], ps["structure"], ps["generic"]
+    gof_p, struct_p, gen_p = (null.p_value("gof", base.chi2), null.p_value("structure", struct),
+                              null.p_value("generic", gen))
     # the first-order screen only where the residual looks like noise: a strong effect can be
     # far from its linearisation at the off state (a housing mode inside the speed range)
     quiet = min(gof_p, struct_p, gen_p) > QUIET_P

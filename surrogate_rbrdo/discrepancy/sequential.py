@@ -21,7 +21,10 @@ the p-value is then the Monte Carlo one, ``(1 + h) / (1 + n)`` (Davison & Hinkle
 at most :data:`FAR` times the level stays extrapolated: a factor of two or three in its error
 (the measured one is below that at 0.001) cannot move it across the level, and the statistic
 of a real misfit (p 1e-10) would otherwise cost :data:`MAX_DRAWS` draws every time. Nothing
-changes — no draw is taken — when every p-value is settled by the first draws.
+changes — no draw is taken — when every p-value is settled by the first draws. The workflow
+refines the last stage's p-values only (``workflow._refined``): theirs give the verdict; an
+earlier stage's serve its screen (``naming.QUIET_P``, far from the level) and are left as
+they are.
 """
 
 from __future__ import annotations

@@ -185,8 +185,6 @@ def test_the_rival_test_counts_a_held_shape_as_fitted(monkeypatch):
     for name, value in {
             "linearise": lambda *a: ns(candidates=[(c, None)], absorbed=()),
             "simulate_null": lambda *a, **k: null, "gp_statistic": lambda *a: 0.0,
-            "residual_p_values": lambda *a, **k: dict.fromkeys(("gof", "structure", "generic"),
-                                                               0.5),
             "generic_statistic": lambda *a: 0.0, "damping_law_columns": lambda *a: None,
             "linear_statistics": lambda *a: np.array([100.0]), "warm_base": lambda *a, **k: None,
             "fit_candidate": lambda *a, **k: bound, "rival_test": spy,
