@@ -18,9 +18,11 @@ needed), until the statistic has :data:`MIN_EXCEED` draws beyond it — Besag & 
 sequential stopping rule (1991, *Biometrika* 78:301) — or :data:`MAX_DRAWS` draws are taken;
 the p-value is then the Monte Carlo one, ``(1 + h) / (1 + n)`` (Davison & Hinkley 1997,
 *Bootstrap Methods and their Application*, §4.2: under the null ``P(p ≤ α) ≤ α``). A p-value
-at most :data:`FAR` times the level stays extrapolated: a factor of two or three in its error
-(the measured one is below that at 0.001) cannot move it across the level, and the statistic
-of a real misfit (p 1e-10) would otherwise cost :data:`MAX_DRAWS` draws every time. Nothing
+extrapolated to at most :data:`FAR` (a hundredth) of the level stays as it is: the moment
+fit's error there — a factor of 2 at 0.001 on the rig, of 8 for a maximum of 64 independent
+χ²₁ (``tests/discrepancy/test_sequential.py``'s case) — cannot move it across the level, and
+the statistic of a real misfit (p 1e-10) would otherwise cost :data:`MAX_DRAWS` draws every
+time. Nothing
 changes — no draw is taken — when every p-value is settled by the first draws. The workflow
 refines the last stage's p-values only (``workflow._refined``): theirs give the verdict; an
 earlier stage's serve its screen (``naming.QUIET_P``, far from the level) and are left as
