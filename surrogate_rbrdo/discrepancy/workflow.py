@@ -30,6 +30,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
+from surrogate_rbrdo.discrepancy.calibration import linearise
 from surrogate_rbrdo.discrepancy.candidates import (
     DEFAULT_LIBRARY,
     check_library,
@@ -58,6 +59,7 @@ from surrogate_rbrdo.discrepancy.rivals import (
     RIVAL_SEPARATION_SPRING,
 )
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, fit_nuisance, slot_estimate
+from surrogate_rbrdo.discrepancy.sequential import residual_p_values, settled_p
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -317,6 +319,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             confounded = group
         else:
             named.append(group[0])
+    stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
     res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), tuple(named),
                     tuple(confounded), withheld, options, one_x[0].coord,
                     time.perf_counter() - t0)
@@ -329,6 +332,18 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         if runs else (),
                    curves=tuple(block_curves(everything, held_pts, base, current, gp)),
                    dropped_blocks=dropped, seconds=time.perf_counter() - t0)
+
+
+def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator) -> Stage:
+    """The last stage — whose residual tests give the verdict — with their p-values refined by
+    sequential Monte Carlo where the bootstrap's first draws leave them near ``level``
+    (:mod:`.sequential`); unchanged, and no draw taken, where those settle them all."""
+    observed = {"gof": st.base.chi2, "structure": st.structure, "generic": st.generic}
+    if all(settled_p(getattr(st.null, k), v, level) is not None for k, v in observed.items()):
+        return st
+    ps = residual_p_values(problem, linearise(problem, st.base, ()), st.null, observed,
+                           level=level, rng=rng.spawn(1)[0])
+    return replace(st, gof_p=ps["gof"], structure_p=ps["structure"], generic_p=ps["generic"])
 
 
 def _conclude(data, train, holdout, split, base, final, stages, named, confounded, withheld,
