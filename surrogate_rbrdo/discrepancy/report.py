@@ -63,7 +63,8 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
         "residual_test": result.residual_test,
         "partial_library_fit": list(result.partial),
         "gap": {"before": result.gap_before.to_dict(), "after": result.gap_after.to_dict(),
-                "units": {"rmse": "um", "max_abs": "um", "chi2_dof": "1"},
+                "units": {"rmse": "um", "max_abs": "um", "chi2_dof": "1",
+                          "predictive_chi2_dof": "1"},
                 "on": "held-out speeds (interleaved and extrapolated), parameters and "
                       "unbalance fitted on training speeds",
                 "per_channel": {"before": result.gap_before.per_channel,

@@ -144,9 +144,10 @@ class Truth:
 
     ``effects`` are those the model has too; ``hidden`` are added on top (the discrepancy the
     workflow should find); ``random_phase``: unbalance phases drawn per build (else as given).
-    A hidden effect of a kind the model has switched *off* (the reference model's
-    ``Gyroscopics(g=0)``) replaces that switch instead of adding a second one: hiding
-    ``{"name": "gyroscopics", "g": 0.5}`` means the truth has half the gyroscopic coupling.
+    A hidden effect of a kind the model carries only in its off (identity) state (the
+    reference model's ``Gyroscopics(g=0)``: the coupling as the geometry gives it) replaces
+    that state instead of adding a second one: hiding ``{"name": "gyroscopics", "g": 0.5}``
+    gives the truth 1.5 times the geometric gyroscopic coupling.
 
     >>> from surrogate_rbrdo.spindle.effects import Gyroscopics
     >>> t = reference_truth(hidden=[{"name": "gyroscopics", "g": 0.5}])
@@ -179,7 +180,8 @@ class Truth:
 
     @property
     def all_effects(self) -> tuple[Effect, ...]:
-        """The model's effects (less those off of a kind ``hidden`` has) and the hidden."""
+        """The model's effects (less those in their off state of a kind ``hidden`` has) and
+        the hidden."""
         kinds = {type(h) for h in self.hidden}
         return tuple(e for e in self.effects
                      if not (type(e) in kinds and e.is_off)) + self.hidden

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import surrogate_rbrdo.rig.simulate as sim
 from surrogate_rbrdo.rig.frf import h1_frf
 from surrogate_rbrdo.rig.impacts import (
     ImpactPlan,
@@ -128,3 +129,26 @@ def test_hits_share_one_simulation_and_it_must_match(state):
         impact_record(model, state.theta, sensors, inst, np.random.default_rng(1), rid="hit",
                       provenance={}, direction="x", speed_rpm=10_000.0, duration_s=0.2,
                       response=shared)
+
+
+@pytest.mark.known_answer
+def test_a_shared_hit_scaled_by_its_peak_is_the_hit_simulated_at_that_peak(state, monkeypatch):
+    """Known answer (linearity): the response to a hammer pulse of peak ``P`` is ``P`` times
+    the response to the same pulse of 1 N, through the integrator, the force's hold, the
+    decimation filter, the drivers and the delays — the hit simulated with the pulse's peak
+    set to ``P`` (``hammer_pulse`` patched) against the shared 1 N response scaled by ``P``,
+    at standstill and at 20 000 rpm, on every channel with a signal above round-off."""
+    sensors = SensorSet()
+    inst = sensors.install(np.random.default_rng(0))
+    model, peak, pulse = state.model(), 237.31, sim.hammer_pulse
+    for speed, d in ((0.0, "x"), (20_000.0, "y")):
+        kw = dict(direction=d, speed_rpm=speed, duration_s=0.2)
+        one = impact_response(model, state.theta, sensors, inst, **kw)
+        monkeypatch.setattr(sim, "hammer_pulse",
+                            lambda t, th, pk, w: pulse(t, th, pk * peak, w))
+        big = impact_response(model, state.theta, sensors, inst, **kw)
+        monkeypatch.setattr(sim, "hammer_pulse", pulse)
+        rms = np.sqrt(np.mean(big.x**2, axis=1))
+        live = rms > 1e-9 * rms.max()
+        err = np.max(np.abs(peak * one.x - big.x), axis=1)
+        assert live.sum() >= 3 and np.all(err[live] <= 1e-12 * rms[live])

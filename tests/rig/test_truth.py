@@ -89,8 +89,8 @@ def test_iso_allocation_needs_two_planes_and_the_tool_disk():
 
 
 def test_a_hidden_switch_replaces_the_models_off_switch():
-    """The reference model has gyroscopics switched off (``Gyroscopics(g=0)``); hiding
-    gyroscopics in the truth switches it on at the hidden value (one switch, not two — a
+    """The reference model carries gyroscopics in its off (identity) state (``Gyroscopics(
+    g=0)``: the geometry's coupling); a hidden gyroscopics replaces it (one, not two — a
     second raised "at most one 'gyroscopics' effect" from the [rig] table), while a hidden
     effect of a kind the model has on (a bearing softening) is added to the model's own. The
     truth's model scales the gyroscopic matrix as a model built with that switch does."""
