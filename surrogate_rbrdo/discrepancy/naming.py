@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from joblib import Parallel, delayed
+from threadpoolctl import threadpool_limits
 
 from surrogate_rbrdo.discrepancy.calibration import (
     NullDistribution,
@@ -176,10 +177,12 @@ def fit_one(problem: Problem, base: Fit, c: Candidate, warm, *, max_nfev: int,
             confound_delta: float) -> CandidateFit:
     """One candidate's fit on top of ``base`` (:func:`~.search.fit_candidate` from the
     stage's 1x-only recalibration ``warm``), held inside if a shape ends on a bound the data
-    may not prefer (:func:`~.holds.interior`)."""
-    cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm)
-    if cf.at_bound:
-        cf = interior(problem, base, cf, confound_delta, max_nfev=max_nfev)
+    may not prefer (:func:`~.holds.interior`); on one BLAS thread, in this process as on a
+    worker (whose thread count loky sets), so the digits do not depend on ``n_jobs``."""
+    with threadpool_limits(limits=1, user_api="blas"):   # the same digits in any process
+        cf = fit_candidate(problem, base, c, max_nfev=max_nfev, warm=warm)
+        if cf.at_bound:
+            cf = interior(problem, base, cf, confound_delta, max_nfev=max_nfev)
     return cf
 
 
