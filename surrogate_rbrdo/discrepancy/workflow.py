@@ -319,7 +319,8 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             confounded = group
         else:
             named.append(group[0])
-    stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
+    if not withheld:     # a withheld name decides the verdict; more draws could not change it
+        stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
     res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), tuple(named),
                     tuple(confounded), withheld, options, one_x[0].coord,
                     time.perf_counter() - t0)

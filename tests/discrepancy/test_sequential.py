@@ -10,10 +10,10 @@ from scipy.stats import chi2
 from surrogate_rbrdo.discrepancy.calibration import NullDistribution, TailModel
 from surrogate_rbrdo.discrepancy.sequential import (
     FAR,
+    FAR_DRAWS,
     MAX_DRAWS,
     MIN_EXCEED,
     sequential_p_values,
-    settled_p,
 )
 
 K = 64                      # directions, as the rig's generic statistic has
@@ -77,17 +77,30 @@ def test_sequential_p_stops_after_min_exceed_draws_beyond(p_exact):
 
 
 def test_no_draw_is_taken_when_the_first_draws_settle_every_p_value():
-    """A p-value in the empirical range, or extrapolated far below the level, is settled: the
-    answer is NullDistribution.p_value's and ``more`` is never called."""
+    """A p-value in the empirical range is settled by the first draws: the answer is
+    NullDistribution.p_value's and ``more`` is never called."""
     rng = np.random.default_rng(2)
     d = _sampler(rng)(400)
     null = NullDistribution(d, d, d, np.zeros((400, 0)), ())
-    far = _at(1e-9)
-    observed = {"gof": float(np.quantile(d, 0.5)), "generic": far}
-    assert settled_p(d, far, LEVEL) <= FAR * LEVEL
+    observed = {"gof": float(np.quantile(d, 0.5)), "generic": float(np.quantile(d, 0.9))}
 
     def more(n):
         raise AssertionError("no draw should be taken")
 
     out = sequential_p_values({k: d for k in observed}, observed, LEVEL, more)
     assert out == {k: null.p_value(k, v) for k, v in observed.items()}
+
+
+def test_a_statistic_far_beyond_every_draw_costs_one_chunk():
+    """A real misfit (exact p 1e-9): its moment-fit p-value is far below the level, but it is
+    taken as it stands only after FAR_DRAWS draws with none beyond it — one chunk more, not
+    MAX_DRAWS."""
+    draw = _sampler(np.random.default_rng(2))
+    far, taken = _at(1e-9), []
+
+    def more(n):
+        taken.append(n)
+        return {"g": draw(n)}
+
+    p = sequential_p_values({"g": draw(400)}, {"g": far}, LEVEL, more)["g"]
+    assert sum(taken) + 400 == FAR_DRAWS and p <= FAR * LEVEL
