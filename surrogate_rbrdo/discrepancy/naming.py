@@ -26,13 +26,14 @@ fits when nothing is missing).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from joblib import Parallel, delayed
 from threadpoolctl import threadpool_limits
 
 from surrogate_rbrdo.discrepancy.calibration import (
+    Linearisation,
     NullDistribution,
     generic_statistic,
     gp_statistic,
@@ -103,6 +104,10 @@ class Stage:
     generic: float
     generic_p: float
     chosen: tuple[str, ...] = field(default=())
+    #: the stage's linearisation without the candidates' columns (the nuisance's and the
+    #: generic ones): more draws of the residual statistics (:mod:`.sequential`) need no
+    #: second linearisation
+    residual_lin: Linearisation | None = field(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -170,7 +175,8 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
                         cf.fit.jac, cf.n_fitted, confound_delta, law)
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
                               rt))
-    return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p)
+    return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p,
+                 residual_lin=replace(lin, candidates=()))
 
 
 def fit_one(problem: Problem, base: Fit, c: Candidate, warm, *, max_nfev: int,

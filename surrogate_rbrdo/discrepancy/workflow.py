@@ -30,7 +30,6 @@ import numpy as np
 
 from surrogate_rbrdo.core.rng import require_rng
 from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
-from surrogate_rbrdo.discrepancy.calibration import linearise
 from surrogate_rbrdo.discrepancy.candidates import (
     DEFAULT_LIBRARY,
     check_library,
@@ -59,7 +58,7 @@ from surrogate_rbrdo.discrepancy.rivals import (
     RIVAL_SEPARATION_SPRING,
 )
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, fit_nuisance, slot_estimate
-from surrogate_rbrdo.discrepancy.sequential import residual_p_values, settled_p
+from surrogate_rbrdo.discrepancy.sequential import residual_p_values
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -338,12 +337,11 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
 def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator) -> Stage:
     """The last stage — whose residual tests give the verdict — with their p-values refined by
     sequential Monte Carlo where the bootstrap's first draws leave them near ``level``
-    (:mod:`.sequential`); unchanged, and no draw taken, where those settle them all."""
+    (:func:`~.sequential.residual_p_values`, at the stage's own linearisation; unchanged, and
+    no draw taken, where those settle them all)."""
     observed = {"gof": st.base.chi2, "structure": st.structure, "generic": st.generic}
-    if all(settled_p(getattr(st.null, k), v, level) is not None for k, v in observed.items()):
-        return st
-    ps = residual_p_values(problem, linearise(problem, st.base, ()), st.null, observed,
-                           level=level, rng=rng.spawn(1)[0])
+    ps = residual_p_values(problem, st.residual_lin, st.null, observed, level=level,
+                           rng=rng.spawn(1)[0])
     return replace(st, gof_p=ps["gof"], structure_p=ps["structure"], generic_p=ps["generic"])
 
 
