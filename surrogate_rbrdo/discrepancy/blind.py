@@ -59,7 +59,7 @@ from surrogate_rbrdo.discrepancy.synthetic import (
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
 from surrogate_rbrdo.rig.impacts import ImpactPlan
-from surrogate_rbrdo.spindle.effects import EFFECTS, Effect
+from surrogate_rbrdo.spindle.effects import EFFECTS, Effect, with_effects
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
@@ -92,10 +92,7 @@ class Hidden:
         kw = {**self.fixed, self.knob: value, **{p: value * f for p, f in self.linked.items()}}
         if self.truth_only:
             return TRUTH_MODIFIERS[self.name](geometry, **kw), effects
-        cls = EFFECTS[self.name]
-        # an off effect of the same kind changes nothing; dropping it keeps kinds unique
-        kept = tuple(e for e in effects if not (type(e) is cls and e.is_off))
-        return geometry, kept + (cls(**kw),)
+        return geometry, with_effects(effects, (EFFECTS[self.name](**kw),))
 
     def value(self, s: float) -> float:
         """Knob value at strength coordinate ``s`` ∈ (0, 1] (1 = the physical extreme),

@@ -33,7 +33,7 @@ import numpy as np
 
 from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
 from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
-from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict
+from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict, with_effects
 from surrogate_rbrdo.spindle.geometry import PreloadLaw, SpindleGeometry, Unbalance
 from surrogate_rbrdo.spindle.reference import (
     BALANCE_SPEED_RPM,
@@ -180,11 +180,9 @@ class Truth:
 
     @property
     def all_effects(self) -> tuple[Effect, ...]:
-        """The model's effects (less those in their off state of a kind ``hidden`` has) and
-        the hidden."""
-        kinds = {type(h) for h in self.hidden}
-        return tuple(e for e in self.effects
-                     if not (type(e) in kinds and e.is_off)) + self.hidden
+        """The model's effects and the hidden (:func:`~surrogate_rbrdo.spindle.effects.
+        with_effects`: an off effect of a hidden kind is replaced)."""
+        return with_effects(self.effects, self.hidden)
 
     def _plane_shares(self, model: SpindleModel) -> np.ndarray:
         """Permissible residual per plane (kg m) under ``variability.unbalance_allocation``."""

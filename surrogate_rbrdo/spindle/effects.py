@@ -163,6 +163,19 @@ def effects_from_data(data: Sequence[Any], where: str = "effects") -> tuple[Effe
     return out
 
 
+def with_effects(effects: Sequence[Effect], added: Sequence[Effect]) -> tuple[Effect, ...]:
+    """``effects`` with ``added`` appended; an effect of ``effects`` in its off (identity)
+    state of a kind ``added`` has is dropped, so a model's neutral switch (the reference
+    model's ``Gyroscopics(g=0)``) is replaced rather than doubled — it changes nothing, and
+    some kinds allow one per model.
+
+    >>> [e.g for e in with_effects((Gyroscopics(),), (Gyroscopics(g=0.5),))]
+    [0.5]
+    """
+    kinds = {type(e) for e in added}
+    return tuple(e for e in effects if not (type(e) in kinds and e.is_off)) + tuple(added)
+
+
 def check_effects(effects: Sequence[Effect], bearings: Sequence[str] | None,
                   where: str = "effects") -> None:
     """Refuse effects on bearings that do not exist (``bearings``: the geometry's names,
