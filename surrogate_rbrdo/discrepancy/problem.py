@@ -97,8 +97,7 @@ class Problem:
         """The same problem on its blocks of sweep ``kind`` alone (and the identified
         stiffness); its parametrisation drops what only the other blocks see (the force
         channel of impact tests)."""
-        sub = copy.copy(self)
-        sub.__dict__.pop("_recent", None)      # its own recent rows (other blocks)
+        sub = copy.copy(self)                  # without the recent rows (__getstate__)
         keep = [i for i, b in enumerate(self.blocks) if b.sweep.kind == kind]
         sub.blocks = [self.blocks[i] for i in keep]
         sub.channel_index = [self.channel_index[i] for i in keep]
@@ -161,6 +160,12 @@ class Problem:
             j = [names.index(n) for n in ib.bearings]
             out.append(np.stack([Z[:, :, j, 0, 0].real, Z[:, :, j, 1, 1].real], axis=-1))
         return out
+
+    def __getstate__(self) -> dict:
+        """The state without the recent rows' memo (:meth:`_unit_responses`): keyed by the
+        sweeps' ids, it can never hit in an unpickled problem (a worker's) or in a copy on
+        other blocks (:meth:`only`), and it is up to ~2 MB."""
+        return {k: v for k, v in self.__dict__.items() if k != "_recent"}
 
     def _unit_responses(self, keys: list, u: np.ndarray, thetas: dict, ds: np.ndarray,
                         extras: list, mass: np.ndarray) -> list[np.ndarray]:
