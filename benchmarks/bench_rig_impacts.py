@@ -1,9 +1,10 @@
 """The rig's impact records, side by side: step by step (every hit simulated on its own, the
-recurrence over every fine step — the code before), the free decay in closed form (each hit
-still simulated on its own), and the campaign's way (one simulation per speed and direction,
-scaled by each hit's peak). Prints the CPU per record of each, the ratios, the fine outputs'
-largest difference from the step-by-step ones (relative to their RMS) and whether the records'
-samples are identical, then the load average.
+recurrence over every fine step — the code before's stepping, here as a 1 N hit scaled by the
+peak, which equals a hit simulated at its peak to 1e-12: tests/rig/test_impacts.py), the free
+decay in closed form (each hit still simulated on its own), and the campaign's way (one
+simulation per speed and direction, scaled by each hit's peak). Prints the CPU per record of
+each, the ratios, the fine outputs' largest difference from the step-by-step ones (relative to
+their RMS) and whether the records' samples are identical, then the load average.
 
     PYTHONPATH=$PWD python3 benchmarks/bench_rig_impacts.py [--config experiments/discrepancy.toml]
 
