@@ -18,6 +18,7 @@ from scipy.special import log_ndtr
 from scipy.stats import chi2
 
 from surrogate_rbrdo.discrepancy import naming
+from surrogate_rbrdo.discrepancy.calibration import Linearisation
 from surrogate_rbrdo.discrepancy.candidates import candidate
 from surrogate_rbrdo.discrepancy.fit import Fit, fit, jacobian
 from surrogate_rbrdo.discrepancy.forward import ForwardModel
@@ -183,7 +184,8 @@ def test_the_rival_test_counts_a_held_shape_as_fitted(monkeypatch):
     null = ns(p_value=lambda k, v: 0.5, tails=lambda: [tail], critical_p=lambda a: 0.01,
               adjusted=lambda p: p)
     for name, value in {
-            "linearise": lambda *a: ns(candidates=[(c, None)], absorbed=()),
+            "linearise": lambda *a: Linearisation(np.zeros((0, 0)), ((c, ()),), (),
+                                                  np.zeros((0, 0))),
             "simulate_null": lambda *a, **k: null, "gp_statistic": lambda *a: 0.0,
             "generic_statistic": lambda *a: 0.0, "damping_law_columns": lambda *a: None,
             "linear_statistics": lambda *a: np.array([100.0]), "warm_base": lambda *a, **k: None,
