@@ -48,9 +48,11 @@ effect the final lack-of-fit tests then still check.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import qr
 from scipy.stats import chi2
 
 from surrogate_rbrdo.discrepancy.calibration import Linearisation, _apply, _data_whitening
@@ -75,6 +77,9 @@ class RivalTest:
     level : float
         The confound level (``P(χ²₁ > confound_delta)``).
     n_free : int
+    rival_adds : float
+        The reverse direction, ``χ²(candidate) − χ²(rival + candidate)`` for the same rival:
+        what that rival adds to the fitted candidate (``inf``: not computed).
     """
 
     statistic: float
@@ -83,6 +88,7 @@ class RivalTest:
     rival_delta_chi2: float
     level: float = 0.01
     n_free: int = 1
+    rival_adds: float = math.inf
 
     @property
     def p_value(self) -> float:
@@ -93,17 +99,41 @@ class RivalTest:
     def passed(self) -> bool:
         return self.statistic > self.threshold
 
+    @property
+    def mutual(self) -> bool:
+        """Neither explains the data better: the candidate adds nothing significant to its
+        closest rival (not :attr:`passed`) and that rival, a one-parameter change, adds
+        nothing significant to the candidate (``rival_adds`` within the χ²₁ quantile of the
+        level) — the non-nested pair the data cannot discriminate (Davidson & MacKinnon 1981:
+        neither model is rejected against the other)."""
+        return not self.passed and self.rival_adds <= float(chi2.isf(self.level, 1))
+
     def to_dict(self) -> dict:
         return {"statistic": self.statistic, "threshold": self.threshold,
                 "p_value": self.p_value, "level": self.level, "rival": self.rival,
-                "rival_delta_chi2": self.rival_delta_chi2, "passed": self.passed}
+                "rival_delta_chi2": self.rival_delta_chi2, "rival_adds": self.rival_adds,
+                "passed": self.passed, "mutual": self.mutual}
+
+
+#: relative size of a pivoted QR's diagonal below which a column of ``B`` adds no direction
+RANK_TOL = 1e-10
 
 
 def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """``Y`` with its projection on the columns of ``B`` removed (Householder QR)."""
+    """``Y`` with its projection on the column space of ``B`` removed (Householder QR with
+    column pivoting, rank-revealing: a column that repeats others — the nuisance's beside a
+    fit's Jacobian that holds it — adds no direction, where a plain QR would add an arbitrary
+    one made of round-off).
+
+    >>> B = np.array([[1.0, 2.0], [0.0, 0.0], [0.0, 0.0]])          # rank 1
+    >>> _orth(B, np.array([[1.0], [1.0], [0.0]])).ravel().tolist()
+    [0.0, 1.0, 0.0]
+    """
     if B.shape[1] == 0:
         return Y
-    Q, _ = np.linalg.qr(B)
+    Q, R, _ = qr(B, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    Q = Q[:, :int(np.count_nonzero(d > RANK_TOL * d[0]))] if d.size and d[0] > 0 else Q[:, :0]
     return Y - Q @ (Q.T @ Y)
 
 
@@ -250,8 +280,8 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     gg = np.einsum("nk,nk->k", G, G)
     V = _orth(np.hstack([N, fit_jac]), G)
     V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
-    both = fit_chi2 - _bounded_fit(V, fit_r, bounds)[0]                  # rival + candidate
-    stat = np.where(live, (base_chi2 - gain) - both, np.inf)
+    adds = _bounded_fit(V, fit_r, bounds)[0]                  # rival on top of the candidate
+    stat = np.where(live, (base_chi2 - gain) - (fit_chi2 - adds), np.inf)
     j = int(np.argmin(stat))
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),
-                     float(gain[j]), level, k)
+                     float(gain[j]), level, k, float(adds[j]))

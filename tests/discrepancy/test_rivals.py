@@ -49,6 +49,32 @@ def test_a_candidate_that_is_a_generic_direction_adds_nothing_to_it():
 
 
 @pytest.mark.known_answer
+def test_what_the_rival_adds_to_the_candidate_is_an_independent_least_squares_gain():
+    """The reverse direction of the encompassing test: the closest rival's gain on top of the
+    fitted candidate, ``|r_cand|² − |r_cand+rival|²``, against a least-squares fit of
+    nuisance + candidate + rival (free range). Truth ``3 g1``; the candidate mimics g1 (``d =
+    g1 + 0.05 e``): it adds nothing to g1 and g1 adds nothing to it — *mutual*. A candidate
+    that explains only part of it (``d = g1 + 2 e``) still adds nothing to g1, but g1 adds a
+    lot to it: not mutual (the rival explains the data, the candidate does not)."""
+    rng = np.random.default_rng(3)
+    lin, nuis, gen = _setup(rng)
+    n = nuis.shape[0]
+    e = _ls_residual(np.hstack([nuis, gen]), rng.standard_normal(n))
+    e /= np.linalg.norm(e)
+    y = 3.0 * gen[:, 1] + 0.1 * rng.standard_normal(n)
+    r0 = _ls_residual(nuis, y)
+    for eps, mutual in ((0.05, True), (2.0, False)):
+        d = gen[:, 1] + eps * e * np.linalg.norm(gen[:, 1])
+        A = np.hstack([nuis, d[:, None]])
+        r1 = _ls_residual(A, y)
+        t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+        both = _ls_residual(np.hstack([A, gen[:, 1:2]]), y)
+        assert t.rival == "g1" and not t.passed
+        assert t.rival_adds == pytest.approx(float(r1 @ r1 - both @ both), rel=1e-8, abs=1e-9)
+        assert t.mutual is mutual
+
+
+@pytest.mark.known_answer
 def test_a_candidate_no_rival_can_mimic_adds_its_whole_fit():
     """Truth along a direction orthogonal to the nuisance and every generic column: the
     closest rival explains nothing and the candidate adds its whole Δχ² = |r0|² − |r1|²."""
