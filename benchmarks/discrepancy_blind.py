@@ -53,7 +53,7 @@ from surrogate_rbrdo.discrepancy.grid import (
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
-from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
+from surrogate_rbrdo.discrepancy.workflow import GENERIC_CONFOUND, DiscrepancyOptions
 from surrogate_rbrdo.rig.impacts import ImpactPlan
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
@@ -79,6 +79,10 @@ def main() -> None:
                     help="add a 'separable' strength: every library effect alone where the "
                          "part of its strength no generic rival explains reaches Z_SEP "
                          "(grid.calibrate_grid; e.g. 12, the strong level)")
+    ap.add_argument("--generic-confound", choices=GENERIC_CONFOUND,
+                    default=DiscrepancyOptions.generic_confound,
+                    help="the answer when a library effect and a generic local change explain "
+                         "the data alike (DiscrepancyOptions.generic_confound)")
     ap.add_argument("--base-seed", type=int, default=0,
                     help="root of the scenarios' seeds (another value: an independent sample)")
     ap.add_argument("--report", nargs="+", default=[],
@@ -114,7 +118,8 @@ def main() -> None:
             "additive_m", "gain", "phase_rad", "frf_additive", "k_relative")})
             for k, s in FACTORS.items()}, 2 * sp.geometry.unbalances[0].magnitude_kgm, (0.0, 350.0))
         nuis = NuisanceOptions()
-    ctx = Context(g, sp.effects, source, DiscrepancyOptions(nuisance=nuis, n_draws=args.draws))
+    ctx = Context(g, sp.effects, source, DiscrepancyOptions(nuisance=nuis, n_draws=args.draws,
+                                                           generic_confound=args.generic_confound))
     noises = tuple(args.noise)
     names = tuple(n for n in HIDDEN if HIDDEN[n].truth_only or n in ctx.options.library)
     cal = calibrate_grid(ctx if args.calibrate_on == "same" else replace(

@@ -337,6 +337,8 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
         "statistic": res.test["statistic"], "p_value": res.test["p_value"],
         "gap_before_chi2": res.gap_before.chi2_dof, "gap_after_chi2": res.gap_after.chi2_dof,
         "gof_p": res.residual_test["gof_p"],
+        # a library effect and a generic change explain the data alike (rivals.RivalTest)
+        "mutual_generic": bool(res.test.get("mutual", False) or res.confounded_generic),
         "parameters": "; ".join(f"{a.name} {a.fit.parameters}" for a in res.effects if a.fit),
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,

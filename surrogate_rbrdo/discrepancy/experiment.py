@@ -116,6 +116,7 @@ class DiscrepancyTable:
     min_impact_dof: int = _D.min_impact_dof
     max_nfev: int = _D.max_nfev
     n_jobs: int = _D.n_jobs
+    generic_confound: str = _D.generic_confound
 
     def __post_init__(self) -> None:
         self.options()

@@ -8,7 +8,9 @@ Files (:func:`write_run`); the figures are drawn by
 ``effects`` (``name``, ``parameters``, ``ci``, ``identified``: those of the final joint
 fit, exactly what ``spindle_updated.toml`` carries; ``ci`` is ``null`` for a parameter the data
 cannot tell from off), ``updated_effects`` (every effect the spindle adds),
-``confounded_with``, ``test`` (``statistic``, ``p_value``, ``threshold``)
+``confounded_with``, ``confounded_generic`` (a confounded set's generic local changes: a library
+effect the data cannot tell from, e.g., a passive spring beside its bearing), ``test``
+(``statistic``, ``p_value``, ``threshold``)
 and ``gap`` (``before``/``after`` with ``rmse``, ``max_abs`` in µm and
 ``chi2_dof`` on held-out speeds) — plus the residual tests, the ranking of every candidate, the
 recalibrated nuisance, the held-out split and the options. Infinite values (a rigid interface, an
@@ -58,6 +60,7 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
         "updated_effects": [{"name": n, "parameters": e.parameters, "ci": e.ci,
                              "identified": e.identified} for n, e in result.fitted_effects],
         "confounded_with": list(result.confounded_with),
+        "confounded_generic": list(result.confounded_generic),
         "separating_test": result.separating,
         "test": result.test,
         "residual_test": result.residual_test,
@@ -171,8 +174,11 @@ def write_run(result: DiscrepancyResult, out_dir: str | Path, *,
              "candidates": out / "candidates.csv", "curves": out / "curves.csv"}
     paths["findings"].write_text(json.dumps(findings(result), indent=2))
     note = {"named": "named effects added with their fitted parameters",
-            "confounded": f"confounded set {list(result.confounded_with)}: the best-fitting "
-                          "member is added for prediction; the data cannot tell which",
+            "confounded": f"confounded set {list(result.confounded_with)}"
+                          + (f" with the generic local change(s) {list(result.confounded_generic)}"
+                             if result.confounded_generic else "")
+                          + ": the best-fitting member is added for prediction; the data "
+                            "cannot tell which",
             "nothing_missing": "nothing missing: the model's own effects",
             "unnamed_residual": "unnamed residual: no library effect explains it; the model "
                                 "is unchanged (the GP correction is for prediction only)"}

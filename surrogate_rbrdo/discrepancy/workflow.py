@@ -64,6 +64,8 @@ from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 VERDICTS = ("named", "confounded", "nothing_missing", "unnamed_residual")
+#: what a library effect the data cannot tell from a generic change becomes
+GENERIC_CONFOUND = ("confounded", "unnamed_residual")
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,19 @@ class DiscrepancyOptions:
         Worker processes for the candidate fits of a stage (:func:`~.naming.fit_all`; the
         same answers for any value). 1 in the blind harness, which runs whole scenarios in
         parallel instead.
+    generic_confound : {"confounded", "unnamed_residual"}
+        The answer when the first stage's best library member and its closest generic local
+        change explain the data alike — neither adds significantly to the other
+        (:attr:`~.rivals.RivalTest.mutual`; e.g. a preload growth and a passive spring
+        beside its bearing): ``"unnamed_residual"`` (the default: the model left unchanged,
+        the library fit reported as partial, the test marked ``mutual``) or ``"confounded"``
+        (the set, with the generic change in ``confounded_generic``, its best member carried
+        for prediction, the residual tests still judging it). The data are the same whichever
+        is hidden, so no rule is right for both: the second answers a hidden preload growth
+        with a confounded set that holds it, and a hidden spring (outside the library) with
+        one that holds library names. The default keeps the rule that an effect outside the
+        library never gets a library name (docs/discrepancy.md, "Mutual confounds with a
+        generic change", both measured).
     """
 
     library: tuple[str, ...] = DEFAULT_LIBRARY
@@ -133,6 +148,7 @@ class DiscrepancyOptions:
     min_impact_dof: int = 9
     max_nfev: int = 150
     n_jobs: int = 1
+    generic_confound: str = "unnamed_residual"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "library", check_library(self.library))
@@ -148,6 +164,9 @@ class DiscrepancyOptions:
         check_int("max_nfev", self.max_nfev, minimum=5)
         check_int("n_jobs", self.n_jobs, minimum=1)
         check_int("min_impact_dof", self.min_impact_dof, minimum=4)
+        if self.generic_confound not in GENERIC_CONFOUND:
+            raise ValueError(f"generic_confound = {self.generic_confound!r} is not allowed: "
+                             f"must be one of {', '.join(map(repr, GENERIC_CONFOUND))}")
         check_positive("confound_delta", self.confound_delta)
         check_positive("holdout_tolerance", self.holdout_tolerance, allow_zero=True)
 
@@ -178,6 +197,9 @@ class DiscrepancyResult:
     curves: tuple[BlockCurves, ...] = ()
     #: impact blocks left out for too few hits: ``(name, dof)`` (``min_impact_dof``)
     dropped_blocks: tuple[tuple[str, int], ...] = ()
+    #: for *confounded*: the generic local changes (:mod:`.rivals`) the data cannot tell from
+    #: the set's library members, e.g. a grounded spring beside a bearing
+    confounded_generic: tuple[str, ...] = ()
 
     @property
     def named_effects(self) -> tuple[Effect, ...]:
@@ -295,6 +317,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     current = base
     stages, named = [], []
     confounded: list[Assessment] = []
+    generic: tuple[str, ...] = ()          # generic local changes a confounded set holds
     withheld: tuple[Assessment, ...] = ()
     while True:
         left = tuple(c for c in cands if c.name not in {a.name for a in named})
@@ -306,9 +329,19 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
         stages.append(st)
         group = decide(st, options.confound_delta) if n_left else []
         if group and not any(a.separable for a in group):
-            # detected, but a generic local change fits as well: at the first stage nothing
-            # can be named (unnamed residual); later, the names stand and the residual tests
-            # judge what is left (the stage's rival tests are in the findings)
+            if (not named and options.generic_confound == "confounded"
+                    and group[0].rival is not None and group[0].rival.mutual):
+                # the library effect and its closest generic change explain the data alike
+                # (neither adds to the other): a confounded set with that change, carried at
+                # the library member's fit; the residual tests at that fit still judge it
+                current, confounded = group[0].fit.fit, group
+                generic = tuple(dict.fromkeys(a.rival.rival for a in group
+                                              if a.rival is not None and a.rival.mutual))
+                continue
+            # detected, but a generic local change explains the data better, or as well
+            # without the converse: at the first stage nothing can be named (unnamed
+            # residual); later, the names stand and the residual tests judge what is left
+            # (the stage's rival tests are in the findings)
             withheld = () if named else tuple(group)
             break
         if not group:
@@ -321,7 +354,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     if not withheld:     # a withheld name decides the verdict; more draws could not change it
         stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
     res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), tuple(named),
-                    tuple(confounded), withheld, options, one_x[0].coord,
+                    (tuple(confounded), generic), withheld, options, one_x[0].coord,
                     time.perf_counter() - t0)
     everything = _problem(fm, data, None, options.nuisance, runs)
     held_pts = split.interleaved | split.extrapolated
@@ -348,6 +381,7 @@ def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator
 def _conclude(data, train, holdout, split, base, final, stages, named, confounded, withheld,
               options, speeds, seconds) -> DiscrepancyResult:
     held, ho = holdout
+    confounded, generic = confounded
     parts = {"interleaved": ho.interleaved, "extrapolated": ho.extrapolated}
     last = stages[-1]
     level = options.alpha_residual / 3
@@ -373,8 +407,10 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
             rt = max((a.rival for a in withheld), key=lambda t: t.statistic)
             test = {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
                     "kind": "detected, not separable from a generic local change "
-                            f"(encompassing test; closest: {rt.rival})"}
-        effects, conf = (), ()
+                            f"(encompassing test; closest: {rt.rival})",
+                    # both ways: does the rival add to the library fit (no: explained alike)
+                    "rival_adds": rt.rival_adds, "mutual": rt.mutual}
+        effects, conf, generic = (), (), ()
     else:
         after = held_out_gap(train, held, parts, final)
         if confounded:
@@ -389,11 +425,15 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
                 "p_value": lead.p_adjusted if lead else 1.0, "threshold": options.alpha,
                 "kind": "likelihood ratio, bootstrap min-p over candidates",
                 "candidate": lead.name if lead else None}
+        if generic and lead is not None and lead.rival is not None:
+            test["generic_rival"] = lead.rival.to_dict()    # the encompassing test, both ways
+    separating = "; ".join(t for t in (
+        separating_test(list(conf)) if len(conf) > 1 else "",
+        _rival_separation(data, withheld or confounded) if withheld or generic else "") if t)
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
-        np.asarray(speeds), partial, separating_test(list(conf)) if conf
-        else (_rival_separation(data, withheld) if withheld else ""), seconds,
-        options)
+        np.asarray(speeds), partial, separating, seconds, options,
+        confounded_generic=generic if verdict == "confounded" else ())
 
 
 def _drop_thin_impacts(data: MeasuredData, min_dof: int
