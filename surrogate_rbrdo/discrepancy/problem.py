@@ -182,8 +182,11 @@ class Problem:
         G: list[np.ndarray] = []
         if new:
             v = u[new]
+            # one array per kind, shared by its blocks: the forward model evaluates the bearing
+            # impedance once per distinct array over all its sweeps' points
+            sel = {k: t[v] for k, t in thetas.items()}
             G = self.forward.responses([b.sweep for b in self.blocks],
-                                       [thetas[b.sweep.kind][v] for b in self.blocks],
+                                       [sel[b.sweep.kind] for b in self.blocks],
                                        ds[v], [extras[i] for i in v], mass[v])
         for j in hits:
             recent.move_to_end(tags[j])
