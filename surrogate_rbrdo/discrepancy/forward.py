@@ -418,10 +418,19 @@ class ForwardModel:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
-        return np.stack([bearing_dynamic_stiffness(
-            self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
-            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
-            self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
+        groups: dict[tuple[Effect, ...], list[int]] = {}
+        for i, extra in enumerate(extras):
+            groups.setdefault(extra, []).append(i)
+        # rows with the same extra effects in one call: the same elementwise arithmetic (and
+        # 2 × 2 solves) per row as one call per row
+        Z = np.empty((theta.shape[0], sweep.freq_rad_s.size, self.n_bearings, 2, 2),
+                     dtype=complex)
+        for extra, rows in groups.items():
+            Z[rows] = bearing_dynamic_stiffness(
+                self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
+                sweep.freq_rad_s, theta[rows], ds[rows],
+                self.bearing_parts(extra, sweep.spin_rad_s))
+        return Z
 
 
 #: rotors whose coupling plan (:meth:`ForwardModel._plan`) is kept
