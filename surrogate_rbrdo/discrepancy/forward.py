@@ -105,7 +105,6 @@ class ForwardModel:
     _prints: dict = field(default_factory=dict, init=False, repr=False)
     _parts: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
     _plans: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
-    _disked: OrderedDict = field(default_factory=OrderedDict, init=False, repr=False)
 
     def __post_init__(self) -> None:
         # an off effect leaves the model unchanged; dropping it lets a candidate of the same
@@ -332,8 +331,7 @@ class ForwardModel:
                                     theta[ks[0]], ds)
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
             for sel, pts, cond, at in plan:
-                q = self._couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts],
-                                 mass[rows])
+                q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts])
                 for j, ks in enumerate(sel):
                     c0 = 0
                     for k in ks:
@@ -341,29 +339,6 @@ class ForwardModel:
                         c0 += n_load[k]
         if not all(np.all(np.isfinite(o)) for o in out):
             raise ModelError("ForwardModel.response: non-finite response")
-        return out
-
-    def _couple(self, cond: _Condensed, Z: np.ndarray, Zd: np.ndarray | None,
-                mass: np.ndarray) -> np.ndarray:
-        """:func:`_couple` of the rows, each distinct row of disk factors ``mass`` coupled
-        into ``cond`` once (:func:`_with_disks`, memoised for the last :data:`DISK_CACHE`:
-        a Jacobian's rows share the disk factors of the point evaluated just before)."""
-        if Zd is None or not Zd.shape[2]:
-            return _couple(cond, Z)
-        out = np.empty(Z.shape[:2] + cond.H_OF.shape[1:], dtype=complex)
-        _, first, inv = np.unique(mass, axis=0, return_index=True, return_inverse=True)
-        for g, i0 in enumerate(first):
-            rows = np.flatnonzero(inv.ravel() == g)
-            key = (id(cond), mass[i0].tobytes())
-            hit = self._disked.get(key)
-            if hit is None or hit[0] is not cond:
-                hit = (cond, _with_disks(cond, Zd[i0], 2 * Z.shape[2]))
-                self._disked[key] = hit
-                if len(self._disked) > DISK_CACHE:
-                    self._disked.popitem(last=False)
-            else:
-                self._disked.move_to_end(key)
-            out[rows] = _couple(hit[1], Z[rows])
         return out
 
     def _plan(self, model: SpindleModel, sweeps: Sequence[Sweep], n_load: list[int]) -> list:
@@ -455,8 +430,6 @@ class ForwardModel:
 
 #: rotors whose coupling plan (:meth:`ForwardModel._plan`) is kept
 PLAN_CACHE = 32
-#: condensed rotors with a row's disk changes coupled in (:meth:`ForwardModel._couple`) kept
-DISK_CACHE = 8
 
 
 def _lru(cache: OrderedDict, key, make, size: int):
@@ -494,58 +467,37 @@ def _loads_together(conds: list[_Condensed]) -> _Condensed:
 COUPLE_BLOCK_BYTES = 2**25
 
 
-def _couple(c: _Condensed, Z: np.ndarray) -> np.ndarray:
-    """Woodbury coupling of the condensed rotor ``c`` (its coupled DOFs the bearings' x, y:
-    disk changes coupled in already, :func:`_with_disks`) with bearing impedances ``Z``
-    (B, X, nb, 2, 2), in blocks of rows of at most :data:`COUPLE_BLOCK_BYTES` of work arrays
-    (each row's arithmetic is the same whatever the block).
-
-    Coupling the disk changes first, once per distinct row of disk factors (a Jacobian's or a
-    linearisation's rows share them but for one), and then the bearings per row is the exact
-    block elimination of the joint update: it solves ``2 nb`` equations per row and point
-    instead of ``2 nb + 4 nd`` (two bearings and one disk: 4 × 4 instead of 8 × 8, about a
-    third of the cost)."""
+def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
+    and disk changes ``Zd`` (B, X, nd, 4, 4), in blocks of rows of at most
+    :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the same whatever the
+    block)."""
     B, X, nb = Z.shape[:3]
-    n = 2 * nb
+    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2])
     per_row = 16 * X * n * (3 * n + 2 * c.H_PF.shape[-1])
     step = max(1, COUPLE_BLOCK_BYTES // max(per_row, 1))
     if B <= step:
-        return _couple_block(c, Z)
+        return _couple_block(c, Z, Zd)
     out = np.empty((B, X) + c.H_OF.shape[1:], dtype=complex)
     for i in range(0, B, step):
-        out[i:i + step] = _couple_block(c, Z[i:i + step])
+        out[i:i + step] = _couple_block(c, Z[i:i + step],
+                                        None if Zd is None else Zd[i:i + step])
     return out
 
 
-def _with_disks(c: _Condensed, Zd: np.ndarray, n_b: int) -> _Condensed:
-    """The condensed rotor with the disk changes ``Zd`` (X, nd, 4, 4) coupled in, restricted
-    to the first ``n_b`` coupled DOFs (the bearings'): with ``D`` the disks' DOFs,
-    ``H' = H − H_·D (I + Z_d H_DD)⁻¹ Z_d H_D·`` (Woodbury, as :func:`_couple_block`)."""
-    X, nd = Zd.shape[:2]
-    Zf = np.zeros((X, 4 * nd, 4 * nd), dtype=complex)
-    for k in range(nd):
-        Zf[:, 4 * k:4 * k + 4, 4 * k:4 * k + 4] = Zd[:, k]
-    b, d = slice(0, n_b), slice(n_b, None)
-    L = c.H_PF.shape[-1]
-    lhs = np.eye(4 * nd) + Zf @ c.H_PP[:, d, d]
-    try:
-        T = np.linalg.solve(lhs, Zf @ np.concatenate([c.H_PF[:, d], c.H_PP[:, d, b]], -1))
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("ForwardModel: singular coupled system") from exc
-    TF, TB = T[..., :L], T[..., L:]
-    H_Od, H_bd = c.H_OP[:, :, d], c.H_PP[:, b, d]
-    return _Condensed(c.H_OF - H_Od @ TF, c.H_OP[:, :, b] - H_Od @ TB,
-                      c.H_PP[:, b, b] - H_bd @ TB, c.H_PF[:, b] - H_bd @ TF, c.system)
-
-
-def _couple_block(c: _Condensed, Z: np.ndarray) -> np.ndarray:
-    """:func:`_couple` of one block of rows without disk changes (``c`` on the bearings'
-    DOFs)."""
+def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+    """:func:`_couple` of one block of rows."""
     B, X, nb = Z.shape[:3]
-    n = 2 * nb
+    blocks = [Z[:, :, j] for j in range(nb)]
+    if Zd is not None:
+        blocks += [Zd[:, :, k] for k in range(Zd.shape[2])]
+    n = sum(b.shape[-1] for b in blocks)
     Zf = np.zeros((B, X, n, n), dtype=complex)
-    for j in range(nb):
-        Zf[:, :, 2 * j:2 * j + 2, 2 * j:2 * j + 2] = Z[:, :, j]
+    k = 0
+    for b in blocks:
+        m = b.shape[-1]
+        Zf[:, :, k:k + m, k:k + m] = b
+        k += m
     lhs = np.eye(n) + Zf @ c.H_PP[None]
     try:
         U = np.linalg.solve(lhs, Zf @ c.H_PF[None])

@@ -195,9 +195,9 @@ def test_node_by_node_condensation_equals_the_dense_schur_complement(spindle, ex
 
 @pytest.mark.known_answer
 def test_disk_mass_changes_equal_dense_solve(spindle):
-    """Rows with a recalibrated disk (its change coupled in once per distinct disk factor,
-    then the bearings per row) against the dense solve of the spindle assembled with that
-    disk's mass and inertias scaled: rows sharing a factor and a row with its own."""
+    """Rows with a recalibrated disk (its change of mass and inertias coupled in with the
+    bearings) against the dense solve of the spindle assembled with that disk's mass and
+    inertias scaled: rows sharing a factor and a row with its own."""
     sp, g = spindle
     fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0), mass_disks=("tool_holder",))
     speeds = np.linspace(2000.0, 22000.0, 4)
