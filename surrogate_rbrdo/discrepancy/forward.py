@@ -36,6 +36,7 @@ from surrogate_rbrdo.discrepancy.impedance import (
     bearing_dynamic_stiffness,
     bearing_parts,
     condensed_dynamic_stiffness,
+    with_supports,
 )
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
 from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
@@ -379,30 +380,24 @@ class ForwardModel:
                        spin: np.ndarray, freq: np.ndarray, theta: np.ndarray, ds: np.ndarray
                        ) -> None:
         """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: extra effects →
-        positions ``sub`` among ``rows``). Groups without a housing stage are evaluated in one
-        call, their θ-free stiffness stacked row by row: the same elementwise arithmetic as
-        one call per group (a linearisation has thousands of one-row groups)."""
-        plain = []
-        for extra, sub in groups.items():
-            parts = self.bearing_parts(extra, spin)
-            if any(sup is not None for sup in parts.supports):
-                at = rows[sub]
-                Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
-                    self.geometry, self.effects + extra, self.theta_bearings, spin, freq,
-                    theta[at], ds[at], parts)
-            else:
-                plain.append((sub, parts))
-        if not plain:
-            return
-        sub = np.concatenate([s for s, _ in plain])
+        positions ``sub`` among ``rows``), all groups in one call: their θ-free stiffness
+        stacked row by row, then each row's housing stages condensed in
+        (:func:`~.impedance.with_supports`) — the same elementwise arithmetic and 2 × 2 solves
+        as one call per group (a linearisation has thousands of one-row groups)."""
+        items = [(sub, self.bearing_parts(extra, spin)) for extra, sub in groups.items()]
+        sub = np.concatenate([s for s, _ in items])
         stiffness = tuple(np.concatenate([np.broadcast_to(p.stiffness[j], (len(s),)
                                                           + p.stiffness[j].shape[1:])
-                                          for s, p in plain])
+                                          for s, p in items])
                           for j in range(self.n_bearings))
         at = rows[sub]
-        Z[np.ix_(sub, pts)] = bearing_dynamic_stiffness(
+        Zs = bearing_dynamic_stiffness(
             self.geometry, self.effects, self.theta_bearings, spin, freq, theta[at], ds[at],
-            BearingParts(stiffness, plain[0][1].supports))
+            BearingParts(stiffness, (None,) * self.n_bearings))
+        supports = [p.supports for s, p in items for _ in s]
+        if any(sup is not None for sups in supports for sup in sups):
+            with_supports(Zs, freq, supports)
+        Z[np.ix_(sub, pts)] = Zs
 
     def bearing_parts(self, extra: tuple[Effect, ...], spin: np.ndarray) -> BearingParts:
         """The bearings' θ-free parts with the extra effects at spin speeds ``spin`` (memoised:
@@ -418,10 +413,19 @@ class ForwardModel:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
-        return np.stack([bearing_dynamic_stiffness(
-            self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
-            sweep.freq_rad_s, theta[i:i + 1], ds[i:i + 1],
-            self.bearing_parts(extra, sweep.spin_rad_s))[0] for i, extra in enumerate(extras)])
+        groups: dict[tuple[Effect, ...], list[int]] = {}
+        for i, extra in enumerate(extras):
+            groups.setdefault(extra, []).append(i)
+        # rows with the same extra effects in one call: the same elementwise arithmetic (and
+        # 2 × 2 solves) per row as one call per row
+        Z = np.empty((theta.shape[0], sweep.freq_rad_s.size, self.n_bearings, 2, 2),
+                     dtype=complex)
+        for extra, rows in groups.items():
+            Z[rows] = bearing_dynamic_stiffness(
+                self.geometry, self.effects + extra, self.theta_bearings, sweep.spin_rad_s,
+                sweep.freq_rad_s, theta[rows], ds[rows],
+                self.bearing_parts(extra, sweep.spin_rad_s))
+        return Z
 
 
 #: rotors whose coupling plan (:meth:`ForwardModel._plan`) is kept

@@ -137,12 +137,33 @@ def bearing_dynamic_stiffness(geometry: SpindleGeometry, effects: Sequence[Effec
                                         (B, spin.size))
     w = freq[None, :, None, None, None]
     Z = Kb + 1j * w * Cb * damping_scale[:, None, :, None, None]
-    for j, sup in enumerate(parts.supports):
-        if sup is None:
+    if any(sup is not None for sup in parts.supports):
+        with_supports(Z, freq, [parts.supports] * B)
+    return Z
+
+
+def with_supports(Z: np.ndarray, freq: np.ndarray,
+                  supports: Sequence[Sequence[Support | None]]) -> np.ndarray:
+    """Condense each row's housing stages into bearing impedances ``Z`` (B, X, nb, 2, 2), in
+    place: bearing ``j`` of row ``b`` in series with ``supports[b][j]`` (None: rigidly held),
+    ``Z − Z (Z + z_h I)⁻¹ Z`` with ``z_h = k + iωc − ω²m``. All the rows' stages of a bearing
+    in one batched solve (each row's arithmetic is the same as on its own).
+
+    >>> from surrogate_rbrdo.spindle.effects import Support
+    >>> Z = np.full((2, 1, 1, 2, 2), 0.0, dtype=complex); Z[..., 0, 0] = Z[..., 1, 1] = 3.0
+    >>> out = with_supports(Z, np.zeros(1), [(Support(6.0),), (None,)])
+    >>> out[:, 0, 0, 0, 0].real.tolist()           # 3 and 6 in series: 2; row 2 unchanged
+    [2.0, 3.0]
+    """
+    for j in range(Z.shape[2]):
+        rows = [b for b, s in enumerate(supports) if s[j] is not None]
+        if not rows:
             continue
-        zh = sup.k_N_per_m + 1j * freq * sup.c_Ns_per_m - freq**2 * sup.m_kg
-        Zj = Z[:, :, j]
-        Z[:, :, j] = Zj - Zj @ np.linalg.solve(Zj + zh[None, :, None, None] * np.eye(2), Zj)
+        k, c, m = (np.array([[getattr(supports[b][j], f)] for b in rows])
+                   for f in ("k_N_per_m", "c_Ns_per_m", "m_kg"))
+        zh = k + 1j * freq[None] * c - freq[None]**2 * m
+        Zj = Z[rows, :, j]
+        Z[rows, :, j] = Zj - Zj @ np.linalg.solve(Zj + zh[..., None, None] * np.eye(2), Zj)
     return Z
 
 

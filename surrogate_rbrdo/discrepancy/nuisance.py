@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -196,7 +197,7 @@ class Parametrisation:
         return Parametrisation(self.theta_bearings, self.bearings, self.nuisance,
                                self.n_channels, slots, self.impacts)
 
-    @property
+    @cached_property
     def force_names(self) -> tuple[str, ...]:
         """The force channel's parameters (only with impact tests in the data)."""
         o = self.nuisance
@@ -207,7 +208,7 @@ class Parametrisation:
             tuple(f"log_theta_impact_{b}" for b in self.theta_bearings)
             if o.impact_theta_sd > 0 else ())
 
-    @property
+    @cached_property
     def sizes(self) -> tuple[int, int, int, int, int]:
         """Numbers of θ, damping, mass, gain and τ parameters."""
         o = self.nuisance
@@ -216,7 +217,7 @@ class Parametrisation:
                 self.n_channels if o.gain_sd > 0 else 0,
                 self.n_channels if o.delay_sd_s > 0 and o.bandwidth_hz is not None else 0)
 
-    @property
+    @cached_property
     def n_nuisance(self) -> int:
         return sum(self.sizes) + len(self.force_names)
 
@@ -235,7 +236,13 @@ class Parametrisation:
         return tuple(out)
 
     def _prior(self) -> tuple[np.ndarray, np.ndarray]:
-        """Means and SDs of the nuisance parameters (SD inf: no prior)."""
+        """Means and SDs of the nuisance parameters (SD inf: no prior; read-only arrays)."""
+        return self._prior_arrays
+
+    # the derived quantities below depend on the frozen fields only: computed once per
+    # instance (a fit asks for them at every residual evaluation)
+    @cached_property
+    def _prior_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         nt, nd, nm, ng, nk = self.sizes
         o = self.nuisance
         fsd = {"log_force_gain": o.force_gain_sd, "force_delay": o.force_delay_sd_s,
@@ -245,9 +252,10 @@ class Parametrisation:
         sd = np.concatenate([np.full(nt + nd, np.inf), np.full(nm, o.mass_sd),
                              np.full(ng, o.gain_sd), np.full(nk, o.delay_sd_s),
                              [fsd[n] for n in self.force_names]])
+        mu.flags.writeable = sd.flags.writeable = False
         return mu, sd
 
-    @property
+    @cached_property
     def n_prior(self) -> int:
         return int(np.sum(np.isfinite(self._prior()[1])))
 
@@ -258,6 +266,12 @@ class Parametrisation:
         return (mu[k] - np.atleast_2d(X)[:, :mu.size][:, k]) / sd[k]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of the outer parameters (fitting units; copies)."""
+        lo, hi = self._bounds
+        return lo.copy(), hi.copy()
+
+    @cached_property
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
         nt, nd, nm, ng, nk = self.sizes
         o = self.nuisance
         mu, sd = self._prior()
@@ -281,6 +295,10 @@ class Parametrisation:
 
     def scales(self) -> np.ndarray:
         """A typical magnitude per parameter (finite-difference steps are relative to it)."""
+        return self._scales.copy()
+
+    @cached_property
+    def _scales(self) -> np.ndarray:
         nt, nd, nm, ng, nk = self.sizes
         o = self.nuisance
         out = [0.05] * nt + [0.3] * nd + [o.mass_sd] * nm + [o.gain_sd] * ng

@@ -143,15 +143,21 @@ class Problem:
             inv = np.array([at.setdefault(k, len(at)) for k in keys])
             u = np.unique(inv, return_index=True)[1]
             G_all = self._unit_responses([keys[i] for i in u], u, thetas, ds, extras, mass)
-        for b, idx, off, G in zip(self.blocks, self.channel_index, self.run_offset,
-                                  G_all, strict=True):
+            # the measurement chain at every block's points at once (elementwise: the same
+            # numbers as block by block), then each block's points and channels
+            freq = np.concatenate([b.sweep.freq_rad_s for b in self.blocks])
+            ends = np.cumsum([b.sweep.freq_rad_s.size for b in self.blocks])
+            chain_all = rows.gain[:, None] / (1 + 1j * freq[None, :, None] * rows.tau[:, None])
+            force_all = rows.force_chain(freq)
+        for b, idx, off, G, e in zip(self.blocks, self.channel_index, self.run_offset,
+                                     G_all, ends if self.blocks else (), strict=True):
             G = G[inv][:, :, idx]
             if off is not None:
                 G = G + off[None]
-            w = b.sweep.freq_rad_s[None, :, None]
-            chain = rows.gain[:, None, idx] / (1 + 1j * w * rows.tau[:, None, idx])
+            pts = slice(e - b.sweep.freq_rad_s.size, e)
+            chain = chain_all[:, pts][:, :, idx]
             if b.sweep.kind == "impact":      # an FRF: response over the measured force
-                chain = chain * rows.force_chain(b.sweep.freq_rad_s)[..., None]
+                chain = chain * force_all[:, pts, None]
             out.append(G * chain[..., None])
         if self.identified is not None:
             ib = self.identified
@@ -182,8 +188,11 @@ class Problem:
         G: list[np.ndarray] = []
         if new:
             v = u[new]
+            # one array per kind, shared by its blocks: the forward model evaluates the bearing
+            # impedance once per distinct array over all its sweeps' points
+            sel = {k: t[v] for k, t in thetas.items()}
             G = self.forward.responses([b.sweep for b in self.blocks],
-                                       [thetas[b.sweep.kind][v] for b in self.blocks],
+                                       [sel[b.sweep.kind] for b in self.blocks],
                                        ds[v], [extras[i] for i in v], mass[v])
         for j in hits:
             recent.move_to_end(tags[j])
@@ -293,8 +302,11 @@ KNOWN_DOF = 10**9
 
 def _whitened(r: np.ndarray, W: np.ndarray) -> np.ndarray:
     """Whiten complex residuals ``r`` (B, X, C) with per-cell ``W`` (X, C, 2, 2) → (B, 2XC)."""
-    return _times_2x2(W, np.stack([r.real, r.imag], axis=-1)[..., None])[..., 0].reshape(
-        r.shape[0], -1)
+    re, im = r.real, r.imag                 # the sums of :func:`_times_2x2`, written out
+    out = np.empty(r.shape + (2,))
+    out[..., 0] = W[..., 0, 0] * re + W[..., 0, 1] * im
+    out[..., 1] = W[..., 1, 0] * re + W[..., 1, 1] * im
+    return out.reshape(r.shape[0], -1)
 
 
 def _times_2x2(W: np.ndarray, V: np.ndarray) -> np.ndarray:

@@ -6,7 +6,14 @@ from __future__ import annotations
 import numpy as np
 
 from surrogate_rbrdo.discrepancy.candidates import candidate
-from surrogate_rbrdo.discrepancy.impedance import bearing_dynamic_stiffness, bearing_parts
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.impedance import (
+    BearingParts,
+    bearing_dynamic_stiffness,
+    bearing_parts,
+    with_supports,
+)
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.spindle.assembly import bearing_coefficients
 from surrogate_rbrdo.spindle.effects import CrossCoupling, HousingFlexibility, ThermalPreload
 
@@ -50,3 +57,38 @@ def test_candidate_effects_are_built_once_and_equal_a_fresh_build():
     assert c.effect((), vals) == c._effect((), vals) != a
     b = c.effect(("front",), {**vals, "m_kg": 10.0 + 1e-12})
     assert b != a and b.m_kg == 10.0 + 1e-12
+
+
+def test_housing_stages_of_many_rows_at_once_equal_each_row_alone(spindle):
+    """Rows with different housing stages (and none) condensed in one batch
+    (:func:`with_supports`, what the forward model does for a linearisation's rows) give each
+    row's own :func:`bearing_dynamic_stiffness`, bit for bit."""
+    sp, g = spindle
+    names = tuple(b.name for b in g.bearings)
+    rng = np.random.default_rng(5)
+    spin = np.linspace(0.0, 2500.0, 6)
+    freq = 1.1 * spin + 30.0
+    extras = [(), EXTRA[:1], (EXTRA[0].__class__(k_N_per_m=3e8, m_kg=5.0, c_Ns_per_m=0.0,
+                                                 bearings=("front",)),), EXTRA[1:]]
+    theta = rng.uniform(0.6, 1.4, (len(extras), len(names)))
+    ds = rng.uniform(0.5, 2.0, (len(extras), len(names)))
+    parts = [bearing_parts(g, sp.effects + e, spin) for e in extras]
+    one = np.concatenate([bearing_dynamic_stiffness(g, sp.effects + e, names, spin, freq,
+                                                    theta[i:i + 1], ds[i:i + 1], parts[i])
+                          for i, e in enumerate(extras)])
+    stiff = tuple(np.concatenate([p.stiffness[j] for p in parts]) for j in range(len(names)))
+    Z = bearing_dynamic_stiffness(g, sp.effects, names, spin, freq, theta, ds,
+                                  BearingParts(stiff, (None,) * len(names)))
+    batch = with_supports(Z, freq, [p.supports for p in parts])
+    assert any(s is not None for s in parts[2].supports) and parts[2].supports[1] is None
+    np.testing.assert_array_equal(batch, one)
+    # and the forward model's identified-stiffness path, rows grouped by their effects
+    fm = ForwardModel(g, sp.effects, (Channel("tool_x", 0.0, "x"),), (0.0,))
+    sw = Sweep.unbalance(spin[1:] * 60 / (2 * np.pi))
+    rows = [extras[i % len(extras)] for i in range(7)]
+    th = rng.uniform(0.6, 1.4, (7, len(names)))
+    dd = rng.uniform(0.5, 2.0, (7, len(names)))
+    got = fm.bearing_impedance(sw, th, dd, rows)
+    for i, e in enumerate(rows):
+        np.testing.assert_array_equal(got[i], fm.bearing_impedance(sw, th[i:i + 1],
+                                                                   dd[i:i + 1], [e])[0])
