@@ -172,7 +172,8 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
         }
         # a shape held inside by holds.interior was chosen from the data: it counts as free
         rt = rival_test(problem, lin, base.chi2, r, cf.fit.chi2, cf.fit.evaluation.residuals[0],
-                        cf.fit.jac, cf.n_fitted, confound_delta, law)
+                        cf.fit.jac, cf.n_fitted, confound_delta, law,
+                        fit_design=problem.unbalance_design(cf.fit.par, cf.fit.x))
         out.append(Assessment(c.name, cf.delta_chi2, p, null.adjusted(p), cf, gain, checks,
                               rt))
     return Stage(base, null, tuple(out), lin.absorbed, gof_p, struct, struct_p, gen, gen_p,

@@ -115,25 +115,28 @@ class RivalTest:
                 "passed": self.passed, "mutual": self.mutual}
 
 
-#: relative size of a pivoted QR's diagonal below which a column of ``B`` adds no direction
+#: relative size of a pivoted QR's diagonal, on unit-norm columns, below which a column of ``B``
+#: adds no direction (it repeats the others)
 RANK_TOL = 1e-10
 
 
 def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """``Y`` with its projection on the column space of ``B`` removed (Householder QR with
-    column pivoting, rank-revealing: a column that repeats others — the nuisance's beside a
-    fit's Jacobian that holds it — adds no direction, where a plain QR would add an arbitrary
-    one made of round-off).
+    """``Y`` with its projection on the column space of ``B`` removed: Householder QR with
+    column pivoting on ``B``'s columns scaled to unit norm (the span does not depend on the
+    parameters' units, which differ by many decades), rank-revealing, so a column that repeats
+    others adds no direction made of round-off.
 
     >>> B = np.array([[1.0, 2.0], [0.0, 0.0], [0.0, 0.0]])          # rank 1
     >>> _orth(B, np.array([[1.0], [1.0], [0.0]])).ravel().tolist()
     [0.0, 1.0, 0.0]
     """
-    if B.shape[1] == 0:
+    norms = np.linalg.norm(B, axis=0) if B.size else np.zeros(0)
+    live = norms > 0
+    if not np.any(live):
         return Y
-    Q, R, _ = qr(B, mode="economic", pivoting=True)
+    Q, R, _ = qr(B[:, live] / norms[live], mode="economic", pivoting=True)
     d = np.abs(np.diag(R))
-    Q = Q[:, :int(np.count_nonzero(d > RANK_TOL * d[0]))] if d.size and d[0] > 0 else Q[:, :0]
+    Q = Q[:, :int(np.count_nonzero(d > RANK_TOL * d[0]))]
     return Y - Q @ (Q.T @ Y)
 
 
@@ -247,8 +250,8 @@ def rival_refit(problem: Problem, lin: Linearisation, r: np.ndarray,
 def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: np.ndarray,
                fit_chi2: float, fit_r: np.ndarray, fit_jac: np.ndarray, n_free: int,
                confound_delta: float,
-               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None
-               ) -> RivalTest:
+               extra: tuple[np.ndarray, tuple[str, ...], np.ndarray] | None = None,
+               fit_design: np.ndarray | None = None) -> RivalTest:
     """The encompassing test of a fitted candidate against every generic rival (module doc).
 
     Parameters
@@ -268,6 +271,12 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
         χ²₁ quantile of the confound level.
     extra : (ndarray, tuple of str, ndarray), optional
         Further rival columns (unwhitened), labels and ranges (:func:`damping_law_columns`).
+    fit_design : ndarray, optional
+        The unbalance design at the candidate's fit (unwhitened, ``Problem.unbalance_design``):
+        with ``fit_jac`` it spans what the candidate's model refits, against which the closest
+        rival's gain on top of it (``rival_adds``) is taken — the first-order gain of adding
+        the rival to the fitted candidate (score / Gauss–Newton step at that fit). Without it,
+        ``fit_jac`` alone (a problem without unbalance).
     """
     level = float(chi2.sf(confound_delta, 1))
     k = max(n_free, 1)
@@ -280,8 +289,15 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     gg = np.einsum("nk,nk->k", G, G)
     V = _orth(np.hstack([N, fit_jac]), G)
     V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
-    adds = _bounded_fit(V, fit_r, bounds)[0]                  # rival on top of the candidate
-    stat = np.where(live, (base_chi2 - gain) - (fit_chi2 - adds), np.inf)
+    both = fit_chi2 - _bounded_fit(V, fit_r, bounds)[0]                  # rival + candidate
+    stat = np.where(live, (base_chi2 - gain) - both, np.inf)
     j = int(np.argmin(stat))
+    # the converse for that rival: its gain on the candidate's residual with what the
+    # candidate's own model refits (its Jacobian, the unbalance at its fit) projected out
+    own = fit_jac if fit_design is None else np.hstack(
+        [fit_jac, _apply(_data_whitening(problem), fit_design)])
+    v = _orth(own, G[:, j:j + 1])
+    adds = (float(_bounded_fit(v, fit_r, bounds[j:j + 1])[0][0])
+            if float(v[:, 0] @ v[:, 0]) > 1e-12 * gg[j] else 0.0)
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),
-                     float(gain[j]), level, k, float(adds[j]))
+                     float(gain[j]), level, k, adds)

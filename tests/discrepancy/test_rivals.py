@@ -67,11 +67,16 @@ def test_what_the_rival_adds_to_the_candidate_is_an_independent_least_squares_ga
         d = gen[:, 1] + eps * e * np.linalg.norm(gen[:, 1])
         A = np.hstack([nuis, d[:, None]])
         r1 = _ls_residual(A, y)
-        t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
         both = _ls_residual(np.hstack([A, gen[:, 1:2]]), y)
-        assert t.rival == "g1" and not t.passed
-        assert t.rival_adds == pytest.approx(float(r1 @ r1 - both @ both), rel=1e-8, abs=1e-9)
-        assert t.mutual is mutual
+        # the candidate's model as the workflow hands it over: its outer Jacobian (here the
+        # first nuisance column and d) and the unbalance design (the second) apart
+        for jac, design in ((A, None), (A[:, [0, 2]], nuis[:, 1:])):
+            t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, jac, 1,
+                           6.63, fit_design=design)
+            assert t.rival == "g1" and not t.passed
+            assert t.rival_adds == pytest.approx(float(r1 @ r1 - both @ both), rel=1e-8,
+                                                 abs=1e-9)
+            assert t.mutual is mutual
 
 
 @pytest.mark.known_answer
@@ -232,3 +237,20 @@ def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
     assert _rival_separation(at_speed, held("thermal_preload", (), *far)) == more
     assert _rival_separation(at_speed, held("thermal_preload", (), "grounded spring at node 4",
                                             "mass of disk x")) == more
+
+
+@pytest.mark.known_answer
+def test_the_projection_does_not_depend_on_the_columns_units():
+    """A span does not change when its columns are rescaled: parameters in their own units
+    differ by many decades (a compliance's column is 1e9 times a factor's), and the rank test
+    must not read a small column as a dependent one; an exactly repeated column adds nothing
+    (its projection is that of the span without it)."""
+    rng = np.random.default_rng(0)
+    B = rng.standard_normal((50, 3))
+    Y = rng.standard_normal((50, 2))
+    want = _ls_residual(B, Y)
+    for s in (1e-12, 1e-6, 1.0, 1e6, 1e12):
+        np.testing.assert_allclose(rivals._orth(B * np.array([1.0, s, 1.0 / s]), Y), want,
+                                   atol=1e-9)
+    np.testing.assert_allclose(rivals._orth(np.hstack([B, 3.0 * B[:, 1:2]]), Y), want,
+                               atol=1e-9)
