@@ -171,12 +171,13 @@ def test_the_rival_test_counts_a_held_shape_as_fitted(monkeypatch):
     ns = SimpleNamespace
     zero = ns(residuals=np.zeros((1, 3)))
     held = CandidateFit("housing", Slot(c, (), (("m_kg", 40.0),)),
-                        ns(chi2=50.0, evaluation=zero, jac=None), 50.0, {}, {}, False, True,
+                        ns(chi2=50.0, evaluation=zero, jac=None, par=None, x=None), 50.0, {},
+                        {}, False, True,
                         held=("m_kg",))
     bound = replace(held, slot=Slot(c, ()), at_bound=True, held=())
     seen = {}
 
-    def spy(*args):
+    def spy(*args, **kwargs):
         seen["n_free"] = args[7]
         return RivalTest(0.0, 1.0, "none", 0.0)
 
@@ -193,7 +194,7 @@ def test_the_rival_test_counts_a_held_shape_as_fitted(monkeypatch):
             "interior": lambda p, b, cf, d, **k: held if cf is bound else cf}.items():
         monkeypatch.setattr(naming, name, value)
     base = ns(chi2=100.0, evaluation=zero, par=ns(names=()))
-    stage = naming.run_stage(ns(series=lambda: None), base, (c,),
+    stage = naming.run_stage(ns(series=lambda: None, unbalance_design=lambda *a: None), base, (c,),
                              ns(chi2=lambda f, p: (0.0, 0.0)), alpha=0.05, n_draws=1,
                              holdout_tolerance=10.83, rng=np.random.default_rng(0),
                              max_nfev=1, confound_delta=DELTA)
