@@ -413,6 +413,9 @@ class ForwardModel:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         ds = np.atleast_2d(np.asarray(damping_scale, dtype=float))
         extras = [()] * theta.shape[0] if extras is None else [tuple(e) for e in extras]
+        if not len(extras) == theta.shape[0] == ds.shape[0]:
+            raise ValueError(f"extras: {len(extras)} rows for theta {theta.shape} and "
+                             f"damping_scale {ds.shape}: must be one per row of both")
         groups: dict[tuple[Effect, ...], list[int]] = {}
         for i, extra in enumerate(extras):
             groups.setdefault(extra, []).append(i)

@@ -155,6 +155,10 @@ def with_supports(Z: np.ndarray, freq: np.ndarray,
     >>> out[:, 0, 0, 0, 0].real.tolist()           # 3 and 6 in series: 2; row 2 unchanged
     [2.0, 3.0]
     """
+    if len(supports) != Z.shape[0] or any(len(s) != Z.shape[2] for s in supports):
+        raise ValueError(f"supports: {[len(s) for s in supports]} for impedances of shape "
+                         f"{Z.shape}: must be {Z.shape[0]} rows of {Z.shape[2]} (one per "
+                         "bearing)")
     for j in range(Z.shape[2]):
         rows = [b for b, s in enumerate(supports) if s[j] is not None]
         if not rows:

@@ -86,7 +86,8 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
                     "alpha_residual": result.options.alpha_residual,
                     "n_draws": result.options.n_draws,
                     "confound_delta": result.options.confound_delta,
-                    "holdout_tolerance": result.options.holdout_tolerance},
+                    "holdout_tolerance": result.options.holdout_tolerance,
+                    "generic_confound": result.options.generic_confound},
         "seconds": result.seconds,
     }
     return _clean(out)

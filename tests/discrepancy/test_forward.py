@@ -12,6 +12,7 @@ from surrogate_rbrdo.discrepancy.impedance import (
     acts_on_rotor,
     condensed_dynamic_stiffness,
     condensed_dynamic_stiffness_dense,
+    with_supports,
 )
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
 from surrogate_rbrdo.spindle.assembly import RPM, build_model
@@ -139,6 +140,11 @@ def test_bad_input_names_the_field(spindle):
     fm = ForwardModel(g, sp.effects, CHANNELS[:1], (0.0,))
     with pytest.raises(ValueError, match="damping_scale"):
         fm.response(Sweep.unbalance([1000.0]), np.ones((2, 2)), np.ones((1, 2)))
+    with pytest.raises(ValueError, match="extras: 1 rows"):
+        fm.bearing_impedance(Sweep.unbalance([1000.0]), np.ones((3, 2)), np.ones((3, 2)),
+                             [()])
+    with pytest.raises(ValueError, match="supports"):
+        with_supports(np.zeros((2, 1, 2, 2, 2), dtype=complex), np.zeros(1), [(None, None)])
 
 
 @pytest.mark.known_answer
