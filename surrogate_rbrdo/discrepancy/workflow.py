@@ -313,7 +313,43 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     fm = ForwardModel(geometry, effects, data.channels, planes, theta_bearings,
                       options.nuisance.mass_disks)
     train, ho, held, base, runs = _recalibrate(fm, data, split, options)
-    cands = library(options.library, fm.bearing_names)
+    sel = _select(train, base, library(options.library, fm.bearing_names), ho, options, rng)
+    stages, named, current, withheld = list(sel.stages), sel.named, sel.current, sel.withheld
+    if not withheld:     # a withheld name decides the verdict; more draws could not change it
+        stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
+    res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), named,
+                    (sel.confounded, sel.generic), withheld, options, one_x[0].coord,
+                    time.perf_counter() - t0)
+    everything = _problem(fm, data, None, options.nuisance, runs)
+    held_pts = split.interleaved | split.extrapolated
+    gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
+          else None)
+    return replace(res, run_scatter=tuple(
+        float(v) for v in np.concatenate(list(runs[2].values())).std(axis=0, ddof=1))
+        if runs else (),
+                   curves=tuple(block_curves(everything, held_pts, base, current, gp)),
+                   dropped_blocks=dropped, seconds=time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The forward selection's outcome (:func:`_select`): its stages, the names given, a
+    confounded set (with the generic changes it holds), the group withheld at the first stage
+    (an unnamed residual) and the fit the model carries."""
+
+    stages: tuple[Stage, ...]
+    named: tuple[Assessment, ...]
+    confounded: tuple[Assessment, ...]
+    generic: tuple[str, ...]
+    withheld: tuple[Assessment, ...]
+    current: Fit
+
+
+def _select(train: Problem, base: Fit, cands, ho, options: DiscrepancyOptions,
+            rng: np.random.Generator) -> Selection:
+    """Forward selection: a stage of candidate fits on top of the current model until nothing
+    passes, a confounded set is found, a name is withheld or ``max_effects`` are named; the
+    last stage (no candidates left) holds the residual tests of the model carried."""
     current = base
     stages, named = [], []
     confounded: list[Assessment] = []
@@ -351,20 +387,8 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
             confounded = group
         else:
             named.append(group[0])
-    if not withheld:     # a withheld name decides the verdict; more draws could not change it
-        stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
-    res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), tuple(named),
-                    (tuple(confounded), generic), withheld, options, one_x[0].coord,
-                    time.perf_counter() - t0)
-    everything = _problem(fm, data, None, options.nuisance, runs)
-    held_pts = split.interleaved | split.extrapolated
-    gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
-          else None)
-    return replace(res, run_scatter=tuple(
-        float(v) for v in np.concatenate(list(runs[2].values())).std(axis=0, ddof=1))
-        if runs else (),
-                   curves=tuple(block_curves(everything, held_pts, base, current, gp)),
-                   dropped_blocks=dropped, seconds=time.perf_counter() - t0)
+    return Selection(tuple(stages), tuple(named), tuple(confounded), generic, withheld,
+                     current)
 
 
 def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator) -> Stage:
