@@ -54,6 +54,8 @@ def main() -> None:
     ap.add_argument("new")
     ap.add_argument("--repeats", type=int, default=2)
     args = ap.parse_args()
+    if args.repeats < 1:
+        ap.error(f"--repeats = {args.repeats} is not allowed: must be at least 1")
     print("load average before", os.getloadavg())
     total = {"old": 0.0, "new": 0.0}
     for name, knob, seed in SCENARIOS:

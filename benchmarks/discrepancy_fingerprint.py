@@ -13,6 +13,10 @@ seed 3, the impact plan), recalibrates the nuisance on the training speeds (the 
 χ² and Jacobian, the linearisation's columns and each short fit's parameters, χ² and Jacobian.
 ``compare`` prints the arrays that differ with their largest relative difference, or
 ``identical``. Run ``save`` once per code tree (``git archive`` of each commit) and compare.
+
+Not covered: the identified-stiffness block (the rig's data have none), the rival tests, the
+bootstrap null draws and the held-out checks — a bit-for-bit claim for those rests on the blind
+samples' ``--compare`` (every statistic of every scenario).
 """
 
 from __future__ import annotations

@@ -149,6 +149,20 @@ def with_supports(Z: np.ndarray, freq: np.ndarray,
     ``Z − Z (Z + z_h I)⁻¹ Z`` with ``z_h = k + iωc − ω²m``. All the rows' stages of a bearing
     in one batched solve (each row's arithmetic is the same as on its own).
 
+    Parameters
+    ----------
+    Z : ndarray, complex, shape (B, X, nb, 2, 2)
+        Bearing impedances per row, frequency and bearing (N/m); overwritten.
+    freq : ndarray, shape (X,)
+        Excitation frequencies (rad/s).
+    supports : sequence of sequences of Support or None
+        Per row, per bearing: the housing stage it sits on, or None.
+
+    Returns
+    -------
+    ndarray
+        ``Z`` itself, the stages condensed in.
+
     >>> from surrogate_rbrdo.spindle.effects import Support
     >>> Z = np.full((2, 1, 1, 2, 2), 0.0, dtype=complex); Z[..., 0, 0] = Z[..., 1, 1] = 3.0
     >>> out = with_supports(Z, np.zeros(1), [(Support(6.0),), (None,)])

@@ -80,6 +80,10 @@ class RivalTest:
     rival_adds : float
         The reverse direction, ``χ²(candidate) − χ²(rival + candidate)`` for the same rival:
         what that rival adds to the fitted candidate (``inf``: not computed).
+    rival_one_sided : bool
+        The rival's range ends at 0 (a sign: a passive spring): under the null its bounded
+        gain is ``½χ²₀ + ½χ²₁`` (Self & Liang 1987), so its quantile at the level is χ²₁'s
+        at twice the level.
     """
 
     statistic: float
@@ -89,6 +93,7 @@ class RivalTest:
     level: float = 0.01
     n_free: int = 1
     rival_adds: float = math.inf
+    rival_one_sided: bool = False
 
     @property
     def p_value(self) -> float:
@@ -104,9 +109,11 @@ class RivalTest:
         """Neither explains the data better: the candidate adds nothing significant to its
         closest rival (not :attr:`passed`) and that rival, a one-parameter change, adds
         nothing significant to the candidate (``rival_adds`` within the χ²₁ quantile of the
-        level) — the non-nested pair the data cannot discriminate (Davidson & MacKinnon 1981:
-        neither model is rejected against the other)."""
-        return not self.passed and self.rival_adds <= float(chi2.isf(self.level, 1))
+        level, at twice the level for a one-sided rival) — the non-nested pair the data cannot
+        discriminate (Davidson & MacKinnon 1981: neither model is rejected against the
+        other)."""
+        tail = 2 * self.level if self.rival_one_sided else self.level
+        return not self.passed and self.rival_adds <= float(chi2.isf(tail, 1))
 
     def to_dict(self) -> dict:
         return {"statistic": self.statistic, "threshold": self.threshold,
@@ -300,4 +307,4 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     adds = (float(_bounded_fit(v, fit_r, bounds[j:j + 1])[0][0])
             if float(v[:, 0] @ v[:, 0]) > 1e-12 * gg[j] else 0.0)
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),
-                     float(gain[j]), level, k, adds)
+                     float(gain[j]), level, k, adds, bool(0.0 in bounds[j]))

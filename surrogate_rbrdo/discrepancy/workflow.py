@@ -318,7 +318,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     if not withheld:     # a withheld name decides the verdict; more draws could not change it
         stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
     res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), named,
-                    (sel.confounded, sel.generic), withheld, options, one_x[0].coord,
+                    sel.confounded, sel.generic, withheld, options, one_x[0].coord,
                     time.perf_counter() - t0)
     everything = _problem(fm, data, None, options.nuisance, runs)
     held_pts = split.interleaved | split.extrapolated
@@ -402,10 +402,9 @@ def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator
     return replace(st, gof_p=ps["gof"], structure_p=ps["structure"], generic_p=ps["generic"])
 
 
-def _conclude(data, train, holdout, split, base, final, stages, named, confounded, withheld,
-              options, speeds, seconds) -> DiscrepancyResult:
+def _conclude(data, train, holdout, split, base, final, stages, named, confounded, generic,
+              withheld, options, speeds, seconds) -> DiscrepancyResult:
     held, ho = holdout
-    confounded, generic = confounded
     parts = {"interleaved": ho.interleaved, "extrapolated": ho.extrapolated}
     last = stages[-1]
     level = options.alpha_residual / 3
@@ -432,8 +431,10 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
             test = {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
                     "kind": "detected, not separable from a generic local change "
                             f"(encompassing test; closest: {rt.rival})",
-                    # both ways: does the rival add to the library fit (no: explained alike)
-                    "rival_adds": rt.rival_adds, "mutual": rt.mutual}
+                    # both ways, for the member the model would carry (the policy's):
+                    # does its rival add to its fit (no: explained alike)
+                    "rival_adds": withheld[0].rival.rival_adds,
+                    "mutual": withheld[0].rival.mutual}
         effects, conf, generic = (), (), ()
     else:
         after = held_out_gap(train, held, parts, final)

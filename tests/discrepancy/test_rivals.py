@@ -254,3 +254,18 @@ def test_the_projection_does_not_depend_on_the_columns_units():
                                    atol=1e-9)
     np.testing.assert_allclose(rivals._orth(np.hstack([B, 3.0 * B[:, 1:2]]), Y), want,
                                atol=1e-9)
+
+
+@pytest.mark.known_answer
+def test_a_one_sided_rival_is_mutual_only_below_its_mixture_quantile():
+    """Under the null a rival bounded at 0 (a passive spring) gains ``½χ²₀ + ½χ²₁``
+    (Self & Liang 1987): its quantile at level 0.01 is χ²₁'s at 0.02 (5.41), below the
+    two-sided 6.63. A rival adding 6.0 is mutual with a two-sided range, not with a sign."""
+    level = 0.01
+    # P(½χ²₀ + ½χ²₁ > q) = ½ P(Z² > q) = P(Z > √q) = 0.01: q = z_0.99², z_0.99 = 2.32634787...
+    q = 2.3263478740408408 ** 2
+    for one_sided, mutual in ((False, True), (True, False)):
+        t = RivalTest(0.5, 6.63, "spring", 10.0, level, 1, 6.0, one_sided)
+        assert t.mutual is mutual
+    assert RivalTest(0.5, 6.63, "spring", 10.0, level, 1, q - 1e-9, True).mutual
+    assert not RivalTest(0.5, 6.63, "spring", 10.0, level, 1, q + 1e-9, True).mutual
