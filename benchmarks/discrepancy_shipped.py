@@ -70,10 +70,12 @@ def main() -> None:
     res = done["analyse"] = phase("analysis", lambda: kind.analyse(p, done, ctx))
     phase("tables", lambda: write_run(res, out, spindle_section=p.spindle_section,
                                       model_effects=p.spindle.effects))
-    figs = phase("figures", lambda: plot_all(res, _mkdir(out / "figures")))
+    figs = phase("figures", lambda: plot_all(res, _mkdir(out / "figures"),
+                                             n_jobs=p.options.n_jobs))
     wall = time.perf_counter() - w_all
     print(verdict_line(res))
-    print(f"{len(figs)} figures; discrepancy n_jobs = {p.options.n_jobs}")
+    print(f"{len(figs)} figures; discrepancy n_jobs = {p.options.n_jobs} (the figures' too), "
+          f"rig n_jobs = {p.rig.rig.n_jobs if p.rig is not None else '-'}")
     print(f"{'phase':<10} {'CPU s':>8} {'wall s':>8}")
     for name, cpu, w in rows:
         print(f"{name:<10} {cpu:8.2f} {w:8.2f}")
