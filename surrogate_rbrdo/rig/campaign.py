@@ -216,11 +216,13 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     for b in range(options.builds):
         for tl in range(options.tools_per_build):
             st0 = truth.state(root_ss, build=b, tool=tl, run=0)
-            check_stable(st0.model(), st0.theta, stability_speeds(options))
             red = _precheck(st0, options)
             plans = [_run_plan(options, done, b, tl, r) for r in range(options.repeats)]
-            for r, made_run in enumerate(_steady_runs(
-                    (truth, options, inst, root_ss, red, b, tl), plans, n_jobs)):
+            # on workers the runs start now, while this process checks the truth's stability
+            # (nothing is written before it passes; one process makes them after it)
+            runs = _steady_runs((truth, options, inst, root_ss, red, b, tl), plans, n_jobs)
+            check_stable(st0.model(), st0.theta, stability_speeds(options))
+            for r, made_run in enumerate(runs):
                 for trial, ids, new in made_run:
                     for i, rid in enumerate(ids):
                         if rid in new:
