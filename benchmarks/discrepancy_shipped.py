@@ -9,7 +9,8 @@ workers'), and the machine's load average (other jobs inflate the wall times, no
         [--config experiments/discrepancy.toml] [--n-jobs N]
 
 ``--n-jobs`` replaces ``[discrepancy] n_jobs`` (the config's by default): the worker processes
-of the candidate fits. The run folder under
+of the candidate fits and the figures (``[rig] n_jobs``, the steady runs', stays the config's).
+The run folder under
 ``--out`` holds what the runner writes (campaign/, findings.json, tables, figures/), so
 ``diff`` against a ``rbrdo run`` folder checks the answers. No timed asserts: it prints.
 """
