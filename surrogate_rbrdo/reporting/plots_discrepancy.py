@@ -148,18 +148,48 @@ class _Curves:
     curves: tuple
 
 
+@dataclass(frozen=True)
+class _Bar:
+    """What :func:`plot_candidates` reads of an assessment."""
+
+    name: str
+    delta_chi2: float
+    passed: bool
+
+
+@dataclass(frozen=True)
+class _StageBars:
+    """What :func:`plot_candidates` reads of a stage."""
+
+    assessments: tuple[_Bar, ...]
+
+
+@dataclass(frozen=True)
+class _Ranking:
+    """What :func:`plot_candidates` reads of a result (sent to a worker instead of it)."""
+
+    stages: tuple[_StageBars, ...]
+
+    @classmethod
+    def of(cls, result) -> _Ranking:
+        return cls(tuple(_StageBars(tuple(_Bar(a.name, float(a.delta_chi2), bool(a.passed))
+                                          for a in st.assessments))
+                         for st in result.stages))
+
+
 def plot_all(result, out_dir: str | Path, *, n_jobs: int = 1) -> dict[str, Path]:
     """Every figure into ``out_dir``: ``residual_map.png``, ``candidates.png`` and
     ``gap_<block>.png`` per observable block (one column per channel). With ``n_jobs > 1``
-    the residual map and the gap figures are drawn on that many joblib (loky) worker
+    every figure is drawn on that many joblib (loky) worker
     processes — the ones the analysis used, when they are still up — largest first (a
     figure's cost grows with its channels and points); every figure is drawn by the same
     code from the same data either way, so the files are the same."""
     check_int("n_jobs", n_jobs, minimum=1)
     out = Path(out_dir)
-    paths = {"candidates": plot_candidates(result, out / "candidates.png")}
+    paths = {}
     jobs = [("residual_map", plot_residual_map, _Curves(result.verdict, tuple(result.curves)),
-             out / "residual_map.png", sum(c.data.size for c in result.curves))]
+             out / "residual_map.png", sum(c.data.size for c in result.curves)),
+            ("candidates", plot_candidates, _Ranking.of(result), out / "candidates.png", 0)]
     jobs += [(f"gap_{c.name}", plot_gap, c, out / f"gap_{c.name}.png", c.data.size)
              for c in result.curves]
     jobs.sort(key=lambda j: -j[4])                  # longest first (LPT)
