@@ -9,7 +9,8 @@ workers'), and the machine's load average (other jobs inflate the wall times, no
         [--config experiments/discrepancy.toml] [--n-jobs N]
 
 ``--n-jobs`` replaces ``[discrepancy] n_jobs`` (the config's by default): the worker processes
-of the candidate fits. The run folder under
+of the candidate fits and the figures (``[rig] n_jobs``, the steady runs', stays the config's).
+The run folder under
 ``--out`` holds what the runner writes (campaign/, findings.json, tables, figures/), so
 ``diff`` against a ``rbrdo run`` folder checks the answers. No timed asserts: it prints.
 """
@@ -70,10 +71,12 @@ def main() -> None:
     res = done["analyse"] = phase("analysis", lambda: kind.analyse(p, done, ctx))
     phase("tables", lambda: write_run(res, out, spindle_section=p.spindle_section,
                                       model_effects=p.spindle.effects))
-    figs = phase("figures", lambda: plot_all(res, _mkdir(out / "figures")))
+    figs = phase("figures", lambda: plot_all(res, _mkdir(out / "figures"),
+                                             n_jobs=p.options.n_jobs))
     wall = time.perf_counter() - w_all
     print(verdict_line(res))
-    print(f"{len(figs)} figures; discrepancy n_jobs = {p.options.n_jobs}")
+    print(f"{len(figs)} figures; discrepancy n_jobs = {p.options.n_jobs} (the figures' too), "
+          f"rig n_jobs = {p.rig.rig.n_jobs if p.rig is not None else '-'}")
     print(f"{'phase':<10} {'CPU s':>8} {'wall s':>8}")
     for name, cpu, w in rows:
         print(f"{name:<10} {cpu:8.2f} {w:8.2f}")

@@ -3,11 +3,14 @@ ranking, and the gap before and after, one figure per observable."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from joblib import Parallel, delayed
 
+from surrogate_rbrdo.core.validate import check_int
 from surrogate_rbrdo.discrepancy.plan import DiscrepancyPlan
 from surrogate_rbrdo.discrepancy.report import write_run
 
@@ -136,15 +139,68 @@ def plot_gap(block, path: str | Path) -> Path:
     return Path(path)
 
 
-def plot_all(result, out_dir: str | Path) -> dict[str, Path]:
+@dataclass(frozen=True)
+class _Curves:
+    """What :func:`plot_residual_map` reads of a result (sent to a worker instead of the
+    whole result with its fits)."""
+
+    verdict: str
+    curves: tuple
+
+
+@dataclass(frozen=True)
+class _Bar:
+    """What :func:`plot_candidates` reads of an assessment."""
+
+    name: str
+    delta_chi2: float
+    passed: bool
+
+
+@dataclass(frozen=True)
+class _StageBars:
+    """What :func:`plot_candidates` reads of a stage."""
+
+    assessments: tuple[_Bar, ...]
+
+
+@dataclass(frozen=True)
+class _Ranking:
+    """What :func:`plot_candidates` reads of a result (sent to a worker instead of it)."""
+
+    stages: tuple[_StageBars, ...]
+
+    @classmethod
+    def of(cls, result) -> _Ranking:
+        return cls(tuple(_StageBars(tuple(_Bar(a.name, float(a.delta_chi2), bool(a.passed))
+                                          for a in st.assessments))
+                         for st in result.stages))
+
+
+def plot_all(result, out_dir: str | Path, *, n_jobs: int = 1) -> dict[str, Path]:
     """Every figure into ``out_dir``: ``residual_map.png``, ``candidates.png`` and
-    ``gap_<block>.png`` per observable block (one column per channel)."""
+    ``gap_<block>.png`` per observable block (one column per channel). With ``n_jobs > 1``
+    every figure is drawn on that many joblib (loky) worker
+    processes — the ones the analysis used, when they are still up — largest first (a
+    figure's cost grows with its channels and points); every figure is drawn by the same
+    code from the same data either way, so the files are the same."""
+    check_int("n_jobs", n_jobs, minimum=1)
     out = Path(out_dir)
-    paths = {"residual_map": plot_residual_map(result, out / "residual_map.png"),
-             "candidates": plot_candidates(result, out / "candidates.png")}
-    for c in result.curves:
-        paths[f"gap_{c.name}"] = plot_gap(c, out / f"gap_{c.name}.png")
-    return paths
+    paths = {}
+    jobs = [("residual_map", plot_residual_map, _Curves(result.verdict, tuple(result.curves)),
+             out / "residual_map.png", sum(c.data.size for c in result.curves)),
+            ("candidates", plot_candidates, _Ranking.of(result), out / "candidates.png", 0)]
+    jobs += [(f"gap_{c.name}", plot_gap, c, out / f"gap_{c.name}.png", c.data.size)
+             for c in result.curves]
+    jobs.sort(key=lambda j: -j[4])                  # longest first (LPT)
+    if n_jobs == 1 or len(jobs) < 2:
+        made = [func(arg, path) for _, func, arg, path, _ in jobs]
+    else:
+        made = Parallel(n_jobs=min(n_jobs, len(jobs)))(
+            delayed(func)(arg, path) for _, func, arg, path, _ in jobs)
+    order = ["residual_map", "candidates"] + [f"gap_{c.name}" for c in result.curves]
+    paths.update((j[0], m) for j, m in zip(jobs, made, strict=True))
+    return {k: paths[k] for k in order}
 
 
 def verdict_line(res: Any) -> str:
@@ -168,7 +224,7 @@ def write_discrepancy_run(out_dir: str | Path, p: DiscrepancyPlan, res: Any, dat
     out = Path(out_dir)
     write_run(res, out, spindle_section=p.spindle_section, model_effects=p.spindle.effects)
     (out / "figures").mkdir(exist_ok=True)
-    figs = plot_all(res, out / "figures")
+    figs = plot_all(res, out / "figures", n_jobs=p.options.n_jobs)
     src = data
     named = [{"effect": e.name, **{k: float(f"{v:.6g}") for k, v in e.fit.parameters.items()
                                    if isinstance(v, float) and np.isfinite(v)}}

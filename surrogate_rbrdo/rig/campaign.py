@@ -188,9 +188,11 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                  n_jobs: int = 1) -> CampaignResult:
     """Simulate the campaign into ``out_dir/dataset`` (resumable) and write ``phasors.csv`` and
     ``summary.json`` into ``out_dir``. ``n_jobs`` worker processes (joblib) simulate the
-    ramps, each from its own seeded stream: the files do not depend on it. The impact records
-    are made here: the hits of one speed and direction share one simulation
-    (:class:`~.simulate.ImpactResponse`, the model is linear in the hit's peak force)."""
+    steady records (a run at a time, with its stability check and 1x phasors, while this
+    process writes the runs made) and the ramps; every record draws from its own seeded
+    stream, so the files do not depend on it. The impact records are made here: the hits of
+    one speed and direction share one simulation (:class:`~.simulate.ImpactResponse`, the
+    model is linear in the hit's peak force)."""
     require_rng(rng)
     check_int("n_jobs", n_jobs, minimum=1)
     check_record_lengths(options.duration_s, options.speeds_rpm,
@@ -214,26 +216,26 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     for b in range(options.builds):
         for tl in range(options.tools_per_build):
             st0 = truth.state(root_ss, build=b, tool=tl, run=0)
-            check_stable(st0.model(), st0.theta, stability_speeds(options))
             red = _precheck(st0, options)
-            for r in range(options.repeats):
-                st = truth.state(root_ss, build=b, tool=tl, run=r)
-                _check_run(st, options, red, b, tl, r)
-                for trial in (False, True) if options.trial_unbalance else (False,):
-                    ids = [f"b{b}_t{tl}_r{r:02d}_s{i:02d}" + ("_trial" if trial else "")
-                           for i in range(len(options.speeds_rpm))]
-                    todo = [i for i, rid in enumerate(ids) if rid not in done]
-                    new = _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r,
-                                  trial) if todo else {}
+            plans = [_run_plan(options, done, b, tl, r) for r in range(options.repeats)]
+            # on workers the runs start now, while this process checks the truth's stability
+            # (nothing is written before it passes; one process makes them after it)
+            runs = _steady_runs((truth, options, inst, root_ss, red, b, tl), plans, n_jobs)
+            check_stable(st0.model(), st0.theta, stability_speeds(options))
+            for r, made_run in enumerate(runs):
+                for trial, ids, new in made_run:
                     for i, rid in enumerate(ids):
-                        rec = new.get(rid) or read_record(writer.root / f"records/{rid}.npz")
                         if rid in new:
+                            rec, rec_rows = new[rid]
                             labels = {"build": b, "tool": tl, "run": r, "repeat": r,
                                       "speed_index": i}
                             writer.write(rec, labels={**labels, "trial": 1} if trial
                                          else labels)
                             written += 1
-                        rows += _phasor_rows(rec, b, tl, r)
+                        else:
+                            rec_rows = _phasor_rows(
+                                read_record(writer.root / f"records/{rid}.npz"), b, tl, r)
+                        rows += rec_rows
                         count += 1
                         if progress:
                             progress(count, total, rid)
@@ -363,6 +365,48 @@ def _provenance(truth, st, inst, root_ss, b, tl, r) -> dict[str, Any]:
             "truth_draws": st.draws, "theta": st.theta[0].tolist(),
             "sensor_installation": inst.to_dict(), "seed_entropy": str(root_ss.entropy),
             "seed_spawn_key": list(root_ss.spawn_key)}
+
+
+def _run_plan(options: CampaignOptions, done: set[str], b: int, tl: int, r: int
+              ) -> tuple[int, tuple[tuple[bool, tuple[str, ...], tuple[int, ...]], ...]]:
+    """Run ``r`` of build ``b``, tool ``tl``: ``(r, ((trial, ids, todo), ...))``, the ids of
+    its steady records without and (with a trial mass) with the trial mass, and the indices
+    of those not written yet."""
+    out = []
+    for trial in (False, True) if options.trial_unbalance else (False,):
+        ids = tuple(f"b{b}_t{tl}_r{r:02d}_s{i:02d}" + ("_trial" if trial else "")
+                    for i in range(len(options.speeds_rpm)))
+        out.append((trial, ids, tuple(i for i, rid in enumerate(ids) if rid not in done)))
+    return r, tuple(out)
+
+
+def _steady_run(common: tuple, plan: tuple) -> list[tuple[bool, tuple[str, ...], dict]]:
+    """One run's steady records not written yet, each with its 1x phasor rows: the run's
+    truth state, its stability check (:func:`_check_run`) and the records of every speed
+    (``common``: truth, options, installation, root seed, reduction, build, tool)."""
+    truth, options, inst, root_ss, red, b, tl = common
+    r, parts = plan
+    st = truth.state(root_ss, build=b, tool=tl, run=r)
+    _check_run(st, options, red, b, tl, r)
+    out = []
+    for trial, ids, todo in parts:
+        new = _steady(truth, st, options, inst, root_ss, list(ids), list(todo), b, tl, r,
+                      trial) if todo else {}
+        out.append((trial, ids, {rid: (rec, _phasor_rows(rec, b, tl, r))
+                                 for rid, rec in new.items()}))
+    return out
+
+
+def _steady_runs(common: tuple, plans: list[tuple], n_jobs: int):
+    """:func:`_steady_run` of every run, in order: here, one run at a time, or on ``n_jobs``
+    joblib worker processes (loky) a few runs at a time (``pre_dispatch``: bounded memory)
+    while this process writes the runs already made. Every record draws from its own seeded
+    stream (:func:`_steady`), so the records are the same either way."""
+    if n_jobs == 1 or len(plans) < 2:
+        return (_steady_run(common, p) for p in plans)
+    return iter(Parallel(n_jobs=min(n_jobs, len(plans)), return_as="generator",
+                         pre_dispatch="2 * n_jobs")(
+        delayed(_steady_run)(common, p) for p in plans))
 
 
 def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False

@@ -86,9 +86,9 @@ class RigTruthTable:
 @dataclass(frozen=True)
 class RigTable(RigTruthTable):
     """A rig campaign's ``[rig]``: the truth, its ``design``, the ``campaign`` (its sensors
-    are ``[rig.sensors]``), ``figures`` and ``n_jobs``: worker processes for the ramps
-    (``rig.campaign.run_campaign``; the records are the same for any value; the impact records
-    share one simulation per speed and direction, made in the main process)."""
+    are ``[rig.sensors]``), ``figures`` and ``n_jobs``: worker processes for the steady runs
+    and the ramps (``rig.campaign.run_campaign``; the records are the same for any value; the
+    impact records share one simulation per speed and direction, made in the main process)."""
 
     design: tuple[float, float, float] | None = None
     campaign: CampaignOptions = field(default_factory=CampaignOptions)

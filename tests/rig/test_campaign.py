@@ -143,15 +143,15 @@ def test_report_with_bearing_probes_only(tmp_path):
 
 
 def test_worker_processes_write_the_same_files(tmp_path):
-    """``n_jobs = 2`` simulates the ramps on joblib workers (the hits share one simulation per
-    speed and direction, here): every record file and the 1x table are byte for byte those of
-    one process (each record has its own stream)."""
+    """``n_jobs = 2`` simulates the steady runs and the ramps on joblib workers (the hits share
+    one simulation per speed and direction, here): every record file, the index and the 1x
+    table are byte for byte those of one process (each record has its own stream)."""
     truth = reference_truth(hidden=[{"name": "housing", "k_N_per_m": 6e8, "m_kg": 20.0}])
     for name, jobs in (("one", 1), ("two", 2)):
         run_campaign(truth, OPTS, tmp_path / name, rng=np.random.default_rng(4), n_jobs=jobs)
     files = sorted(p.relative_to(tmp_path / "one")
-                   for p in (tmp_path / "one").rglob("*") if p.suffix in (".npz", ".csv"))
-    assert len(files) == 6 + 2 + 2 + 1
+                   for p in (tmp_path / "one").rglob("*") if p.suffix in (".npz", ".csv", ".jsonl"))
+    assert len(files) == 6 + 2 + 2 + 1 + 1
     for f in files:
         assert (tmp_path / "one" / f).read_bytes() == (tmp_path / "two" / f).read_bytes(), f
     with pytest.raises(ValueError, match="n_jobs = 0 is not allowed"):

@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from surrogate_rbrdo.core.workers import preload
 from surrogate_rbrdo.discrepancy.experiment import data_from_folder
 from surrogate_rbrdo.discrepancy.plan import DiscrepancyConfig, DiscrepancyPlan, build_discrepancy
 from surrogate_rbrdo.discrepancy.workflow import find_discrepancy
@@ -32,10 +33,19 @@ def _campaign(p: DiscrepancyPlan, done: Mapping[str, Any], ctx: StageContext
     return p.folder if p.rig is None else rig_kind.campaign(p.rig, done, ctx)
 
 
+#: what the workers of the candidate fits and the figures import (:func:`analyse`)
+WORKER_MODULES = ("surrogate_rbrdo.discrepancy.naming",
+                  "surrogate_rbrdo.reporting.plots_discrepancy", "matplotlib.pyplot")
+
+
 def analyse(p: DiscrepancyPlan, done: Mapping[str, Any], ctx: StageContext) -> Any:
     src = done["campaign"]
+    # the workers import the fits' and figures' modules while this process reads the data
+    ready = preload(WORKER_MODULES, p.options.n_jobs)
     data = data_from_folder(src if isinstance(src, Path) else src.root,
                             impacts=p.options.use_impacts)
+    for _ in ready:
+        pass
     sp = p.spindle
     with ctx.bar("discrepancy: recalibrate, fit the candidates, test", "step") as progress:
         progress(0, 1, f"{len(p.options.library)} candidates")
