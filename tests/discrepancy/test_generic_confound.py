@@ -19,6 +19,7 @@ from surrogate_rbrdo.discrepancy.workflow import (
     DiscrepancyOptions,
     find_discrepancy,
 )
+from surrogate_rbrdo.reporting.plots_discrepancy import verdict_line
 
 #: the blind grid's strong thermal preload at default noise (z = 12 with the impact plan: a
 #: 1 % preload growth at 24 000 rpm) and a seed where the spring explains it alike
@@ -55,5 +56,6 @@ def test_a_preload_growth_a_spring_mimics_is_unnamed_or_confounded_by_policy():
     rt = c.residual_test
     assert min(rt["gof_p"], rt["structure_p"], rt["generic_p"]) > rt["threshold"]
     assert c.test["generic_rival"]["mutual"] is True
+    assert "thermal_preload" in verdict_line(c) and "(grounded spring" in verdict_line(c)
     # the model carries the best member: the held-out gap shrinks
     assert c.gap_after.chi2_dof < c.gap_before.chi2_dof
