@@ -454,7 +454,10 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
             test["generic_rival"] = lead.rival.to_dict()    # the encompassing test, both ways
     separating = "; ".join(t for t in (
         separating_test(list(conf)) if len(conf) > 1 else "",
-        _rival_separation(data, withheld or confounded) if withheld or generic else "") if t)
+        # a confounded set with a generic change: the experiment for the member carried (whose
+        # rival the set holds); a withheld group: for its best-separated member
+        _rival_separation(data, withheld or confounded[:1]) if withheld or generic else "")
+        if t)
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
         np.asarray(speeds), partial, separating, seconds, options,
