@@ -11,7 +11,12 @@ the same number of jobs). Nothing computed depends on it.
 from __future__ import annotations
 
 import importlib
+import os
+import shutil
+import tempfile
+import time
 from collections.abc import Iterator
+from pathlib import Path
 
 from joblib import Parallel, delayed
 
@@ -19,9 +24,13 @@ from surrogate_rbrdo.core.validate import check_int
 
 
 def preload(modules: tuple[str, ...], n_jobs: int) -> Iterator[tuple[str, ...]]:
-    """Start importing ``modules`` on each of ``n_jobs`` joblib workers (one task per worker:
-    with idle workers each takes one); returns the tasks' results to drain, in order (empty
-    for ``n_jobs = 1``: nothing to prepare).
+    """Start importing ``modules`` on each of ``n_jobs`` joblib workers; returns the tasks'
+    results to drain, in order (empty for ``n_jobs = 1``: nothing to prepare).
+
+    One task per worker: each task, once its imports are done, waits until ``n_jobs``
+    distinct processes have checked in (a file per process in a scratch folder, at most
+    :data:`RENDEZVOUS_S`), so a worker that starts first cannot take a second task while
+    another is still starting — loky gives a task to any idle worker.
 
     >>> list(preload(("json",), 1))
     []
@@ -29,11 +38,28 @@ def preload(modules: tuple[str, ...], n_jobs: int) -> Iterator[tuple[str, ...]]:
     check_int("n_jobs", n_jobs, minimum=1)
     if n_jobs == 1 or not modules:
         return iter(())
-    return Parallel(n_jobs=n_jobs, return_as="generator")(
-        delayed(_import)(tuple(modules)) for _ in range(n_jobs))
+    return _drained(tuple(modules), n_jobs)
 
 
-def _import(modules: tuple[str, ...]) -> tuple[str, ...]:
+#: longest a preloading task waits for the other workers to check in (s)
+RENDEZVOUS_S = 10.0
+
+
+def _drained(modules: tuple[str, ...], n_jobs: int) -> Iterator[tuple[str, ...]]:
+    """The preload tasks' results, the scratch folder removed once they are drained."""
+    folder = tempfile.mkdtemp(prefix="rbrdo-preload-")
+    try:
+        yield from Parallel(n_jobs=n_jobs, return_as="generator")(
+            delayed(_import)(modules, folder, n_jobs) for _ in range(n_jobs))
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _import(modules: tuple[str, ...], folder: str, n_jobs: int) -> tuple[str, ...]:
     for m in modules:
         importlib.import_module(m)
+    Path(folder, str(os.getpid())).touch()
+    end = time.monotonic() + RENDEZVOUS_S
+    while len(os.listdir(folder)) < n_jobs and time.monotonic() < end:
+        time.sleep(0.01)
     return modules

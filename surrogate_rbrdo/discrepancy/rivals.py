@@ -119,7 +119,8 @@ class RivalTest:
         return {"statistic": self.statistic, "threshold": self.threshold,
                 "p_value": self.p_value, "level": self.level, "rival": self.rival,
                 "rival_delta_chi2": self.rival_delta_chi2, "rival_adds": self.rival_adds,
-                "passed": self.passed, "mutual": self.mutual}
+                "rival_one_sided": self.rival_one_sided, "passed": self.passed,
+                "mutual": self.mutual}
 
 
 #: relative size of a pivoted QR's diagonal, on unit-norm columns, below which a column of ``B``
