@@ -22,7 +22,7 @@ import csv
 import dataclasses
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -404,9 +404,31 @@ def _steady_runs(common: tuple, plans: list[tuple], n_jobs: int):
     stream (:func:`_steady`), so the records are the same either way."""
     if n_jobs == 1 or len(plans) < 2:
         return (_steady_run(common, p) for p in plans)
-    return iter(Parallel(n_jobs=min(n_jobs, len(plans)), return_as="generator",
-                         pre_dispatch="2 * n_jobs")(
-        delayed(_steady_run)(common, p) for p in plans))
+    return _raising(Parallel(n_jobs=min(n_jobs, len(plans)), return_as="generator",
+                             pre_dispatch="2 * n_jobs")(
+        delayed(_run_or_error)(common, p) for p in plans))
+
+
+def _run_or_error(common: tuple, plan: tuple):
+    """:func:`_steady_run` on a worker, its ``ModelError`` (an unstable run) returned rather
+    than raised: a raise would abort the runs before it that are made but not yet written."""
+    try:
+        return _steady_run(common, plan)
+    except ModelError as exc:
+        return exc
+
+
+def _raising(results: Iterable):
+    """The runs' results in order, the first failed one raised where it comes — after every
+    run before it has been handed on (written), and naming that run, as one process would.
+
+    >>> list(_raising([1, 2]))
+    [1, 2]
+    """
+    for res in results:
+        if isinstance(res, ModelError):
+            raise res
+        yield res
 
 
 def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False

@@ -156,3 +156,17 @@ def test_worker_processes_write_the_same_files(tmp_path):
         assert (tmp_path / "one" / f).read_bytes() == (tmp_path / "two" / f).read_bytes(), f
     with pytest.raises(ValueError, match="n_jobs = 0 is not allowed"):
         run_campaign(truth, OPTS, tmp_path / "bad", rng=np.random.default_rng(4), n_jobs=0)
+
+
+def test_runs_made_on_workers_fail_in_order_after_the_ones_before_are_handed_on():
+    """With ``[rig] n_jobs > 1`` a worker returns its unstable run's ``ModelError``: the main
+    process hands on (writes) every run before it, then raises that run's error — not a later
+    failing run's, and not before the earlier runs, as one process would."""
+    from surrogate_rbrdo.core.errors import ModelError
+    from surrogate_rbrdo.rig.campaign import _raising
+
+    got = []
+    with pytest.raises(ModelError, match="run 2"):
+        for res in _raising(iter([0, 1, ModelError("run 2"), ModelError("run 3"), 4])):
+            got.append(res)
+    assert got == [0, 1]
