@@ -43,14 +43,27 @@ def preload(modules: tuple[str, ...], n_jobs: int) -> Iterator[tuple[str, ...]]:
 
 #: longest a preloading task waits for the other workers to check in (s)
 RENDEZVOUS_S = 10.0
+#: the scratch folders' name prefix (in the system's temporary folder)
+FOLDER_PREFIX = "rbrdo-preload-"
 
 
 def _drained(modules: tuple[str, ...], n_jobs: int) -> Iterator[tuple[str, ...]]:
-    """The preload tasks' results, the scratch folder removed once they are drained."""
-    folder = tempfile.mkdtemp(prefix="rbrdo-preload-")
+    """The preload tasks, dispatched now (``joblib.Parallel`` dispatches when called; a
+    generator function would not call it before the first result is asked for), and their
+    results to drain, the scratch folder removed once they are drained."""
+    folder = tempfile.mkdtemp(prefix=FOLDER_PREFIX)
     try:
-        yield from Parallel(n_jobs=n_jobs, return_as="generator")(
+        results = Parallel(n_jobs=n_jobs, return_as="generator")(
             delayed(_import)(modules, folder, n_jobs) for _ in range(n_jobs))
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return _removing(results, folder)
+
+
+def _removing(results: Iterator, folder: str) -> Iterator:
+    try:
+        yield from results
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
