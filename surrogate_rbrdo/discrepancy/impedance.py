@@ -36,16 +36,18 @@ BEARING_HOOKS = frozenset({"preload", "bearing", "support", "unbalance"})
 _NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off"})
 
 
-def acts_on_rotor(effect: Effect) -> bool:
-    """Whether ``effect`` overrides a hook other than the bearing-level ones (then the rotor
-    must be reassembled with it; otherwise the base rotor is reused). A property of the
-    effect's class, so it is looked up once per class.
+def acts_on_rotor(effect: Effect | type[Effect]) -> bool:
+    """Whether ``effect`` (an effect or its class) overrides a hook other than the
+    bearing-level ones (then the rotor must be reassembled with it; otherwise the base rotor
+    is reused). A property of the effect's class, so it is looked up once per class.
 
     >>> from surrogate_rbrdo.spindle.effects import Gyroscopics, SpeedSoftening
     >>> acts_on_rotor(SpeedSoftening(a=0.1)), acts_on_rotor(Gyroscopics(g=0.1))
     (False, True)
+    >>> acts_on_rotor(Gyroscopics)
+    True
     """
-    return _class_acts_on_rotor(type(effect))
+    return _class_acts_on_rotor(effect if isinstance(effect, type) else type(effect))
 
 
 @cache

@@ -45,7 +45,7 @@ from surrogate_rbrdo.discrepancy.candidates import Candidate
 from surrogate_rbrdo.discrepancy.fit import Fit
 from surrogate_rbrdo.discrepancy.holdout import predictive_chi2
 from surrogate_rbrdo.discrepancy.holds import interior
-from surrogate_rbrdo.discrepancy.impedance import _class_acts_on_rotor  # by class: no effect built
+from surrogate_rbrdo.discrepancy.impedance import acts_on_rotor
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.rivals import RivalTest, damping_law_columns, rival_test
 from surrogate_rbrdo.discrepancy.search import CandidateFit, fit_candidate, warm_base
@@ -244,7 +244,7 @@ def fit_cost(c: Candidate) -> int:
     ...  for n in ("housing", "tool_interface", "cross_coupling", "gyroscopics")]
     [9, 4, 3, 2]
     """
-    return search_size(c) * (ROTOR_COST if _class_acts_on_rotor(c.effect_cls) else 1)
+    return search_size(c) * (ROTOR_COST if acts_on_rotor(c.effect_cls) else 1)
 
 
 def decide(stage: Stage, delta: float) -> list[Assessment]:
