@@ -138,7 +138,7 @@ def _orth(B: np.ndarray, Y: np.ndarray) -> np.ndarray:
     >>> _orth(B, np.array([[1.0], [1.0], [0.0]])).ravel().tolist()
     [0.0, 1.0, 0.0]
     """
-    norms = np.linalg.norm(B, axis=0) if B.size else np.zeros(0)
+    norms = np.linalg.norm(B, axis=0)
     live = norms > 0
     if not np.any(live):
         return Y

@@ -461,7 +461,7 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
         np.asarray(speeds), partial, separating, seconds, options,
-        confounded_generic=generic if verdict == "confounded" else ())
+        confounded_generic=generic)       # only a confounded set holds one
 
 
 def _drop_thin_impacts(data: MeasuredData, min_dof: int

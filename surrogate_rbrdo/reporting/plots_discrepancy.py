@@ -186,7 +186,6 @@ def plot_all(result, out_dir: str | Path, *, n_jobs: int = 1) -> dict[str, Path]
     code from the same data either way, so the files are the same."""
     check_int("n_jobs", n_jobs, minimum=1)
     out = Path(out_dir)
-    paths = {}
     jobs = [("residual_map", plot_residual_map, _Curves(result.verdict, tuple(result.curves)),
              out / "residual_map.png", sum(c.data.size for c in result.curves)),
             ("candidates", plot_candidates, _Ranking.of(result), out / "candidates.png", 0)]
@@ -198,8 +197,8 @@ def plot_all(result, out_dir: str | Path, *, n_jobs: int = 1) -> dict[str, Path]
     else:
         made = Parallel(n_jobs=min(n_jobs, len(jobs)))(
             delayed(func)(arg, path) for _, func, arg, path, _ in jobs)
+    paths = {j[0]: m for j, m in zip(jobs, made, strict=True)}
     order = ["residual_map", "candidates"] + [f"gap_{c.name}" for c in result.curves]
-    paths.update((j[0], m) for j, m in zip(jobs, made, strict=True))
     return {k: paths[k] for k in order}
 
 
