@@ -196,14 +196,19 @@ class MeasuredData:
         Where the data came from (truth effects and seeds for rig data); under
         :data:`THIN_IMPACTS` the reader's ``(name, dof)`` of impact blocks it could not form
         (too few hits: :func:`~.measured.impact_data`), which the workflow's findings list.
+    soaks : tuple of SoakBlock
+        Thermal soaks (:class:`~.soak.SoakBlock`): not fitted, the separating test of an
+        effect that drifts with temperature (:mod:`.soak`).
     """
 
     blocks: tuple[ComplexBlock, ...]
     identified: RealBlock | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
+    soaks: tuple = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "blocks", tuple(self.blocks))
+        object.__setattr__(self, "soaks", tuple(self.soaks))
         if not self.blocks:
             raise ValueError("data.blocks = () is not allowed: give at least one test")
         names = [b.name for b in self.blocks]

@@ -19,11 +19,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData, RealBlock
+from surrogate_rbrdo.discrepancy.soak import SoakBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.rig.impacts import ImpactPlan, expected_frfs, sample_frfs
 from surrogate_rbrdo.rig.phasors import expected_phasors, sample_phasors
 from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
+from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, Variability
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -41,6 +43,9 @@ class RigSource:
     factor: dict[str, float]
     k_relative: float = 0.004
     impacts: ImpactPlan | None = None
+    #: a thermal soak after the impact run (``rig.thermal.SoakPlan``; its speed None: the top
+    #: of ``speeds_rpm``), each of its runs a cold start with its own thermal state
+    soak: SoakPlan | None = None
 
     def parts(self, geometry, effects, noise):
         f = self.factor[noise]
@@ -73,7 +78,33 @@ class RigSource:
         ident = RealBlock("identified_k", sp, ("front", "rear"), ks.mean(0),
                           ks.std(0, ddof=1) / np.sqrt(self.repeats), self.repeats - 1)
         blocks = (blk,) + self._impact_blocks(truth, ss, sensors, inst, chans, pos, rng)
-        return MeasuredData(blocks, ident, {"source": "virtual rig", "seed": seed})
+        soaks = self._soaks(truth, ss, sensors, inst, chans, rng,
+                            np.abs(blk.mean).max(axis=1))
+        return MeasuredData(blocks, ident, {"source": "virtual rig", "seed": seed}, soaks)
+
+    def _soaks(self, truth, ss, sensors, inst, chans, rng, amplitude
+               ) -> tuple[SoakBlock, ...]:
+        """The soak's runs (after the impact run) at its speed (by default the sweep's largest
+        mean amplitude, ``amplitude`` per speed: ``SoakPlan.at``): at each time the run's state
+        warmed to the thermal model's fraction (``TruthState.warming``), a 1x phasor through
+        the sensors, and the run's outer-ring temperature."""
+        if self.soak is None:
+            return ()
+        plan = self.soak.at(self.speeds_rpm, amplitude)
+        t = np.asarray(plan.times_s)
+        Y, T = [], []
+        for j in range(plan.runs):
+            st = truth.state(ss, build=0, tool=0, run=self.repeats + 1 + j)
+            rows = []
+            for f in truth.thermal.fraction(t):
+                w = st.warming(float(f))
+                rows.append(sample_phasors(w.model(), w.theta, np.array([plan.speed_rpm]),
+                                           sensors, inst, rng)[0, 0])
+            Y.append(rows)
+            T.append(truth.thermal.temperature_K(plan.speed_rpm, t, rng))
+        return (SoakBlock(f"soak_{plan.speed_rpm:.0f}rpm", plan.speed_rpm, chans,
+                          np.tile(t, (plan.runs, 1)), np.array(T), np.array(Y),
+                          {"source": "virtual rig fast path (soak)"}),)
 
     def _impact_blocks(self, truth, ss, sensors, inst, chans, pos, rng, expected=None,
                        noise=""):
@@ -139,7 +170,8 @@ def _noise_cov(src: RigSource, noise: str, block: str) -> np.ndarray:
     key = (src.speeds_rpm, src.repeats, src.factor[noise], src.impacts)
     if key not in _COV:
         g = reference_spindle().geometry_for(reference_spindle().baseline)
-        runs = [src.measure(g, reference_spindle().effects, noise, 10_000 + i)
+        runs = [replace(src, soak=None).measure(g, reference_spindle().effects, noise,
+                                                10_000 + i)
                 for i in range(10)]
         _COV[key] = {b.name: np.mean([r.block(b.name).cov for r in runs], axis=0)
                      for b in runs[0].blocks}

@@ -301,7 +301,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     rng = require_rng(rng)
     t0 = time.perf_counter()
     if not options.use_identified and data.identified is not None:
-        data = MeasuredData(data.blocks, None, data.provenance)
+        data = replace(data, identified=None)
     data, dropped = _drop_thin_impacts(data, options.min_impact_dof)
     one_x = [b for b in data.blocks if b.sweep.kind == "unbalance_1x"]
     if not one_x:
@@ -480,7 +480,7 @@ def _drop_thin_impacts(data: MeasuredData, min_dof: int
                   f"fewer than min_impact_dof = {min_dof} (hits per direction - 1); the "
                   "analysis uses the other blocks", stacklevel=3)
     keep = tuple(b for b in data.blocks if b.sweep.kind != "impact" or b.dof >= min_dof)
-    return MeasuredData(keep, data.identified, data.provenance), before + thin
+    return replace(data, blocks=keep), before + thin
 
 
 def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> str:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.core.validate import check_choice, check_positive, check_range
+from surrogate_rbrdo.rig.thermal import ThermalModel
 from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
 from surrogate_rbrdo.spindle.effects import Effect, effect_from_dict, with_effects
 from surrogate_rbrdo.spindle.geometry import PreloadLaw, SpindleGeometry, Unbalance
@@ -137,6 +138,14 @@ class TruthState:
     def model(self) -> SpindleModel:
         return build_model(self.geometry, self.effects, theta_bearings=self.theta_bearings)
 
+    def warming(self, fraction: float) -> TruthState:
+        """This state at thermal fraction ``fraction`` of the steady state after a cold start
+        (:meth:`~surrogate_rbrdo.spindle.effects.Effect.warming` of every effect; the run's own
+        draws unchanged): what a soak record at ``rig.thermal.ThermalModel.fraction(t)``
+        sees."""
+        return dataclasses.replace(self, effects=tuple(e.warming(fraction)
+                                                       for e in self.effects))
+
 
 @dataclass(frozen=True)
 class Truth:
@@ -161,6 +170,8 @@ class Truth:
     variability: Variability = Variability()
     theta_bearings: tuple[str, ...] | None = None
     random_phase: bool = True
+    #: the warm-up after a cold start (a thermal soak, :mod:`.thermal`)
+    thermal: ThermalModel = ThermalModel()
     _u_perm: float = dataclasses.field(init=False, repr=False, compare=False, default=0.0)
     _u_planes: np.ndarray = dataclasses.field(init=False, repr=False, compare=False,
                                               default=None)
@@ -214,6 +225,7 @@ class Truth:
                 "hidden": [_effect_dict(e) for e in self.hidden],
                 "variability": dataclasses.asdict(self.variability),
                 "theta_bearings": list(self.theta_bearings),
+                "thermal": dataclasses.asdict(self.thermal),
                 "geometry": self.geometry.to_dict()}
 
     # ------------------------------------------------------------------ draws

@@ -73,6 +73,10 @@ class Effect:
     bounds: ClassVar[dict[str, tuple[float, float]]] = {}
     #: parameter values of the off state
     off_params: ClassVar[dict[str, float]] = {}
+    #: parameters that follow the spindle's temperature: at the thermal steady state of a
+    #: speed they have their values, from a cold start they grow in proportion to the
+    #: normalised temperature rise (:meth:`warming`); empty for an effect that does not drift
+    thermal_params: ClassVar[tuple[str, ...]] = ()
     bearings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -107,6 +111,26 @@ class Effect:
 
     def params(self) -> dict[str, Any]:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def warming(self, fraction: float) -> Effect:
+        """The effect at a thermal state between cold (``fraction = 0``: its thermal
+        parameters at their off values) and the steady state of the running speed
+        (``fraction = 1``: the effect as it is), the thermal parameters linear in between — a
+        single-time-constant thermal model, where every temperature of the spindle rises as
+        ``1 − e^{−t/τ}`` after a cold start (Bossmanns & Tu, *J. Manuf. Sci. Eng.* 121, 1999).
+        An effect without :attr:`thermal_params` is returned as it is.
+
+        >>> ThermalPreload(b=0.02).warming(0.25).b
+        0.005
+        >>> SpeedSoftening(a=0.2).warming(0.0).a
+        0.2
+        """
+        check_range("fraction", fraction, 0.0, 1.0)
+        if not self.thermal_params:
+            return self
+        return dataclasses.replace(self, **{
+            p: self.off_params[p] + fraction * (getattr(self, p) - self.off_params[p])
+            for p in self.thermal_params})
 
     # hooks -----------------------------------------------------------------
     def preload(self, bearing: str, omega: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -241,6 +265,8 @@ class ThermalPreload(Effect):
     name: ClassVar[str] = "thermal_preload"
     bounds: ClassVar[dict[str, tuple[float, float]]] = {"b": (0.0, 3.0), "q": (0.5, 4.0)}
     off_params: ClassVar[dict[str, float]] = {"b": 0.0}
+    #: the growth follows the rings' temperature difference: it drifts during a soak
+    thermal_params: ClassVar[tuple[str, ...]] = ("b",)
     b: float = 0.0
     q: float = 2.0
     omega_ref: float = 24000 * np.pi / 30

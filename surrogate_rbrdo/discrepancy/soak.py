@@ -1,0 +1,302 @@
+"""The thermal soak: the separating test of an effect that drifts as the spindle warms.
+
+A preload growth and a passive spring beside its bearing (or a centrifugal softening, or a
+housing stage) can explain a speed sweep alike — the sweep's steady records are each at their
+speed's thermal equilibrium, and the run-to-run thermal scatter of the preload hides the rest.
+A soak holds one speed from a cold start (``rig.thermal.SoakPlan``): an effect whose
+parameters follow temperature (:attr:`~surrogate_rbrdo.spindle.effects.Effect.thermal_params`)
+changes the 1x response during the hold, in proportion to the normalised temperature rise
+``θ`` (one time constant, ``rig.thermal``); a spring, a softening or a housing does not.
+Within a run the run's own thermal scatter is common to all its records, so the drift is
+measured against the probes' noise alone, not against the scatter between runs.
+
+The test (:func:`soak_test`), for a candidate fitted on the sweep:
+
+1. **Warm-up.** ``θ`` of every record from the measured temperatures: one rise and time
+   constant for the soak, a starting temperature per run (:func:`warmup`, least squares).
+2. **Prediction.** The model's hot − cold 1x response at the soak's speed and channels, at the
+   candidate's fit (its nuisance, probe chain, unbalance) with and without the candidate:
+   ``Δ₁`` and ``Δ₀`` (:func:`drift_prediction`; ``Δ₀ = 0`` unless the model itself has an
+   effect that drifts).
+3. **Per run**, the slope ``s_r`` of the phasors on ``θ`` (intercept free: the run's cold
+   response) gives ``β_r = Re⟨Δ₁ − Δ₀, s_r − Δ₀⟩_W / ⟨Δ₁ − Δ₀, Δ₁ − Δ₀⟩_W`` — the drift beyond
+   the rival's in units of the candidate's prediction (``W``: each channel's inverse noise
+   variance from the runs' residuals). The runs are independent, so ``β̂ = mean β_r`` with its
+   standard error from their spread and ``n − 1`` degrees of freedom (Student), whatever the
+   noise's correlation within a run.
+4. **Verdict** at ``level``: ``"drift"`` when ``β = 0`` (no drift beyond the rival's) is
+   rejected one-sided and ``β = 1`` (the candidate's drift) is not rejected — the latter with
+   the prediction's own uncertainty from the fit's covariance added (Welch–Satterthwaite
+   degrees of freedom); ``"no_drift"`` when ``β = 0`` is not rejected and the candidate's
+   drift is, one-sided (``β < 1``); else ``"inconclusive"`` (a drift unlike the prediction,
+   or a soak too short or too quiet to tell).
+
+>>> import numpy as np
+>>> from surrogate_rbrdo.discrepancy.sweeps import Channel
+>>> rng = np.random.default_rng(0)
+>>> t = np.tile([0.0, 600.0, 1200.0, 2400.0, 3600.0], (4, 1))
+>>> th = -np.expm1(-t / 900.0)
+>>> T = 293.0 + rng.normal(0, 0.3, (4, 1)) + 12.0 * th + rng.normal(0, 0.05, t.shape)
+>>> d = np.array([2e-8 + 1e-8j, -1e-8j])
+>>> Y = 1e-6 * (1 + rng.normal(0, 0.02, (4, 1, 2))) + th[..., None] * d
+>>> Y = Y + 1e-10 * (rng.normal(size=Y.shape) + 1j * rng.normal(size=Y.shape))
+>>> blk = SoakBlock("soak", 24000.0, (Channel("a", 0.0, "x"), Channel("b", 0.0, "y")), t, T, Y)
+>>> w = warmup(blk)
+>>> round(w.time_constant_s / 900.0, 1), round(w.rise_K, 1)
+(1.0, 12.0)
+>>> res = drift_test("thermal_preload", (blk,), (w,), (np.zeros(2),), (d,), 0.05, 0.01)
+>>> res.outcome, round(res.beta, 1)
+('drift', 1.0)
+>>> drift_test("thermal_preload", (blk,), (w,), (np.zeros(2),), (3 * d,), 0.05, 0.01).outcome
+'inconclusive'
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import t as student
+
+from surrogate_rbrdo.discrepancy.fit import Fit, _fd_rows
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+
+OUTCOMES = ("drift", "no_drift", "inconclusive")
+#: a warm-up whose rise is not this many standard errors above zero is no warm-up
+MIN_RISE_Z = 10.0
+
+
+@dataclass(frozen=True)
+class SoakBlock:
+    """A thermal soak's 1x phasors: ``R`` runs (cold starts) × ``K`` records at one speed.
+
+    Attributes
+    ----------
+    name : str
+    speed_rpm : float
+        The speed held.
+    channels : tuple of Channel
+        Displacement channels (those of the 1x sweep: the model's outputs).
+    times_s : ndarray (R, K)
+        Each record's time after the run reached speed.
+    temperature_K : ndarray (R, K)
+        A bearing temperature during each record (the front outer ring on the rig).
+    phasors : ndarray (R, K, C) complex
+        The 1x phasors (m) against the keyphasor, the format's convention.
+    """
+
+    name: str
+    speed_rpm: float
+    channels: tuple[Channel, ...]
+    times_s: np.ndarray
+    temperature_K: np.ndarray
+    phasors: np.ndarray
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        where = f"soak {self.name!r}"
+        object.__setattr__(self, "channels", tuple(self.channels))
+        t = np.asarray(self.times_s, dtype=float)
+        T = np.asarray(self.temperature_K, dtype=float)
+        Y = np.asarray(self.phasors, dtype=complex)
+        if not (self.speed_rpm > 0 and np.isfinite(self.speed_rpm)):
+            raise ValueError(f"{where}: speed_rpm = {self.speed_rpm!r} is not allowed: > 0")
+        if t.ndim != 2 or t.shape[0] < 3 or t.shape[1] < 3:
+            raise ValueError(f"{where}: times_s has shape {t.shape}: need (runs >= 3, "
+                             "records >= 3)")
+        if T.shape != t.shape or Y.shape != (*t.shape, len(self.channels)):
+            raise ValueError(f"{where}: temperature_K {T.shape} and phasors {Y.shape} must be "
+                             f"{t.shape} and {(*t.shape, len(self.channels))} (runs x records"
+                             " [x channels])")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(T)) and np.all(np.isfinite(Y))):
+            raise ValueError(f"{where}: non-finite times, temperatures or phasors")
+        if np.any(t < 0) or np.any(np.diff(t, axis=1) <= 0):
+            raise ValueError(f"{where}: times_s must be >= 0 and increase within each run")
+        for n, v in (("times_s", t), ("temperature_K", T), ("phasors", Y)):
+            v.setflags(write=False)
+            object.__setattr__(self, n, v)
+
+    @property
+    def runs(self) -> int:
+        return self.times_s.shape[0]
+
+
+@dataclass(frozen=True)
+class Warmup:
+    """The soak's warm-up ``T = T₀ᵣ + ΔT (1 − e^{−t/τ})`` fitted to its temperatures."""
+
+    fraction: np.ndarray
+    time_constant_s: float
+    rise_K: float
+    rise_se_K: float
+    noise_K: float
+
+    @property
+    def measured(self) -> bool:
+        """Whether the rise stands out of the readings' noise (:data:`MIN_RISE_Z`)."""
+        return bool(self.rise_K > MIN_RISE_Z * self.rise_se_K)
+
+
+def warmup(block: SoakBlock) -> Warmup:
+    """Fit one rise and time constant and a starting temperature per run to the soak's
+    temperatures (least squares; ``τ`` between a tenth of the shortest step and 100 times the
+    longest hold); ``fraction`` is every record's ``θ = 1 − e^{−t/τ̂}``."""
+    t, T = block.times_s, block.temperature_K
+    R = t.shape[0]
+    span = float(t.max())
+    step = float(np.diff(t, axis=1).min())
+
+    def res(p: np.ndarray) -> np.ndarray:
+        return (p[:R, None] + p[R] * -np.expm1(-t / np.exp(p[R + 1])) - T).ravel()
+
+    lo = np.r_[np.full(R, -np.inf), -np.inf, np.log(step / 10)]
+    hi = np.r_[np.full(R, np.inf), np.inf, np.log(100 * span)]
+    x0 = np.r_[T[:, 0], np.mean(T[:, -1] - T[:, 0]),
+               np.clip(np.log(span / 3), lo[-1], hi[-1])]
+    sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac")
+    dof = max(t.size - R - 2, 1)
+    s2 = float(sol.fun @ sol.fun) / dof
+    J = sol.jac
+    cov = np.linalg.pinv(J.T @ J) * s2
+    tau = float(np.exp(sol.x[R + 1]))
+    return Warmup(-np.expm1(-t / tau), tau, float(sol.x[R]), float(np.sqrt(cov[R, R])),
+                  float(np.sqrt(s2)))
+
+
+@dataclass(frozen=True)
+class SoakTest:
+    """The soak's verdict on one candidate (see module doc)."""
+
+    candidate: str
+    outcome: str
+    beta: float
+    se: float
+    dof: int
+    p_drift: float
+    p_predicted: float
+    p_below: float
+    prediction_sd: float
+    level: float
+    runs: int
+    time_constant_s: float = float("nan")
+    rise_K: float = float("nan")
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup, ...],
+               rival: tuple[np.ndarray, ...], predicted: tuple[np.ndarray, ...],
+               prediction_sd: float, level: float) -> SoakTest:
+    """The drift test (module doc, steps 3–4) given each block's warm-up, the rival's
+    predicted hot − cold drift ``Δ₀`` and the candidate's ``Δ₁`` (``(C,)`` each), and the
+    relative standard deviation of the candidate's prediction."""
+    betas = []
+    for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
+        if not w.measured:
+            continue
+        th = w.fraction - w.fraction.mean(axis=1, keepdims=True)             # (R, K)
+        Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)           # (R, K, C)
+        den = np.sum(th ** 2, axis=1)                                       # (R,)
+        if np.any(den <= 0):
+            continue
+        slope = np.einsum("rk,rkc->rc", th, Y) / den[:, None]
+        e = Y - th[..., None] * slope[:, None]
+        dof = blk.runs * (blk.times_s.shape[1] - 2)
+        var = np.sum(np.abs(e) ** 2, axis=(0, 1)) / (2 * dof)
+        wgt = 1.0 / np.where(var > 0, var, np.inf)
+        D = np.asarray(d1) - np.asarray(d0)
+        norm = float(np.sum(wgt * np.abs(D) ** 2))
+        if not norm > 0:
+            continue
+        betas.extend((np.sum(wgt * np.conj(D) * (slope - d0), axis=1).real / norm).tolist())
+    n = len(betas)
+    if n < 3:
+        return SoakTest(candidate, "inconclusive", float("nan"), float("nan"), max(n - 1, 0),
+                        1.0, 1.0, 1.0, float(prediction_sd), level, n,
+                        *_warm_figures(warm))
+    b = np.asarray(betas)
+    beta, nu = float(b.mean()), n - 1
+    se = max(float(b.std(ddof=1) / np.sqrt(n)), 1e-300)
+    p_drift = float(student.sf(beta / se, nu))
+    sd = float(np.hypot(se, prediction_sd))
+    nu_eff = nu * (sd / se) ** 4                  # Welch–Satterthwaite, the fit's dof ∞
+    z = (beta - 1.0) / sd
+    p_pred = float(2 * student.sf(abs(z), nu_eff))
+    p_below = float(student.cdf(z, nu_eff))
+    if p_drift < level and p_pred >= level:
+        outcome = "drift"
+    elif p_drift >= level and p_below < level:
+        outcome = "no_drift"
+    else:
+        outcome = "inconclusive"
+    return SoakTest(candidate, outcome, beta, se, nu, p_drift, p_pred, p_below,
+                    float(prediction_sd), level, n, *_warm_figures(warm))
+
+
+def _warm_figures(warm: tuple[Warmup, ...]) -> tuple[float, float]:
+    return ((warm[0].time_constant_s, warm[0].rise_K) if warm
+            else (float("nan"), float("nan")))
+
+
+def drift_prediction(problem: Problem, fit: Fit, block: SoakBlock, *, jacobian: bool = False
+                     ) -> tuple[np.ndarray, float]:
+    """The model's hot − cold 1x response ``(C,)`` at the soak's speed and channels at
+    ``fit`` (its rows on ``problem``'s forward model, the unbalance of its first 1x block), and
+    with ``jacobian`` the prediction's relative standard deviation along itself, from the
+    fit's bounded covariance (first order; the unbalance held at its fit), else 0."""
+    soak_problem = _soak_problem(problem, block)
+    fm = problem.forward
+    cold_fm = None
+    if any(e.thermal_params for e in fm.effects):
+        cold_fm = dataclasses.replace(fm, effects=tuple(e.warming(0.0) for e in fm.effects))
+    u = fit.evaluation.unbalance[0][0]
+    X = fit.x[None]
+    h = None
+    if jacobian:
+        lo, hi = fit.par.bounds()
+        rows_fd, h = _fd_rows(fit.x, fit.par, lo, hi)
+        X = np.vstack([X, rows_fd])
+    rows = fit.par.rows(X)
+    hot = soak_problem.responses(rows)[0][:, 0] @ u                    # (B, C)
+    cold_rows = dataclasses.replace(rows, extras=[tuple(e.warming(0.0) for e in ex)
+                                                  for ex in rows.extras])
+    cold_problem = soak_problem if cold_fm is None else _soak_problem(
+        Problem(cold_fm, problem.data, None, problem.nuisance), block)
+    cold = cold_problem.responses(cold_rows)[0][:, 0] @ u
+    D = hot - cold
+    if not jacobian:
+        return D[0], 0.0
+    d = D[0]
+    nrm = float(np.vdot(d, d).real)
+    if not nrm > 0:
+        return d, 0.0
+    g = (np.conj(d)[None] * (D[1:] - d[None])).sum(axis=1).real / nrm / h
+    cov = fit.covariance(bounded=True)
+    return d, float(np.sqrt(max(g @ cov @ g, 0.0)))
+
+
+def _soak_problem(problem: Problem, block: SoakBlock) -> Problem:
+    """A problem whose one 1x block is the soak's speed at its channels (its data unused:
+    only :meth:`~.problem.Problem.responses` is called)."""
+    C = len(block.channels)
+    cov = np.broadcast_to(np.eye(2), (1, C, 2, 2)).copy()
+    blk = ComplexBlock(f"{block.name}_model", Sweep.unbalance([block.speed_rpm]),
+                       block.channels, np.ones((1, C), dtype=complex), cov, 10**9)
+    return Problem(problem.forward, MeasuredData((blk,)), None, problem.nuisance)
+
+
+def soak_test(problem: Problem, rival: Fit, fit: Fit, name: str,
+              soaks: tuple[SoakBlock, ...], level: float) -> SoakTest:
+    """The soak's verdict on candidate ``name`` fitted as ``fit`` against ``rival`` (the fit
+    of the model without it, whose drift is the no-drift hypothesis): module doc."""
+    warm = tuple(warmup(b) for b in soaks)
+    d0 = tuple(drift_prediction(problem, rival, b)[0] for b in soaks)
+    pred = [drift_prediction(problem, fit, b, jacobian=True) for b in soaks]
+    sd = max((p[1] for p in pred), default=0.0)
+    return drift_test(name, soaks, warm, d0, tuple(p[0] for p in pred), sd, level)

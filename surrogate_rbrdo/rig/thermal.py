@@ -1,0 +1,148 @@
+"""The rig's thermal transient and the thermal soak: a cold start, a speed held, records as the
+spindle warms.
+
+A spindle's bearings warm after a start with a time constant of tens of minutes; a rigidly
+(position-) preloaded arrangement then gains preload as the inner ring and shaft grow more than
+the outer ring and housing (Holkup, Cao, Kolář, Altintas & Zelený, *CIRP Annals* 59, 2010;
+Li & Shin, *J. Manuf. Sci. Eng.* 126, 2004), a spring (constant-force) preload does not. The
+rig models this with one time constant (Bossmanns & Tu, *J. Manuf. Sci. Eng.* 121, 1999, a
+lumped thermal network's dominant mode): after a cold start at speed ``Ω`` every temperature
+rise, and every parameter of an effect that follows temperature
+(:attr:`~surrogate_rbrdo.spindle.effects.Effect.thermal_params`, the preload growth ``b`` of
+``thermal_preload``), is the fraction
+
+    θ(t) = 1 − exp(−t / τ)
+
+of its steady-state value at that speed. The steady effect (``F(Ω) = F₀(1 + b (Ω/Ω_ref)^q)``)
+is what the campaign's steady records see: each is taken at its speed's thermal equilibrium.
+
+A **thermal soak** (:class:`SoakPlan`) holds one speed from a cold start and takes a steady
+record at each of its times, in runs of their own (each with its run's thermal scatter, as any
+run), with the front bearing's outer-ring temperature (:meth:`ThermalModel.temperature_K`).
+An effect that drifts with temperature changes the 1x response during the hold; one that does
+not (a centrifugal softening, a seal, a housing) leaves it constant — the separating test of a
+preload growth (``discrepancy.soak``).
+
+>>> tm = ThermalModel()
+>>> round(tm.fraction(tm.time_constant_s), 4)
+0.6321
+>>> round(tm.rise_K(24000.0), 1), round(tm.rise_K(12000.0), 2)
+(15.0, 4.72)
+>>> SoakPlan(speed_rpm=24000.0).times_s[-1]
+3600.0
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
+
+
+def _default_times() -> tuple[float, ...]:
+    return (0.0, 300.0, 600.0, 900.0, 1200.0, 1800.0, 2700.0, 3600.0)
+
+
+@dataclass(frozen=True)
+class ThermalModel:
+    """One-time-constant warm-up of the spindle (see module doc).
+
+    Attributes
+    ----------
+    time_constant_s : float
+        τ of the dominant thermal mode (15 min; tens of minutes in the sources above).
+    rise_ref_K : float
+        Steady outer-ring temperature rise of the front bearing at ``speed_ref_rpm`` (15 K:
+        measured rises of high-speed spindles' bearings are 10–25 K at their top speed).
+    speed_ref_rpm : float
+    speed_exponent : float
+        Rise ∝ speed^exponent: the bearing's friction power, Palmgren's viscous moment
+        ``M ∝ (ν n)^{2/3}`` times ``n`` (Harris & Kotzalas, *Rolling Bearing Analysis*, 2006).
+    ambient_K : float
+        Mean starting temperature; each run starts at ``ambient_K + N(0, ambient_sd_K²)``.
+    ambient_sd_K : float
+    sensor_noise_K : float
+        SD of one temperature reading (a PT100 on the outer ring, averaged over a record).
+    """
+
+    time_constant_s: float = 900.0
+    rise_ref_K: float = 15.0
+    speed_ref_rpm: float = 24000.0
+    speed_exponent: float = 5.0 / 3.0
+    ambient_K: float = 293.15
+    ambient_sd_K: float = 0.5
+    sensor_noise_K: float = 0.05
+
+    def __post_init__(self) -> None:
+        for n in ("time_constant_s", "rise_ref_K", "speed_ref_rpm", "ambient_K"):
+            check_positive(n, getattr(self, n))
+        check_range("speed_exponent", self.speed_exponent, 0.0, 4.0)
+        for n in ("ambient_sd_K", "sensor_noise_K"):
+            check_positive(n, getattr(self, n), allow_zero=True)
+
+    def fraction(self, t_s: float | np.ndarray) -> np.ndarray | float:
+        """θ(t): the fraction of the steady thermal state reached ``t_s`` after a cold start."""
+        t = np.asarray(t_s, dtype=float)
+        if np.any(t < 0) or not np.all(np.isfinite(t)):
+            raise ValueError(f"t_s = {t_s!r} is not allowed: times >= 0 s after the start")
+        out = -np.expm1(-t / self.time_constant_s)
+        return float(out) if out.ndim == 0 else out
+
+    def rise_K(self, speed_rpm: float) -> float:
+        """Steady temperature rise at ``speed_rpm``."""
+        check_positive("speed_rpm", speed_rpm, allow_zero=True)
+        return self.rise_ref_K * (speed_rpm / self.speed_ref_rpm) ** self.speed_exponent
+
+    def temperature_K(self, speed_rpm: float, t_s: np.ndarray, rng: np.random.Generator
+                      ) -> np.ndarray:
+        """Readings of one run's outer-ring temperature at ``t_s`` after a cold start at
+        ``speed_rpm``: its own starting temperature, the rise, the sensor's noise."""
+        t = np.asarray(t_s, dtype=float)
+        start = self.ambient_K + self.ambient_sd_K * rng.normal()
+        return (start + self.rise_K(speed_rpm) * self.fraction(t)
+                + self.sensor_noise_K * rng.normal(size=t.shape))
+
+
+@dataclass(frozen=True)
+class SoakPlan:
+    """A thermal soak: ``runs`` cold starts, each holding ``speed_rpm`` and taking a steady
+    record at each of ``times_s`` (s after reaching speed; default every 5–15 min for an hour,
+    about 4 τ of :class:`ThermalModel`). ``speed_rpm`` None: chosen from the speed sweep
+    measured before it (:meth:`at`) — the speed of its largest mean 1x amplitude, the
+    resonance, where the response is most sensitive to a bearing's stiffness (and so to a
+    preload that drifts)."""
+
+    speed_rpm: float | None = None
+    times_s: tuple[float, ...] = field(default_factory=_default_times)
+    runs: int = 4
+
+    def __post_init__(self) -> None:
+        if self.speed_rpm is not None:
+            check_positive("soak.speed_rpm", self.speed_rpm)
+            object.__setattr__(self, "speed_rpm", float(self.speed_rpm))
+        t = np.asarray(self.times_s, dtype=float)
+        if t.ndim != 1 or t.size < 3 or np.any(t < 0) or np.any(np.diff(t) <= 0):
+            raise ValueError(f"soak.times_s = {list(self.times_s)} is not allowed: at least 3 "
+                             "increasing times >= 0 s after reaching speed")
+        object.__setattr__(self, "times_s", tuple(t.tolist()))
+        check_int("soak.runs", self.runs, minimum=3)
+
+    def at(self, speeds_rpm, amplitude=None) -> SoakPlan:
+        """The plan with its speed resolved: when None, the speed of ``speeds_rpm`` with the
+        largest ``amplitude`` (the sweep's mean 1x amplitude there, any channel), or the top
+        speed without amplitudes.
+
+        >>> SoakPlan().at([1000.0, 2000.0, 3000.0], [1e-7, 3e-6, 1e-6]).speed_rpm
+        2000.0
+        """
+        if self.speed_rpm is not None:
+            return self
+        sp = np.asarray(speeds_rpm, dtype=float)
+        if amplitude is None:
+            return SoakPlan(float(sp.max()), self.times_s, self.runs)
+        a = np.asarray(amplitude, dtype=float)
+        if a.shape != sp.shape:
+            raise ValueError(f"amplitude has shape {a.shape}: one per speed, {sp.shape}")
+        return SoakPlan(float(sp[int(np.argmax(a))]), self.times_s, self.runs)
