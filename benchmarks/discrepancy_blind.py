@@ -14,9 +14,13 @@ note's figure) for the sparse baseline. With ``--impacts`` (the default test pla
 and y, 20 hits each, all in one run after the 1x runs (its own thermal state), all six probes, FRF
 lines 40–1 480 Hz every 40 Hz through the rig's sensors (probe and hammer gain, driver,
 skew, noise, quantisation; ``rig.impacts.sample_frfs``); ``--impacts none``: the 1x campaign
-alone (the data before this test plan). ``synthetic`` — the phasor-level stand-in of
-``discrepancy.synthetic`` (with impact FRFs). Noise levels scale the probe noise and the
-run-to-run thermal scatter (rig) or every noise component (synthetic) by 0.5, 1 and 3.
+alone (the data before this test plan). With ``--soak`` (the default, ``rig.thermal.SoakPlan``):
+a thermal soak after them — 4 cold starts, each held for an hour at the sweep's resonance with
+a 1x record and a bearing temperature every 5–15 min (``RigSource._soaks``), the separating test
+of an effect that drifts with temperature (``discrepancy.soak``); ``--soak none``: without.
+``synthetic`` — the phasor-level stand-in of ``discrepancy.synthetic`` (with impact FRFs).
+Noise levels scale the probe noise and the run-to-run thermal scatter (rig) or every noise
+component (synthetic) by 0.5, 1 and 3.
 
 Prints: the calibrated knob values, the signature cosines and confounded pairs, the rates table
 of the workflow and of both baselines, the targets, and the timings (measured under load: the
@@ -55,6 +59,7 @@ from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
 from surrogate_rbrdo.discrepancy.workflow import GENERIC_CONFOUND, DiscrepancyOptions
 from surrogate_rbrdo.rig.impacts import ImpactPlan
+from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
 
@@ -68,6 +73,9 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--impacts", choices=("plan", "none"), default="plan",
                     help="impact tests at speed (rig.impacts.ImpactPlan) or the 1x data alone")
+    ap.add_argument("--soak", choices=("plan", "none"), default="plan",
+                    help="a thermal soak after the sweep (rig.thermal.SoakPlan: 4 cold starts "
+                         "held at the sweep's resonance for an hour) or none")
     ap.add_argument("--calibrate-on", choices=("same", "none"), default="same",
                     help="strengths calibrated on the data the scenarios use (same) or on the "
                          "1x data alone (none: the 1x grid's physical sizes, measured with the "
@@ -110,7 +118,8 @@ def main() -> None:
     speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
     if args.source == "rig":
         source = RigSource(speeds, 20, FACTORS,
-                           impacts=ImpactPlan() if args.impacts == "plan" else None)
+                           impacts=ImpactPlan() if args.impacts == "plan" else None,
+                           soak=SoakPlan() if args.soak == "plan" else None)
         nuis = NuisanceOptions.probe_chain()
     else:
         lv = NoiseLevel()

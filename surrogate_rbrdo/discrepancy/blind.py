@@ -59,6 +59,7 @@ from surrogate_rbrdo.discrepancy.synthetic import (
 from surrogate_rbrdo.discrepancy.truth_effects import TRUTH_MODIFIERS
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, find_discrepancy
 from surrogate_rbrdo.rig.impacts import ImpactPlan
+from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.spindle.effects import EFFECTS, Effect, with_effects
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 from surrogate_rbrdo.spindle.reference import reference_spindle
@@ -187,14 +188,16 @@ class Context:
                             mass_disks=self.options.nuisance.mass_disks)
 
 
-def rig_context(*, impacts: bool = True, n_draws: int = 400) -> Context:
+def rig_context(*, impacts: bool = True, soak: bool = True, n_draws: int = 400) -> Context:
     """The benchmarks' rig context: the reference spindle at its baseline design as the model,
     the virtual rig's data (:class:`~.rig_source.RigSource`: 50 speeds 1 000–24 000 rpm, 20
     runs, the noise levels of :data:`~.rig_source.FACTORS`; the impact plan unless
-    ``impacts=False``) and the probe-chain nuisance."""
+    ``impacts=False``; the thermal soak of ``rig.thermal.SoakPlan`` unless ``soak=False``)
+    and the probe-chain nuisance."""
     sp = reference_spindle()
     speeds = tuple(np.linspace(1000.0, 24000.0, 50).tolist())
-    source = RigSource(speeds, 20, FACTORS, impacts=ImpactPlan() if impacts else None)
+    source = RigSource(speeds, 20, FACTORS, impacts=ImpactPlan() if impacts else None,
+                       soak=SoakPlan() if soak else None)
     return Context(sp.geometry_for(sp.baseline), sp.effects, source, DiscrepancyOptions(
         nuisance=NuisanceOptions.probe_chain(), n_draws=n_draws))
 
@@ -339,6 +342,8 @@ def run_scenario(ctx: Context, sc: Scenario) -> dict[str, Any]:
         "gof_p": res.residual_test["gof_p"],
         # a library effect and a generic change explain the data alike (rivals.RivalTest)
         "mutual_generic": bool(res.test.get("mutual", False) or res.confounded_generic),
+        # the thermal soak's verdicts (discrepancy.soak): candidate:outcome
+        "soak": "+".join(f"{t.candidate}:{t.outcome}" for t in res.soak),
         "parameters": "; ".join(f"{a.name} {a.fit.parameters}" for a in res.effects if a.fit),
         "seconds": res.seconds, "cpu_seconds": time.process_time() - cpu0,
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,

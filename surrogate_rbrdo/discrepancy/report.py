@@ -65,6 +65,7 @@ def findings(result: DiscrepancyResult) -> dict[str, Any]:
         "test": result.test,
         "residual_test": result.residual_test,
         "partial_library_fit": list(result.partial),
+        "soak": [t.to_dict() for t in result.soak],
         "gap": {"before": result.gap_before.to_dict(), "after": result.gap_after.to_dict(),
                 "units": {"rmse": "um", "max_abs": "um", "chi2_dof": "1",
                           "predictive_chi2_dof": "1"},

@@ -18,18 +18,22 @@ The test (:func:`soak_test`), for a candidate fitted on the sweep:
    candidate's fit (its nuisance, probe chain, unbalance) with and without the candidate:
    ``Δ₁`` and ``Δ₀`` (:func:`drift_prediction`; ``Δ₀ = 0`` unless the model itself has an
    effect that drifts).
-3. **Per run**, the slope ``s_r`` of the phasors on ``θ`` (intercept free: the run's cold
-   response) gives ``β_r = Re⟨Δ₁ − Δ₀, s_r − Δ₀⟩_W / ⟨Δ₁ − Δ₀, Δ₁ − Δ₀⟩_W`` — the drift beyond
-   the rival's in units of the candidate's prediction (``W``: each channel's inverse noise
-   variance from the runs' residuals). The runs are independent, so ``β̂ = mean β_r`` with its
-   standard error from their spread and ``n − 1`` degrees of freedom (Student), whatever the
-   noise's correlation within a run.
-4. **Verdict** at ``level``: ``"drift"`` when ``β = 0`` (no drift beyond the rival's) is
-   rejected one-sided and ``β = 1`` (the candidate's drift) is not rejected — the latter with
-   the prediction's own uncertainty from the fit's covariance added (Welch–Satterthwaite
-   degrees of freedom); ``"no_drift"`` when ``β = 0`` is not rejected and the candidate's
-   drift is, one-sided (``β < 1``); else ``"inconclusive"`` (a drift unlike the prediction,
-   or a soak too short or too quiet to tell).
+3. **A drift beyond the rival's?** Each run's slope of the phasors on ``θ`` (its own
+   intercept: the run's cold response), pooled over the runs, minus ``Δ₀``, against the noise
+   of the runs' residuals about their own lines: Hotelling's ``T²`` on the ``2C`` real
+   components with ``ν = R (K − 2)`` degrees of freedom (``F(2C, ν − 2C + 1)``; a diagonal
+   covariance and ``F(2C, ν)`` when ``ν`` is too small), so the channels' correlation within a
+   record (the keyphasor's phase error) is carried.
+4. **The candidate's drift?** Each run's ``β_r = Re⟨Δ, s_r − Δ₀⟩_W / ⟨Δ, Δ⟩_W`` with
+   ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance), averaged
+   over the runs: Student's ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities
+   differ with their thermal states; the runs are independent whatever the noise within one),
+   the prediction's own relative uncertainty from the fit's covariance added
+   (Welch–Satterthwaite degrees of freedom).
+5. **Verdict** at ``level``: ``"drift"`` when (3) rejects no drift, ``β̂ > 0`` and (4) does
+   not reject ``β = 1``; ``"no_drift"`` when (3) does not reject and (4) rejects ``β = 1``
+   one-sided (``β < 1``); else ``"inconclusive"`` (a drift unlike the prediction, or a soak
+   too short or too quiet to tell).
 
 >>> import numpy as np
 >>> from surrogate_rbrdo.discrepancy.sweeps import Channel
@@ -59,6 +63,7 @@ from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.stats import f as fdist
 from scipy.stats import t as student
 
 from surrogate_rbrdo.discrepancy.fit import Fit, _fd_rows
@@ -174,10 +179,14 @@ class SoakTest:
 
     candidate: str
     outcome: str
+    #: the drift beyond the rival's: Hotelling's F on the pooled slope, its dofs, p-value
+    drift_F: float
+    drift_dof: tuple[int, int]
+    p_drift: float
+    #: the drift in units of the candidate's prediction: mean over runs, its SE, dof
     beta: float
     se: float
     dof: int
-    p_drift: float
     p_predicted: float
     p_below: float
     prediction_sd: float
@@ -195,48 +204,73 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
                prediction_sd: float, level: float) -> SoakTest:
     """The drift test (module doc, steps 3–4) given each block's warm-up, the rival's
     predicted hot − cold drift ``Δ₀`` and the candidate's ``Δ₁`` (``(C,)`` each), and the
-    relative standard deviation of the candidate's prediction."""
-    betas = []
+    relative standard deviation of the candidate's prediction. With several blocks the drift's
+    p-value is the smallest times their number (Bonferroni)."""
+    betas, p_hot, F_hot, dofs = [], [], [], (0, 0)
     for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
         if not w.measured:
             continue
-        th = w.fraction - w.fraction.mean(axis=1, keepdims=True)             # (R, K)
-        Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)           # (R, K, C)
-        den = np.sum(th ** 2, axis=1)                                       # (R,)
-        if np.any(den <= 0):
-            continue
-        slope = np.einsum("rk,rkc->rc", th, Y) / den[:, None]
-        e = Y - th[..., None] * slope[:, None]
-        dof = blk.runs * (blk.times_s.shape[1] - 2)
-        var = np.sum(np.abs(e) ** 2, axis=(0, 1)) / (2 * dof)
-        wgt = 1.0 / np.where(var > 0, var, np.inf)
-        D = np.asarray(d1) - np.asarray(d0)
-        norm = float(np.sum(wgt * np.abs(D) ** 2))
-        if not norm > 0:
-            continue
-        betas.extend((np.sum(wgt * np.conj(D) * (slope - d0), axis=1).real / norm).tolist())
+        F, dof, p, b = _block_drift(blk, w, np.asarray(d0), np.asarray(d1))
+        betas += b
+        if p < min(p_hot, default=2.0):
+            F_hot, dofs = F, dof
+        p_hot.append(p)
     n = len(betas)
+    p_drift = min(1.0, min(p_hot, default=1.0) * max(len(p_hot), 1))
     if n < 3:
-        return SoakTest(candidate, "inconclusive", float("nan"), float("nan"), max(n - 1, 0),
-                        1.0, 1.0, 1.0, float(prediction_sd), level, n,
-                        *_warm_figures(warm))
+        return SoakTest(candidate, "inconclusive", float(F_hot or 0.0), dofs, p_drift,
+                        float("nan"), float("nan"), max(n - 1, 0), 1.0, 1.0,
+                        float(prediction_sd), level, n, *_warm_figures(warm))
     b = np.asarray(betas)
     beta, nu = float(b.mean()), n - 1
     se = max(float(b.std(ddof=1) / np.sqrt(n)), 1e-300)
-    p_drift = float(student.sf(beta / se, nu))
     sd = float(np.hypot(se, prediction_sd))
     nu_eff = nu * (sd / se) ** 4                  # Welch–Satterthwaite, the fit's dof ∞
     z = (beta - 1.0) / sd
     p_pred = float(2 * student.sf(abs(z), nu_eff))
     p_below = float(student.cdf(z, nu_eff))
-    if p_drift < level and p_pred >= level:
+    if p_drift < level and beta > 0 and p_pred >= level:
         outcome = "drift"
     elif p_drift >= level and p_below < level:
         outcome = "no_drift"
     else:
         outcome = "inconclusive"
-    return SoakTest(candidate, outcome, beta, se, nu, p_drift, p_pred, p_below,
-                    float(prediction_sd), level, n, *_warm_figures(warm))
+    return SoakTest(candidate, outcome, float(F_hot), dofs, p_drift, beta, se, nu, p_pred,
+                    p_below, float(prediction_sd), level, n, *_warm_figures(warm))
+
+
+def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
+                 ) -> tuple[float, tuple[int, int], float, list[float]]:
+    """One block's drift test: Hotelling's F of the pooled slope on ``θ`` beyond ``Δ₀``
+    against the runs' residual noise (each run's own slope and intercept removed: ``ν =
+    R (K − 2)`` degrees of freedom; a diagonal covariance when ``ν`` is too small for the
+    ``2C`` real dimensions), its dofs and p-value, and every run's ``β_r``."""
+    th = w.fraction - w.fraction.mean(axis=1, keepdims=True)                 # (R, K)
+    Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)               # (R, K, C)
+    den = np.sum(th ** 2, axis=1)                                           # (R,)
+    slope = np.einsum("rk,rkc->rc", th, Y) / den[:, None]
+    e = Y - th[..., None] * slope[:, None]
+    R, K, C = Y.shape
+    nu = R * (K - 2)
+    E = np.concatenate([e.real, e.imag], axis=-1).reshape(-1, 2 * C)
+    S = E.T @ E / nu                                                        # (2C, 2C)
+    v = np.einsum("rk,rkc->c", th, Y) / den.sum() - d0
+    v = np.concatenate([v.real, v.imag])
+    cov = S / den.sum()
+    p_dim = 2 * C
+    if nu - p_dim + 1 >= 3:
+        T2 = float(v @ np.linalg.solve(cov, v))
+        F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
+    else:
+        F, dof = float(np.sum(v ** 2 / np.diag(cov))) / p_dim, (p_dim, nu)
+    p = float(fdist.sf(F, *dof))
+    var = np.diag(S)[:C] + np.diag(S)[C:]
+    wgt = 1.0 / np.where(var > 0, var, np.inf)
+    D = d1 - d0
+    norm = float(np.sum(wgt * np.abs(D) ** 2))
+    betas = ((np.sum(wgt * np.conj(D) * (slope - d0), axis=1).real / norm).tolist()
+             if norm > 0 else [])
+    return F, dof, p, betas
 
 
 def _warm_figures(warm: tuple[Warmup, ...]) -> tuple[float, float]:

@@ -59,6 +59,7 @@ from surrogate_rbrdo.discrepancy.rivals import (
 )
 from surrogate_rbrdo.discrepancy.search import SlotEstimate, fit_nuisance, slot_estimate
 from surrogate_rbrdo.discrepancy.sequential import residual_p_values
+from surrogate_rbrdo.discrepancy.soak import SoakBlock, SoakTest, soak_test
 from surrogate_rbrdo.discrepancy.summary import BlockCurves, block_curves
 from surrogate_rbrdo.spindle.effects import Effect
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
@@ -200,6 +201,8 @@ class DiscrepancyResult:
     #: for *confounded*: the generic local changes (:mod:`.rivals`) the data cannot tell from
     #: the set's library members, e.g. a grounded spring beside a bearing
     confounded_generic: tuple[str, ...] = ()
+    #: the thermal soak's verdicts on the drifting candidates it was put to (:mod:`.soak`)
+    soak: tuple[SoakTest, ...] = ()
 
     @property
     def named_effects(self) -> tuple[Effect, ...]:
@@ -313,13 +316,14 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
     fm = ForwardModel(geometry, effects, data.channels, planes, theta_bearings,
                       options.nuisance.mass_disks)
     train, ho, held, base, runs = _recalibrate(fm, data, split, options)
-    sel = _select(train, base, library(options.library, fm.bearing_names), ho, options, rng)
+    sel = _select(train, base, library(options.library, fm.bearing_names), ho, options, rng,
+                  data.soaks)
     stages, named, current, withheld = list(sel.stages), sel.named, sel.current, sel.withheld
     if not withheld:     # a withheld name decides the verdict; more draws could not change it
         stages[-1] = _refined(train, stages[-1], options.alpha_residual / 3, rng)
     res = _conclude(data, train, (held, ho), split, base, current, tuple(stages), named,
                     sel.confounded, sel.generic, withheld, options, one_x[0].coord,
-                    time.perf_counter() - t0)
+                    time.perf_counter() - t0, sel.soak)
     everything = _problem(fm, data, None, options.nuisance, runs)
     held_pts = split.interleaved | split.extrapolated
     gp = ((train, current.evaluation.residuals[0]) if res.verdict == "unnamed_residual"
@@ -335,7 +339,7 @@ def find_discrepancy(data: MeasuredData, geometry: SpindleGeometry, effects: tup
 class Selection:
     """The forward selection's outcome (:func:`_select`): its stages, the names given, a
     confounded set (with the generic changes it holds), the group withheld at the first stage
-    (an unnamed residual) and the fit the model carries."""
+    (an unnamed residual), the fit the model carries and the thermal soak's verdicts."""
 
     stages: tuple[Stage, ...]
     named: tuple[Assessment, ...]
@@ -343,18 +347,22 @@ class Selection:
     generic: tuple[str, ...]
     withheld: tuple[Assessment, ...]
     current: Fit
+    soak: tuple[SoakTest, ...] = ()
 
 
 def _select(train: Problem, base: Fit, cands, ho, options: DiscrepancyOptions,
-            rng: np.random.Generator) -> Selection:
+            rng: np.random.Generator, soaks: tuple[SoakBlock, ...] = ()) -> Selection:
     """Forward selection: a stage of candidate fits on top of the current model until nothing
     passes, a confounded set is found, a name is withheld or ``max_effects`` are named; the
-    last stage (no candidates left) holds the residual tests of the model carried."""
+    last stage (no candidates left) holds the residual tests of the model carried. With a
+    thermal soak in the data (``soaks``), a stage's group holding an effect that drifts with
+    temperature is first put to it (:func:`_soaked`)."""
     current = base
     stages, named = [], []
     confounded: list[Assessment] = []
     generic: tuple[str, ...] = ()          # generic local changes a confounded set holds
     withheld: tuple[Assessment, ...] = ()
+    soak: list[SoakTest] = []
     while True:
         left = tuple(c for c in cands if c.name not in {a.name for a in named})
         n_left = len(left) if len(named) < options.max_effects and not confounded else 0
@@ -364,7 +372,18 @@ def _select(train: Problem, base: Fit, cands, ho, options: DiscrepancyOptions,
                        confound_delta=options.confound_delta, n_jobs=options.n_jobs)
         stages.append(st)
         group = decide(st, options.confound_delta) if n_left else []
-        if group and not any(a.separable for a in group):
+        drifts: set[str] = set()
+        if group and soaks:
+            kept, tests = _soaked(train, current, group, soaks, options.alpha)
+            soak += tests
+            drifts = {t.candidate for t in tests if t.outcome == "drift"}
+            if not kept:
+                # the soak rejects the drift of every member: the detection stands, the
+                # names do not (at the first stage an unnamed residual)
+                withheld = () if named else tuple(group)
+                break
+            group = kept
+        if group and not any(a.separable or a.name in drifts for a in group):
             if (not named and options.generic_confound == "confounded"
                     and group[0].rival is not None and group[0].rival.mutual):
                 # the library effect and its closest generic change explain the data alike
@@ -388,7 +407,42 @@ def _select(train: Problem, base: Fit, cands, ho, options: DiscrepancyOptions,
         else:
             named.append(group[0])
     return Selection(tuple(stages), tuple(named), tuple(confounded), generic, withheld,
-                     current)
+                     current, tuple(soak))
+
+
+def _soaked(train: Problem, current: Fit, group: list[Assessment],
+            soaks: tuple[SoakBlock, ...], level: float
+            ) -> tuple[list[Assessment], tuple[SoakTest, ...]]:
+    """A stage's group after the thermal soak (:mod:`.soak`): each member whose effect drifts
+    with temperature (:attr:`~surrogate_rbrdo.spindle.effects.Effect.thermal_params`) is
+    tested at its own fit against the stage's base (no added drift). If one drifts as
+    predicted, the members that cannot drift leave the group (nor can a generic local change:
+    a spring or a mass does not drift), and so do drifting members the soak does not confirm;
+    if the soak rejects every drifting member's drift, those leave it. Otherwise (no drifting
+    member, or a verdict inconclusive) the group is as it was. The carried member is the
+    best-fitting one that passes every check; a group left without one is empty, as is a
+    group every member of which the soak rejects."""
+    drifting = [a for a in group if a.fit is not None and _drifts(a)]
+    if not drifting:
+        return group, ()
+    tests = tuple(soak_test(train, current, a.fit.fit, a.name, soaks, level)
+                  for a in drifting)
+    out = {t.candidate: t.outcome for t in tests}
+    if "drift" in out.values():
+        kept = [a for a in group if out.get(a.name) == "drift"]
+    elif all(o == "no_drift" for o in out.values()):
+        kept = [a for a in group if a.name not in out]
+    else:
+        return group, tests
+    passing = [a for a in kept if a.passed]
+    if not passing:
+        return [], tests
+    return [passing[0]] + [a for a in kept if a is not passing[0]], tests
+
+
+def _drifts(a: Assessment) -> bool:
+    """Whether a candidate's effect has parameters that follow temperature."""
+    return bool(a.fit.slot.candidate.effect_cls.thermal_params)
 
 
 def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator) -> Stage:
@@ -403,7 +457,7 @@ def _refined(problem: Problem, st: Stage, level: float, rng: np.random.Generator
 
 
 def _conclude(data, train, holdout, split, base, final, stages, named, confounded, generic,
-              withheld, options, speeds, seconds) -> DiscrepancyResult:
+              withheld, options, speeds, seconds, soak=()) -> DiscrepancyResult:
     held, ho = holdout
     parts = {"interleaved": ho.interleaved, "extrapolated": ho.extrapolated}
     last = stages[-1]
@@ -427,14 +481,7 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
         test = {"statistic": ps[worst][0], "p_value": ps[worst][1], "threshold": level,
                 "kind": f"residual lack of fit ({worst})"}
         if withheld:
-            rt = max((a.rival for a in withheld), key=lambda t: t.statistic)
-            test = {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
-                    "kind": "detected, not separable from a generic local change "
-                            f"(encompassing test; closest: {rt.rival})",
-                    # both ways, for the member the model would carry (the policy's):
-                    # does its rival add to its fit (no: explained alike)
-                    "rival_adds": withheld[0].rival.rival_adds,
-                    "mutual": withheld[0].rival.mutual}
+            test = _withheld_test(withheld, soak)
         effects, conf, generic = (), (), ()
     else:
         after = held_out_gap(train, held, parts, final)
@@ -452,6 +499,11 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
                 "candidate": lead.name if lead else None}
         if generic and lead is not None and lead.rival is not None:
             test["generic_rival"] = lead.rival.to_dict()    # the encompassing test, both ways
+        by_soak = [t for t in soak if lead is not None and t.candidate == lead.name
+                   and t.outcome == "drift"]
+        if by_soak and effects:
+            # the sweep alone could not tell it from its rivals; the soak did
+            test["soak"] = by_soak[-1].to_dict()
     separating = "; ".join(t for t in (
         separating_test(list(conf)) if len(conf) > 1 else "",
         # a confounded set with a generic change: the experiment for the member carried (whose
@@ -461,7 +513,35 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
     return DiscrepancyResult(
         verdict, tuple(effects), conf, test, residual, before, after, stages, base, final, split,
         np.asarray(speeds), partial, separating, seconds, options,
-        confounded_generic=generic)       # only a confounded set holds one
+        confounded_generic=generic, soak=tuple(soak))       # only a confounded set holds one
+
+
+def _withheld_test(withheld: tuple[Assessment, ...], soak: tuple[SoakTest, ...]) -> dict:
+    """The ``test`` of a group withheld at the first stage: the soak's rejection of its drift
+    when the soak rejected it; else the encompassing test against its closest generic change;
+    else (the soak confirmed a drift whose member fails a naming check) the soak's test."""
+    names = {a.name for a in withheld}
+    rejected = [t for t in soak if t.outcome == "no_drift" and t.candidate in names]
+    rivals = [a for a in withheld if a.rival is not None and not a.rival.passed]
+    if rejected:
+        t = rejected[0]
+        return {"statistic": t.beta, "p_value": t.p_below, "threshold": t.level,
+                "kind": f"detected; the thermal soak rejects the drift {t.candidate} "
+                        "predicts (statistic: the drift in units of the prediction)",
+                "soak": t.to_dict()}
+    if rivals:
+        rt = max((a.rival for a in rivals), key=lambda t: t.statistic)
+        carried = (withheld[0] if withheld[0].rival is not None else rivals[0]).rival
+        return {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
+                "kind": "detected, not separable from a generic local change "
+                        f"(encompassing test; closest: {rt.rival})",
+                # both ways, for the member the model would carry (the policy's): does its
+                # rival add to its fit (no: explained alike)
+                "rival_adds": carried.rival_adds, "mutual": carried.mutual}
+    t = next(t for t in soak if t.outcome == "drift" and t.candidate in names)
+    return {"statistic": t.beta, "p_value": t.p_drift, "threshold": t.level,
+            "kind": f"detected; the thermal soak confirms the drift of {t.candidate}, which "
+                    "fails a naming check", "soak": t.to_dict()}
 
 
 def _drop_thin_impacts(data: MeasuredData, min_dof: int
@@ -495,6 +575,8 @@ def _rival_separation(data: MeasuredData, withheld: tuple[Assessment, ...]) -> s
     at_speed = any(b.sweep.kind == "impact" and b.sweep.speed_rpm > 0 for b in data.blocks)
     if not at_speed:
         return RIVAL_SEPARATION
+    if data.soaks:                     # a soak was run: its verdicts are in ``soak``
+        return RIVAL_SEPARATION_AT_SPEED
     a = max((a for a in withheld if a.rival is not None), key=lambda a: a.rival.statistic,
             default=None)
     if a is None or a.name not in TEMPERATURE_DRIFT or not a.rival.rival.startswith(

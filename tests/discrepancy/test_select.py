@@ -12,6 +12,7 @@ import pytest
 from surrogate_rbrdo.discrepancy import workflow
 from surrogate_rbrdo.discrepancy.naming import Assessment
 from surrogate_rbrdo.discrepancy.rivals import RivalTest
+from surrogate_rbrdo.discrepancy.soak import SoakTest
 from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, _select
 
 SPRING = "grounded spring at node 4 beside bearing front"
@@ -83,3 +84,71 @@ def test_a_separable_group_is_named_and_the_last_stage_has_no_candidates(monkeyp
     sel, given, _ = _run(monkeypatch, [[hs], []], max_effects=1)
     assert sel.named == (hs,) and len(sel.stages) == 2 and given[1][1] == ()
     assert sel.generic == () and sel.current is hs.fit.fit
+
+
+# ---- the thermal soak as the separating test (workflow._soaked) ---------------------------
+
+def _drifting(name: str, *, separable: bool, drifts: bool) -> Assessment:
+    """As :func:`_assessment`, with the candidate's effect class (drifting or not) and a slot."""
+    a = _assessment(name, separable=separable)
+    cls = SimpleNamespace(thermal_params=("b",) if drifts else ())
+    a.fit.slot = SimpleNamespace(candidate=SimpleNamespace(effect_cls=cls), scope=())
+    return a
+
+
+def _soak_run(monkeypatch, groups, outcomes, soaks=("soak",)):
+    """``_run`` with a soak in the data whose test answers ``outcomes[name]``."""
+    asked = []
+
+    def soak_test(train, current, fit, name, blocks, level):
+        asked.append(name)
+        return SoakTest(name, outcomes[name], 1.0, (12, 13), 0.5, 1.0, 0.1, 3, 0.5, 0.5,
+                        0.1, level, 4)
+
+    monkeypatch.setattr(workflow, "soak_test", soak_test)
+    given = []
+
+    def run_stage(train, current, cands, ho, **kw):
+        given.append(tuple(c.name for c in cands))
+        return SimpleNamespace(index=len(given) - 1)
+
+    monkeypatch.setattr(workflow, "run_stage", run_stage)
+    monkeypatch.setattr(workflow, "decide", lambda st, delta: list(groups[st.index]))
+    cands = tuple(SimpleNamespace(name=n) for n in ("thermal_preload", "housing", "gyroscopics"))
+    sel = _select(None, SimpleNamespace(label="base"), cands, None,
+                  DiscrepancyOptions(max_effects=1), np.random.default_rng(0), soaks)
+    return sel, asked
+
+
+def test_a_drift_the_soak_confirms_names_what_a_spring_mimics(monkeypatch):
+    tp = _drifting("thermal_preload", separable=False, drifts=True)
+    sel, asked = _soak_run(monkeypatch, [[tp], []], {"thermal_preload": "drift"})
+    assert sel.named == (tp,) and sel.withheld == () and asked == ["thermal_preload"]
+    assert [t.outcome for t in sel.soak] == ["drift"]
+
+
+@pytest.mark.parametrize("outcome, named", [("drift", "thermal_preload"),
+                                             ("no_drift", "housing")])
+def test_the_soak_splits_a_confounded_set(monkeypatch, outcome, named):
+    tp = _drifting("thermal_preload", separable=True, drifts=True)
+    hs = _drifting("housing", separable=True, drifts=False)
+    sel, asked = _soak_run(monkeypatch, [[tp, hs], []], {"thermal_preload": outcome})
+    assert [a.name for a in sel.named] == [named] and sel.confounded == ()
+    assert asked == ["thermal_preload"]                 # only a drifting member is tested
+
+
+def test_a_name_whose_drift_the_soak_rejects_is_withheld(monkeypatch):
+    tp = _drifting("thermal_preload", separable=True, drifts=True)
+    sel, _ = _soak_run(monkeypatch, [[tp]], {"thermal_preload": "no_drift"})
+    assert sel.named == () and sel.withheld == (tp,)
+
+
+def test_an_inconclusive_soak_or_none_changes_nothing(monkeypatch):
+    tp = _drifting("thermal_preload", separable=False, drifts=True)
+    sel, asked = _soak_run(monkeypatch, [[tp]], {"thermal_preload": "inconclusive"})
+    assert sel.withheld == (tp,) and sel.named == () and len(sel.soak) == 1
+    sel, asked = _soak_run(monkeypatch, [[tp]], {}, soaks=())
+    assert sel.withheld == (tp,) and asked == [] and sel.soak == ()
+    hs = _drifting("housing", separable=True, drifts=False)
+    sel, asked = _soak_run(monkeypatch, [[hs], []], {})
+    assert sel.named == (hs,) and asked == []           # nothing drifts: no test

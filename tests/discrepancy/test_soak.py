@@ -1,0 +1,157 @@
+"""The thermal soak's test (``discrepancy.soak``): the warm-up fit, the drift test's null
+distribution and power, and the model's predicted drift against the forward model's own
+responses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surrogate_rbrdo.discrepancy.candidates import candidate
+from surrogate_rbrdo.discrepancy.fit import Fit
+from surrogate_rbrdo.discrepancy.forward import ForwardModel
+from surrogate_rbrdo.discrepancy.nuisance import Slot
+from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
+from surrogate_rbrdo.discrepancy.problem import Problem
+from surrogate_rbrdo.discrepancy.soak import (
+    SoakBlock,
+    drift_prediction,
+    drift_test,
+    warmup,
+)
+from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
+from surrogate_rbrdo.discrepancy.synthetic import default_channels
+from surrogate_rbrdo.spindle.effects import ThermalPreload
+
+TIMES = np.array([0.0, 300.0, 600.0, 900.0, 1200.0, 1800.0, 2700.0, 3600.0])
+CH = tuple(Channel(f"p{i}", 10.0 * i, "xy"[i % 2]) for i in range(3))
+
+
+def _soak(rng, drift, *, runs=4, tau=900.0, rise=12.0, noise=1e-9, jitter=0.0,
+          amplitude=1e-6, t_noise=0.05):
+    """Soak phasors ``y_rk = a_r + θ_rk drift + e``: per-run cold responses ``a_r`` 20 % apart,
+    complex noise ``noise`` per channel and a common phase jitter ``jitter`` (rad) per record
+    (the keyphasor's error: correlated across channels)."""
+    t = np.tile(TIMES, (runs, 1))
+    th = -np.expm1(-t / tau)
+    T = 293.0 + rng.normal(0, 0.5, (runs, 1)) + rise * th + rng.normal(0, t_noise, t.shape)
+    a = amplitude * (1 + 0.2 * rng.normal(size=(runs, 1, len(CH)))) * np.exp(
+        1j * rng.uniform(0, 2 * np.pi, (runs, 1, len(CH))))
+    y = a + th[..., None] * drift
+    y = y * np.exp(1j * jitter * rng.normal(size=(runs, len(TIMES), 1)))
+    y = y + noise * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
+    return SoakBlock("soak", 22000.0, CH, t, T, y)
+
+
+@pytest.mark.known_answer
+def test_the_warm_up_comes_back_from_noise_free_temperatures():
+    blk = _soak(np.random.default_rng(1), np.zeros(3), tau=700.0, rise=9.0, t_noise=0.0)
+    w = warmup(blk)
+    assert w.time_constant_s == pytest.approx(700.0, rel=1e-6)
+    assert w.rise_K == pytest.approx(9.0, rel=1e-6)
+    np.testing.assert_allclose(w.fraction, -np.expm1(-blk.times_s / 700.0), atol=1e-8)
+    assert w.measured
+
+
+def test_a_soak_without_a_warm_up_is_inconclusive():
+    blk = _soak(np.random.default_rng(2), np.full(3, 5e-8), rise=0.0)
+    w = warmup(blk)
+    assert not w.measured
+    res = drift_test("thermal_preload", (blk,), (w,), (np.zeros(3),), (np.full(3, 5e-8),),
+                     0.1, 0.01)
+    assert res.outcome == "inconclusive"
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("jitter", [0.0, 3e-3])
+def test_the_drift_p_value_is_uniform_without_a_drift(jitter):
+    """No drift: P(p ≤ 0.05) = 0.05 (binomial bounds over 600 soaks), also with a phase jitter
+    common to the channels (Hotelling's test carries the channels' covariance)."""
+    rng = np.random.default_rng(3)
+    p = np.array([drift_test("x", (blk := _soak(rng, np.zeros(3), jitter=jitter),),
+                             (warmup(blk),), (np.zeros(3),), (np.full(3, 1e-8),), 0.1,
+                             0.01).p_drift for _ in range(600)])
+    n = np.sum(p <= 0.05)
+    assert 17 <= n <= 45           # Binomial(600, 0.05): 30 ± 2.6 SD
+    assert np.sum(p <= 0.5) == pytest.approx(300, abs=45)
+
+
+@pytest.mark.known_answer
+def test_a_drift_as_predicted_is_found_and_one_not_there_is_rejected():
+    rng = np.random.default_rng(4)
+    d = np.array([3e-8 + 1e-8j, -2e-8j, 1e-8 + 0j])
+    blk = _soak(rng, d, jitter=1e-3)
+    w = (warmup(blk),)
+    res = drift_test("thermal_preload", (blk,), w, (np.zeros(3),), (d,), 0.1, 0.01)
+    assert res.outcome == "drift" and res.p_drift < 1e-6
+    assert abs(res.beta - 1.0) < 4 * res.se + 0.02
+    # the same data against a rival that predicts the drift already: nothing beyond it
+    res0 = drift_test("thermal_preload", (blk,), w, (d,), (2 * d,), 0.1, 0.01)
+    assert res0.p_drift > 0.01 and res0.outcome == "no_drift"
+    # a drift three times the one there, known to 10 %: rejected as the candidate's
+    assert drift_test("thermal_preload", (blk,), w, (np.zeros(3),), (3 * d,), 0.1,
+                      0.01).outcome == "inconclusive"
+    # no drift in the data, a candidate predicting one: its drift is rejected
+    still = _soak(rng, np.zeros(3), jitter=1e-3)
+    res1 = drift_test("thermal_preload", (still,), (warmup(still),), (np.zeros(3),), (d,),
+                      0.1, 0.01)
+    assert res1.outcome == "no_drift" and res1.p_below < 1e-3
+
+
+def test_a_prediction_too_uncertain_cannot_reject():
+    rng = np.random.default_rng(5)
+    d = np.array([3e-8 + 1e-8j, -2e-8j, 1e-8 + 0j])
+    still = _soak(rng, np.zeros(3))
+    res = drift_test("thermal_preload", (still,), (warmup(still),), (np.zeros(3),), (d,),
+                     2.0, 0.01)
+    assert res.outcome == "inconclusive"
+
+
+def test_bad_soak_blocks_are_refused_naming_the_field():
+    t = np.tile(TIMES[:3], (3, 1))
+    Y = np.ones((3, 3, 3), dtype=complex)
+    with pytest.raises(ValueError, match="times_s has shape"):
+        SoakBlock("s", 1000.0, CH, t[:2], t[:2], Y[:2])
+    with pytest.raises(ValueError, match="temperature_K"):
+        SoakBlock("s", 1000.0, CH, t, t[:, :2], Y)
+    with pytest.raises(ValueError, match="increase"):
+        SoakBlock("s", 1000.0, CH, t[:, ::-1], t, Y)
+    with pytest.raises(ValueError, match="speed_rpm"):
+        SoakBlock("s", 0.0, CH, t, t, Y)
+
+
+@pytest.mark.known_answer
+def test_the_predicted_drift_is_the_forward_models_hot_minus_cold(spindle):
+    """At a fit carrying a thermal preload growth b: the hot − cold 1x response at the soak
+    speed equals the forward model's responses with the effect at b and at 0, times the fit's
+    unbalance (the measurement chain at its nominal gain)."""
+    sp, g = spindle
+    ch = default_channels(g)
+    fm = ForwardModel(g, sp.effects, ch, (0.0, 350.0))
+    sw = Sweep.unbalance(np.linspace(3000, 22000, 8))
+    u = np.array([4e-6 * np.exp(0.7j), 9e-6 * np.exp(-2.0j)])
+    b = 0.3
+    G = fm.response(sw, np.ones((1, 2)), np.ones((1, 2)), [(ThermalPreload(b=b),)])[0]
+    rng = np.random.default_rng(6)
+    y = G @ u
+    rec = y[None] + 1e-12 * (rng.normal(size=(10,) + y.shape)
+                             + 1j * rng.normal(size=(10,) + y.shape))
+    data = MeasuredData((ComplexBlock.from_repeats("unbalance_1x", sw, ch, rec),))
+    prob = Problem(fm, data)
+    slot = Slot(candidate("thermal_preload", fm.bearing_names))
+    par = prob.parametrisation().with_slots((slot,))
+    x = par.x0()
+    x[par.names.index("thermal_preload.b")] = b
+    ev = prob.evaluate(par, x[None])
+    fit = Fit(par, x, float(ev.chi2[0]), np.eye(1), ev, prob.n_obs, x.size, 1)
+    blk = SoakBlock("soak", 18000.0, ch, np.tile(TIMES[:3], (3, 1)), np.zeros((3, 3)),
+                    np.zeros((3, 3, len(ch)), dtype=complex))
+    d, _ = drift_prediction(prob, fit, blk)
+    one = Sweep.unbalance([18000.0])
+    hot = fm.response(one, np.ones((1, 2)), np.ones((1, 2)), [(ThermalPreload(b=b),)])[0, 0]
+    cold = fm.response(one, np.ones((1, 2)), np.ones((1, 2)), [()])[0, 0]
+    u_fit = ev.unbalance[0][0]
+    np.testing.assert_allclose(d, (hot - cold) @ u_fit, rtol=1e-9,
+                               atol=1e-12 * np.abs(hot @ u_fit).max())
+    np.testing.assert_allclose(u_fit, u, rtol=1e-3)
+    assert np.abs(d).max() > 1e-3 * np.abs(hot @ u).max()      # a drift worth testing
