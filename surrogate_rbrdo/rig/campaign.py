@@ -200,7 +200,8 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     process writes the runs made) and the ramps; every record draws from its own seeded
     stream, so the files do not depend on it. The impact records are made here: the hits of
     one speed and direction share one simulation (:class:`~.simulate.ImpactResponse`, the
-    model is linear in the hit's peak force)."""
+    model is linear in the hit's peak force). With ``options.soak``, each tool's soak records
+    are made here too, a soak run at a time (``rig.soak``: a few records, ~10 ms each)."""
     require_rng(rng)
     check_int("n_jobs", n_jobs, minimum=1)
     check_record_lengths(options.duration_s, options.speeds_rpm + soak_speed(options),

@@ -40,7 +40,11 @@ def _thermal():
 def soaked(tmp_path_factory):
     """A noisy campaign on a truth whose preload grows with temperature."""
     out = tmp_path_factory.mktemp("soaked")
-    return run_campaign(_thermal(), _opts(), out, rng=np.random.default_rng(1))
+    seen = []
+    res = run_campaign(_thermal(), _opts(), out, rng=np.random.default_rng(1),
+                       progress=lambda i, n, rid: seen.append((i, n, rid)))
+    assert seen[-1] == (REPEATS * 4 + 9, REPEATS * 4 + 9, "b0_t0_soak2_k02")
+    return res
 
 
 def _root_and_inst(res, sensors):
