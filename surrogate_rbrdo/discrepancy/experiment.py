@@ -43,6 +43,7 @@ from surrogate_rbrdo.discrepancy.measured import (
     impact_data,
     phasor_block,
     read_phasor_table,
+    soak_blocks,
 )
 from surrogate_rbrdo.discrepancy.nuisance import NuisanceOptions
 from surrogate_rbrdo.discrepancy.observables import THIN_IMPACTS, MeasuredData
@@ -164,7 +165,9 @@ def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
     ``DiscrepancyOptions.use_impacts``), the impact records of the
     dataset (a rig campaign's ``dataset/``, or the dataset folder itself) become FRF blocks,
     one per speed and hit direction (:func:`~.measured.impact_blocks`); those with too few
-    hits are listed in the provenance (:data:`~.observables.THIN_IMPACTS`)."""
+    hits are listed in the provenance (:data:`~.observables.THIN_IMPACTS`). The dataset's
+    soak records become ``MeasuredData.soaks`` (:func:`~.measured.soak_blocks`; none
+    without)."""
     root = Path(path)
     if not root.is_dir():
         raise ValueError(f"data folder {str(root)!r} is not allowed: it is not a folder")
@@ -173,7 +176,7 @@ def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
         rows, pos = dataset_phasor_rows(root)
         imp, thin = impact_data(root) if impacts else ((), ())
         return MeasuredData((phasor_block(rows, pos),) + imp,
-                            provenance=_provenance(root, thin))
+                            provenance=_provenance(root, thin), soaks=soak_blocks(root))
     if not table.is_file():
         raise ValueError(f"data folder {str(root)!r}: no phasors.csv (the 1x phasor table) "
                          "and no index.jsonl (a dataset folder)")
@@ -187,9 +190,11 @@ def data_from_folder(path: str | Path, *, impacts: bool = True) -> MeasuredData:
                              "dataset/records/*.npz to read the channels' positions from")
         pos = channel_positions(recs[0])
     ds = root / "dataset"
-    imp, thin = impact_data(ds) if impacts and (ds / "index.jsonl").is_file() else ((), ())
+    has_ds = (ds / "index.jsonl").is_file()
+    imp, thin = impact_data(ds) if impacts and has_ds else ((), ())
     return MeasuredData((phasor_block(read_phasor_table(table), pos),) + imp,
-                        provenance=_provenance(root, thin))
+                        provenance=_provenance(root, thin),
+                        soaks=soak_blocks(ds) if has_ds else ())
 
 
 def _provenance(root: Path, thin: tuple[tuple[str, int], ...]) -> dict:

@@ -22,6 +22,11 @@
   ``speed_rpm`` (the format's field; 0 at standstill), and the synchronous response must have
   been removed from records at speed (subtract the 1x phasor demodulated against the
   keyphasor; lines near the running frequency are dropped anyway).
+* :func:`soak_blocks` makes thermal soak blocks (:class:`~.soak.SoakBlock`) from the soak
+  records of a dataset folder (kind ``soak``: a speed held from a cold start, labels
+  ``time_s`` and the run's ``build``/``tool``/``run``): per speed held, per run the records
+  in the order of their ``time_s``, each demodulated as a steady record, with the mean of its
+  temperature channel.
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock
+from surrogate_rbrdo.discrepancy.soak import SoakBlock
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.rig.demod import demodulate
 from surrogate_rbrdo.rig.frf import h1_frf
@@ -240,3 +246,73 @@ def _impact_groups(root: str | Path) -> dict[tuple[float, str], list]:
                              "location direction x or y")
         groups.setdefault((speed, force.location.direction), []).append(rec)
     return groups
+
+
+def soak_blocks(root: str | Path) -> tuple[SoakBlock, ...]:
+    """The thermal soaks of the dataset folder ``root``, one :class:`~.soak.SoakBlock` per
+    speed held (in increasing speed; empty without soak records). A run is a record's labels
+    ``(build, tool, run)`` (``build``/``tool`` default 0; ``run``, else ``soak``, is
+    required), its records ordered by their label ``time_s`` (s after reaching speed,
+    required); every run of a speed must have as many records. Each record is demodulated
+    (:func:`~surrogate_rbrdo.rig.demod.demodulate`: its displacement channels, in name
+    order, as the 1x block of :func:`phasor_block` has them) and its temperature is the mean
+    of its temperature channel (quantity ``temperature``, K; the first if several)."""
+    ds = open_dataset(root)
+    groups: dict[float, dict[tuple, list]] = {}
+    for row in ds.select(kind="soak"):
+        lab = row.get("labels", {})
+        run = lab.get("run", lab.get("soak"))
+        if run is None or lab.get("time_s") is None:
+            raise ValueError(f"{root}: soak record {row['id']!r}: labels {lab} need 'time_s' "
+                             "(s after reaching speed) and 'run' (or 'soak')")
+        rec = ds.load(row)
+        if not (math.isfinite(rec.speed_rpm) and rec.speed_rpm > 0):
+            raise ValueError(f"{root}: soak record {rec.id!r}: speed_rpm = {rec.speed_rpm} is "
+                             "not allowed: the speed held, > 0")
+        key = (lab.get("build", 0), lab.get("tool", 0), run)
+        groups.setdefault(float(rec.speed_rpm), {}).setdefault(key, []).append(
+            (float(lab["time_s"]), _soak_point(root, rec)))
+    return tuple(_soak_block(root, s, runs) for s, runs in sorted(groups.items()))
+
+
+def _soak_point(root, rec) -> tuple[dict[str, complex], dict[str, tuple[float, str]], float]:
+    """One soak record's 1x phasor per displacement channel, their positions, temperature."""
+    temp = rec.find("temperature")
+    if not temp:
+        raise ValueError(f"{root}: soak record {rec.id!r} has no temperature channel "
+                         "(quantity 'temperature', K)")
+    p = demodulate(rec)
+    pos = {}
+    for ch in p.channels:
+        c = rec.channel(ch).location
+        if not math.isfinite(c.position_mm) or c.direction not in ("x", "y"):
+            raise ValueError(f"{root}: record {rec.id!r}: channel {ch!r}: location needs "
+                             "position_mm and direction x or y")
+        pos[ch] = (float(c.position_mm), c.direction)
+    return dict(zip(p.channels, p.X[:, 0], strict=True)), pos, float(
+        np.mean(rec.values(temp[0].name)))
+
+
+def _soak_block(root, speed: float, runs: dict[tuple, list]) -> SoakBlock:
+    """The soak block of one speed from its runs' ``(time_s, point)`` lists."""
+    sizes = {k: len(v) for k, v in runs.items()}
+    if len(set(sizes.values())) != 1:
+        raise ValueError(f"{root}: the soak at {speed:g} rpm has runs (build, tool, run) with "
+                         f"different numbers of records {sizes}: every run needs the same "
+                         "times")
+    first = next(iter(runs.values()))[0][1]
+    chans = sorted(first[0])
+    keys = sorted(runs)
+    t, T, Y = [], [], []
+    for k in keys:
+        pts = sorted(runs[k], key=lambda p: p[0])
+        t.append([p[0] for p in pts])
+        T.append([p[1][2] for p in pts])
+        for _, (X, _pos, _) in pts:
+            if sorted(X) != chans:
+                raise ValueError(f"{root}: the soak at {speed:g} rpm: run {k} has channels "
+                                 f"{sorted(X)}, the first record {chans}")
+        Y.append([[X[c] for c in chans] for _, (X, _pos, _) in pts])
+    channels = tuple(Channel(c, *first[1][c]) for c in chans)
+    return SoakBlock(f"soak_{speed:.0f}rpm", speed, channels, np.array(t), np.array(T),
+                     np.array(Y), {"source": "soak records", "runs": [list(k) for k in keys]})

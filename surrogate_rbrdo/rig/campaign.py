@@ -3,8 +3,10 @@
 The paper's campaign by default: 50 speeds uniformly in 1 000–24 000 rpm × 20 repeats of 1 s
 steady-state records, a run-up and a run-down, and impact tests at the tool tip (x and y).
 Each repeat is one *run* (its own thermal state); builds and tool changes are nested around
-runs. Records stream to disk one run at a time (bounded memory); a campaign interrupted and
-started again with the same options and seed skips every record already written.
+runs. With ``soak`` (a :class:`~.thermal.SoakPlan`) each tool ends with a thermal soak: runs of
+steady records at one speed as the spindle warms from a cold start (``rig.soak``). Records
+stream to disk one run at a time (bounded memory); a campaign interrupted and started again
+with the same options and seed skips every record already written.
 
 >>> import numpy as np, tempfile
 >>> from surrogate_rbrdo.rig.truth import reference_truth
@@ -45,8 +47,10 @@ from surrogate_rbrdo.rig.simulate import (
     runup_record,
     steady_records,
 )
+from surrogate_rbrdo.rig.soak import soak_id, soak_jobs, soak_labels, soak_plan, soak_run
 from surrogate_rbrdo.rig.statespace import Reduction, first_order, growth_rates, reduction
 from surrogate_rbrdo.rig.store import DatasetWriter, read_record
+from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, _child
 from surrogate_rbrdo.spindle.assembly import RPM
 from surrogate_rbrdo.spindle.geometry import Unbalance
@@ -96,6 +100,8 @@ class CampaignOptions:
     every run then measures each speed twice, without and with it (record ids ``..._trial``,
     label ``trial = 1``, the mass in the record's ``provenance["test_setup"]``): the
     difference isolates a known excitation (influence-coefficient practice, ISO 21940-13).
+    ``soak``: a thermal soak after each tool's other records (:class:`~.thermal.SoakPlan`,
+    ``rig.soak``; its speed None: the resonance of that tool's sweep), or None for none.
     """
 
     speeds_rpm: tuple[float, ...] | SpeedGrid = field(default_factory=_default_speeds)
@@ -110,6 +116,7 @@ class CampaignOptions:
     impact_speeds_rpm: tuple[float, ...] = (0.0,)
     sensors: SensorSet = SensorSet()
     trial_unbalance: tuple[float, float, float] | None = None
+    soak: SoakPlan | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.speeds_rpm, SpeedGrid):
@@ -138,8 +145,8 @@ class CampaignOptions:
                                  "end_rpm <= 1e6 and 0 < duration_s <= 1e5")
             object.__setattr__(self, "runup", (float(a), float(b), float(d)))
         # the sample rate is checked with the final sensors (run_campaign, [rig] RigTable)
-        check_record_lengths(self.duration_s, self.speeds_rpm, None, self.runup,
-                             self.impact_duration_s)
+        check_record_lengths(self.duration_s, self.speeds_rpm + soak_speed(self), None,
+                             self.runup, self.impact_duration_s)
         if self.trial_unbalance is not None:
             pos, U, ph = (float(v) for v in self.trial_unbalance)
             # a trial mass is a few grams at the rotor's radius: 1e-2 kg m is 100 g at 100 mm
@@ -177,6 +184,7 @@ class CampaignResult:
     seconds: float
     ramps: tuple[str, ...]
     impacts: tuple[str, ...]
+    soaks: tuple[str, ...] = ()
 
 
 PHASOR_COLUMNS = ("record", "build", "tool", "run", "speed_rpm", "measured_speed_rpm",
@@ -192,10 +200,11 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     process writes the runs made) and the ramps; every record draws from its own seeded
     stream, so the files do not depend on it. The impact records are made here: the hits of
     one speed and direction share one simulation (:class:`~.simulate.ImpactResponse`, the
-    model is linear in the hit's peak force)."""
+    model is linear in the hit's peak force). With ``options.soak``, each tool's soak records
+    are made here too, a soak run at a time (``rig.soak``: a few records, ~10 ms each)."""
     require_rng(rng)
     check_int("n_jobs", n_jobs, minimum=1)
-    check_record_lengths(options.duration_s, options.speeds_rpm,
+    check_record_lengths(options.duration_s, options.speeds_rpm + soak_speed(options),
                          options.sensors.daq.sample_rate_hz, options.runup)
     t_start = time.perf_counter()
     out = Path(out_dir)
@@ -212,7 +221,7 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
     total = n_steady + _n_extra(options)
     rows: list[tuple[Any, ...]] = []
     count = written = 0
-    ramps, impacts = [], []
+    ramps, impacts, soaks = [], [], []
     for b in range(options.builds):
         for tl in range(options.tools_per_build):
             st0 = truth.state(root_ss, build=b, tool=tl, run=0)
@@ -222,6 +231,7 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
             # (nothing is written before it passes; one process makes them after it)
             runs = _steady_runs((truth, options, inst, root_ss, red, b, tl), plans, n_jobs)
             check_stable(st0.model(), st0.theta, stability_speeds(options))
+            sweep = np.zeros((options.repeats, len(options.speeds_rpm)))  # largest |1x|
             for r, made_run in enumerate(runs):
                 for trial, ids, new in made_run:
                     for i, rid in enumerate(ids):
@@ -236,6 +246,8 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                             rec_rows = _phasor_rows(
                                 read_record(writer.root / f"records/{rid}.npz"), b, tl, r)
                         rows += rec_rows
+                        if not trial:
+                            sweep[r, i] = max(row[7] for row in rec_rows)   # amplitude_m
                         count += 1
                         if progress:
                             progress(count, total, rid)
@@ -252,15 +264,33 @@ def run_campaign(truth: Truth, options: CampaignOptions, out_dir: str | Path, *,
                 count += 1
                 if progress:
                     progress(count, total, rec_id)
+            if options.soak is not None:
+                plan = soak_plan(options.soak, options.speeds_rpm, sweep)
+                common = (truth, options, inst, root_ss, red, b, tl, plan,
+                          lambda st, r, b=b, tl=tl: _provenance(truth, st, inst, root_ss, b,
+                                                                tl, r))
+                jobs = dict(soak_jobs(plan, done, b, tl))
+                for j in range(plan.runs):        # a run's records made, then written
+                    new = soak_run(common, j, jobs[j]) if j in jobs else {}
+                    for k in range(len(plan.times_s)):
+                        rid = soak_id(b, tl, j, k)
+                        if rid in new:
+                            writer.write(new.pop(rid), labels=soak_labels(
+                                plan, b, tl, options.repeats, j, k))
+                            written += 1
+                        soaks.append(rid)
+                        count += 1
+                        if progress:
+                            progress(count, total, rid)
     table = PhasorTable(PHASOR_COLUMNS, tuple(rows))
     _write_csv(out / "phasors.csv", table)
     secs = time.perf_counter() - t_start
     summary = {"n_records": count, "n_written_this_call": written, "seconds": secs,
-               "n_steady": n_steady, "ramps": ramps, "impacts": impacts}
+               "n_steady": n_steady, "ramps": ramps, "impacts": impacts, "soak": soaks}
     writer.finish(summary)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return CampaignResult(out, writer.root, table, count, written, secs, tuple(ramps),
-                          tuple(impacts))
+                          tuple(impacts), tuple(soaks))
 
 
 def _root_seed(rng: np.random.Generator) -> np.random.SeedSequence:
@@ -296,9 +326,15 @@ def _check_run(st, o: CampaignOptions, red: Reduction, b: int, tl: int, r: int) 
                          "measure (its thermal preload draw; cross-coupling too strong?)")
 
 
+def soak_speed(o: CampaignOptions) -> tuple[float, ...]:
+    """The soak's speed when given (else it is one of ``speeds_rpm``)."""
+    return () if o.soak is None or o.soak.speed_rpm is None else (o.soak.speed_rpm,)
+
+
 def stability_speeds(o: CampaignOptions) -> np.ndarray:
-    """Speeds at which the truth must be stable: the campaign's speeds and the ramp's range."""
-    sp = list(o.speeds_rpm) + [s for s in o.impact_speeds_rpm if s > 0]
+    """Speeds at which the truth must be stable: the campaign's speeds (with the impacts' and
+    a soak's) and the ramp's range."""
+    sp = list(o.speeds_rpm) + [s for s in o.impact_speeds_rpm if s > 0] + list(soak_speed(o))
     if o.runup is not None:
         sp += np.linspace(o.runup[0], o.runup[1], 12).tolist()
     return np.unique(sp)
@@ -311,7 +347,8 @@ class Footprint:
     Disk: every record's samples (``daq.bits`` ≤ 16: 2 bytes, else 4) plus ~24 kB of
     metadata (its provenance), and ``phasors.csv``. Memory above the interpreter's: the
     largest of one run's steady records (all its speeds are held until written, ~128 bytes
-    per channel and sample of temporaries besides), one ramp (~96 bytes per channel and
+    per channel and sample of temporaries besides; a soak run's records likewise, with their
+    temperature channel), one ramp (~96 bytes per channel and
     sample: integration, driver filter in the frequency domain) and one impact (integrated at
     4x the sample rate), plus 128 MB for what the report loads. Those per-sample costs were
     measured with ``resource.getrusage`` (``benchmarks/bench_rig.py`` prints the estimate
@@ -341,18 +378,23 @@ def footprint(options: CampaignOptions) -> Footprint:
     steady = per_tool * o.repeats * len(o.speeds_rpm) * (1 + (o.trial_unbalance is not None))
     ramps = per_tool * (0 if o.runup is None else 1 + o.rundown)
     hits = per_tool * 2 * o.impacts_per_direction * len(o.impact_speeds_rpm)
+    n_k = 0 if o.soak is None else len(o.soak.times_s)
+    soaks = per_tool * (0 if o.soak is None else o.soak.runs * n_k)
     meta = 24e3
     disk = (steady * (n_ch * n_s * item + meta + 160.0 * (n_ch - 1))
-            + ramps * (n_ch * n_r * item + meta) + hits * (n_ch * n_i * item + meta))
-    memory = {"duration_s": n_ch * n_s * (len(o.speeds_rpm) * item + 128.0),
+            + ramps * (n_ch * n_r * item + meta) + hits * (n_ch * n_i * item + meta)
+            + soaks * ((n_ch + 1) * n_s * item + meta))
+    held = max(len(o.speeds_rpm) * n_ch, n_k * (n_ch + 1))      # channels x records at once
+    memory = {"duration_s": n_s * (held * item + 128.0 * n_ch),
               "runup": n_ch * n_r * 96.0, "impact_duration_s": n_ch * 4 * n_i * 48.0 * (hits > 0)}
     by = max(memory, key=memory.get)
-    return Footprint(steady + ramps + hits, float(disk), memory[by] + 128e6, by)
+    return Footprint(steady + ramps + hits + soaks, float(disk), memory[by] + 128e6, by)
 
 
 def _n_extra(o: CampaignOptions) -> int:
     per_tool = (0 if o.runup is None else 1 + o.rundown) + (
-        2 * o.impacts_per_direction * len(o.impact_speeds_rpm))
+        2 * o.impacts_per_direction * len(o.impact_speeds_rpm)) + (
+        0 if o.soak is None else o.soak.runs * len(o.soak.times_s))
     return o.builds * o.tools_per_build * per_tool
 
 

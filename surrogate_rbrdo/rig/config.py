@@ -36,7 +36,12 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.core.memory import require_memory
 from surrogate_rbrdo.core.validate import check_int
-from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, stability_speeds
+from surrogate_rbrdo.rig.campaign import (
+    CampaignOptions,
+    footprint,
+    soak_speed,
+    stability_speeds,
+)
 from surrogate_rbrdo.rig.demod import check_record_lengths
 from surrogate_rbrdo.rig.sensors import SensorSet
 from surrogate_rbrdo.rig.simulate import check_nominal_stable
@@ -127,9 +132,9 @@ RIG_SPEED_FACTOR = 1.5
 
 
 def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
-    """Refuse campaign speeds (steady and ramp) above :data:`RIG_SPEED_FACTOR` x the
-    spindle's ``speed_max_rpm`` (``ValueError`` naming ``campaign.speeds_rpm[i]`` or
-    ``campaign.runup``)."""
+    """Refuse campaign speeds (steady, impact, soak and ramp) above :data:`RIG_SPEED_FACTOR` x
+    the spindle's ``speed_max_rpm`` (``ValueError`` naming ``campaign.speeds_rpm[i]``,
+    ``campaign.impact_speeds_rpm[i]``, ``campaign.soak.speed_rpm`` or ``campaign.runup``)."""
     top = RIG_SPEED_FACTOR * speed_max_rpm
     why = (f"must be at most {top:g} rpm, {RIG_SPEED_FACTOR:g} x the spindle's speed_max_rpm "
            f"= {speed_max_rpm:g} (an overspeed test runs at 1.15 x)")
@@ -139,6 +144,9 @@ def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
     for i, v in enumerate(options.impact_speeds_rpm):
         if v > top:
             raise ValueError(f"campaign.impact_speeds_rpm[{i}] = {v:g} is not allowed: {why}")
+    soak = options.soak
+    if soak is not None and soak.speed_rpm is not None and soak.speed_rpm > top:
+        raise ValueError(f"campaign.soak.speed_rpm = {soak.speed_rpm:g} is not allowed: {why}")
     if options.runup is not None and options.runup[1] > top:
         raise ValueError(f"campaign.runup = {list(options.runup)} is not allowed: end_rpm {why}")
 
@@ -150,7 +158,8 @@ def rig_plan(cfg: RigConfig, effects: Any = ()) -> RigPlan:
     o = cfg.options
     try:        # the sample rate against the top speed (the record lengths: CampaignOptions)
         check_rig_speeds(o, cfg.truth.geometry.speed_max_rpm)
-        check_record_lengths(o.duration_s, o.speeds_rpm, o.sensors.daq.sample_rate_hz, o.runup)
+        check_record_lengths(o.duration_s, o.speeds_rpm + soak_speed(o),
+                             o.sensors.daq.sample_rate_hz, o.runup)
     except ValueError as exc:
         raise ValueError(f"rig.{exc}") from None
     sp = stability_speeds(o)       # the campaign checks them all for each tool

@@ -80,12 +80,13 @@ class ShaftAngle:
 
 def shaft_angle(record: Record, *, constant_speed: bool | None = None,
                 source: str | None = None) -> ShaftAngle:
-    """The shaft angle of ``record`` (constant speed for ``steady`` records by default)."""
+    """The shaft angle of ``record`` (constant speed for ``steady`` and ``soak`` records by
+    default)."""
     e = keyphasor_edges(record, source=source)
     if e.size < 3:
         raise RecordError(source or f"record {record.id!r}", "keyphasor",
                           f"only {e.size} pulses: need at least 3 revolutions")
-    cs = record.kind == "steady" if constant_speed is None else constant_speed
+    cs = record.kind in ("steady", "soak") if constant_speed is None else constant_speed
     return ShaftAngle(e, cs)
 
 

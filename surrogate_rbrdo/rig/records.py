@@ -34,9 +34,10 @@ FORMAT_NAME = "surrogate_rbrdo.rig.record"
 FORMAT_VERSION = 1
 #: what a channel measures, and the SI unit its calibrated values are in
 QUANTITIES = {"displacement": "m", "force": "N", "keyphasor": "V", "acceleration": "m/s^2",
-              "velocity": "m/s", "voltage": "V"}
-#: test kinds: constant speed, speed ramps, standstill impact (hammer) tests
-KINDS = ("steady", "runup", "rundown", "impact")
+              "velocity": "m/s", "voltage": "V", "temperature": "K"}
+#: test kinds: constant speed, speed ramps, impact (hammer) tests, and a steady record taken
+#: during a thermal soak (a speed held from a cold start, ``rig.thermal``)
+KINDS = ("steady", "runup", "rundown", "impact", "soak")
 DIRECTIONS = ("x", "y", "")
 
 
@@ -126,13 +127,14 @@ class Record:
     id : str
         Unique within a dataset.
     kind : str
-        ``steady`` (constant speed), ``runup``/``rundown`` (speed ramp) or ``impact``.
+        ``steady`` (constant speed), ``runup``/``rundown`` (speed ramp), ``impact`` or
+        ``soak`` (constant speed during a thermal soak, with a temperature channel).
     sample_rate_hz : float
     channels : tuple of ChannelSpec
     data : ndarray (n_channels, n_samples)
         Integer counts (int16/int32) or floats; calibrated by each channel's calibration.
     speed_rpm : float
-        Nominal constant speed (steady), 0 for impact tests, NaN for ramps.
+        Nominal constant speed (steady, soak), 0 for impact tests, NaN for ramps.
     speed_profile : ndarray (2, P), optional
         ``[time_s, speed_rpm]`` breakpoints of a ramp (linear in between).
     provenance : mapping

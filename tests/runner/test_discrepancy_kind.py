@@ -15,6 +15,7 @@ import pytest
 
 from surrogate_rbrdo.core.schema import parse
 from surrogate_rbrdo.reporting import plots_discrepancy
+from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.runner.cli import run_experiment
 from surrogate_rbrdo.runner.execute import RunFailed, prepare
 from surrogate_rbrdo.runner.experiments import discrepancy as kind
@@ -153,6 +154,7 @@ def test_the_shipped_configs_build(name):
     assert prep.plan.options.nuisance.gain_sd == 0.02
     hidden = [e.name for e in prep.plan.rig.rig.truth.hidden]
     assert hidden == ([] if "null" in name else ["housing"])
+    assert prep.plan.rig.rig.options.soak == SoakPlan()      # soak = {}: the defaults
 
 
 def test_the_impact_config_states_the_test_plan():
@@ -161,6 +163,7 @@ def test_the_impact_config_states_the_test_plan():
     camp = prep.plan.rig.rig.options
     assert camp.impact_speeds_rpm == (0.0, 10000.0, 20000.0)
     assert camp.impacts_per_direction == 20
+    assert camp.soak == SoakPlan()
     assert [e.name for e in prep.plan.rig.rig.truth.hidden] == ["cross_coupling"]
 
 
