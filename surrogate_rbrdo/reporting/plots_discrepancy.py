@@ -203,12 +203,16 @@ def plot_all(result, out_dir: str | Path, *, n_jobs: int = 1) -> dict[str, Path]
 
 
 def verdict_line(res: Any) -> str:
-    """One line: the verdict, what is named, the test and the held-out gap."""
+    """One line: the verdict, what is named, the test (and the thermal soak's verdicts, when
+    one was consulted) and the held-out gap."""
     t, b, a = res.test, res.gap_before, res.gap_after
     what = {"named": ", ".join(e.name for e in res.effects),
             "confounded": " | ".join(res.confounded_with + tuple(
                 f"({g})" for g in res.confounded_generic))}.get(res.verdict, "")
-    return (f"{res.verdict}{': ' + what if what else ''} (statistic {t['statistic']:.4g}, "
+    soak = "; ".join(f"soak: {s.candidate} {s.outcome.replace('_', ' ')} (p {s.p_drift:.2g})"
+                     for s in res.soak)
+    return (f"{res.verdict}{': ' + what if what else ''}{' [' + soak + ']' if soak else ''} "
+            f"(statistic {t['statistic']:.4g}, "
             f"p {t['p_value']:.3g}, threshold {t['threshold']:g}); held-out RMSE "
             f"{b.rmse:.4g} -> {a.rmse:.4g} um, chi2/dof {b.chi2_dof:.3g} -> {a.chi2_dof:.3g} "
             f"(predictive {b.predictive_chi2_dof:.3g} -> {a.predictive_chi2_dof:.3g})")

@@ -259,7 +259,9 @@ class SpeedSoftening(Effect):
 class ThermalPreload(Effect):
     """Thermal preload growth ``F(Ω) = F₀ (1 + b (Ω/Ω_ref)^q)``; with ``k ∝ F^{1/3}``.
 
-    Signature: the opposite trend to softening (stiffness rises with speed).
+    Signature: the opposite trend to softening (stiffness rises with speed); the growth
+    follows the bearings' temperature, so at a fixed speed it drifts as the spindle warms
+    (a thermal soak, ``rig.thermal``, :meth:`Effect.warming`).
     """
 
     name: ClassVar[str] = "thermal_preload"
