@@ -39,11 +39,16 @@ inside span(nuisance, spring at its bearing's node)). A passive spring can stand
 preload growth (the name is withheld: a thermal soak separates them), not for the softening.
 
 The generic rivals are linear at the stage's base fit (nuisance refitted with them, to first
-order); the library candidate is its nonlinear fit. With both in one model the χ² is
-``χ²_lib − Δ(rival | lib)``, the rival's first-order gain on the candidate's residual with the
-candidate's fit Jacobian and the nuisance projected out. A strong effect far from its
-linearisation favours the library (its rival is only linear): that direction of error names an
-effect the final lack-of-fit tests then still check.
+order): the rival alone has ``χ²_base − Δ(rival)`` with the base's nuisance projected out; the
+library candidate is its nonlinear fit. With both in one model the χ² is
+``χ²_lib − Δ(rival | lib)``, the rival's first-order gain on the candidate's residual with what
+the candidate's model refits — its fit's Jacobian and the unbalance at its fit — projected out
+(the same gain is the converse direction, ``rival_adds``). Before the ninth session the joint
+model also projected the *base's* nuisance columns out, about 22 further directions where the
+base and the fit differ, which understated the rival's gain on top of the candidate and could
+make the statistic negative (review s11 H2: −14 to −19); on a linear problem the two agree. A
+strong effect far from its linearisation favours the library (its rival is only linear): that
+direction of error names an effect the final lack-of-fit tests then still check.
 """
 
 from __future__ import annotations
@@ -295,17 +300,15 @@ def rival_test(problem: Problem, lin: Linearisation, base_chi2: float, base_r: n
     N, G, U, labels, bounds, live = rv
     gain = _bounded_fit(U, _orth(N, base_r[:, None])[:, 0], bounds)[0]    # rival alone
     gg = np.einsum("nk,nk->k", G, G)
-    V = _orth(np.hstack([N, fit_jac]), G)
-    V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
-    both = fit_chi2 - _bounded_fit(V, fit_r, bounds)[0]                  # rival + candidate
-    stat = np.where(live, (base_chi2 - gain) - both, np.inf)
-    j = int(np.argmin(stat))
-    # the converse for that rival: its gain on the candidate's residual with what the
-    # candidate's own model refits (its Jacobian, the unbalance at its fit) projected out
+    # every rival's gain on the candidate's residual with what the candidate's own model
+    # refits (its Jacobian, the unbalance at its fit) projected out: the joint model, to first
+    # order at the candidate's fit (its χ² is ``fit_chi2 − adds``)
     own = fit_jac if fit_design is None else np.hstack(
         [fit_jac, _apply(_data_whitening(problem), fit_design)])
-    v = _orth(own, G[:, j:j + 1])
-    adds = (float(_bounded_fit(v, fit_r, bounds[j:j + 1])[0][0])
-            if float(v[:, 0] @ v[:, 0]) > 1e-12 * gg[j] else 0.0)
+    V = _orth(own, G)
+    V = np.where(np.einsum("nk,nk->k", V, V) > 1e-12 * gg, V, 0.0)
+    adds = _bounded_fit(V, fit_r, bounds)[0]
+    stat = np.where(live, (base_chi2 - gain) - (fit_chi2 - adds), np.inf)
+    j = int(np.argmin(stat))
     return RivalTest(float(stat[j]), threshold, labels[j] if labels else str(j),
-                     float(gain[j]), level, k, adds, bool(0.0 in bounds[j]))
+                     float(gain[j]), level, k, float(adds[j]), bool(0.0 in bounds[j]))

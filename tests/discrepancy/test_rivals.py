@@ -212,11 +212,14 @@ def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
     (a preload growth) and its closest rival is a grounded spring beside a bearing it acts on
     (the spring spans that bearing's speed law, no excitation separates them); else a larger
     effect or more speeds — also for a member that does not drift (a soak cannot separate a
-    housing from a spring) or one at the other bearing."""
+    housing from a spring), one at the other bearing, or when the data hold a soak already."""
     ch = (Channel("t", 0.0, "x"),)
     one_x = SimpleNamespace(sweep=Sweep.unbalance([1000.0, 4000.0]))
-    at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))))
-    standstill = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch))))
+    at_speed = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch, 8e3))),
+                               soaks=())
+    standstill = SimpleNamespace(blocks=(one_x, SimpleNamespace(sweep=Sweep.impact([50], ch))),
+                                 soaks=())
+    soaked = SimpleNamespace(blocks=at_speed.blocks, soaks=("a soak",))
 
     def held(name, scope, *labels):
         fit = SimpleNamespace(slot=SimpleNamespace(scope=scope))
@@ -228,6 +231,8 @@ def test_a_name_withheld_for_a_spring_asks_for_a_thermal_soak():
         == rivals.RIVAL_SEPARATION
     soak, more = rivals.RIVAL_SEPARATION_SPRING, rivals.RIVAL_SEPARATION_AT_SPEED
     assert _rival_separation(at_speed, held("thermal_preload", (), *spring)) == soak
+    # a soak was run already (its verdicts are in the findings): more speeds or a larger effect
+    assert _rival_separation(soaked, held("thermal_preload", (), *spring)) == more
     assert _rival_separation(at_speed, held("thermal_preload", ("a",), *spring)) == soak
     assert _rival_separation(at_speed, held("thermal_preload", ("b",), *spring)) == more
     assert _rival_separation(at_speed, held("housing", (), *spring)) == more
@@ -269,3 +274,32 @@ def test_a_one_sided_rival_is_mutual_only_below_its_mixture_quantile():
         assert t.mutual is mutual
     assert RivalTest(0.5, 6.63, "spring", 10.0, level, 1, q - 1e-9, True).mutual
     assert not RivalTest(0.5, 6.63, "spring", 10.0, level, 1, q + 1e-9, True).mutual
+
+
+@pytest.mark.known_answer
+def test_the_forward_statistic_is_the_nested_least_squares_gain_when_base_and_fit_differ():
+    """The base's nuisance columns differ from those of the candidate's fit (a nonlinear model
+    linearised at two points): what the candidate adds to each rival is ``χ²(base + rival) −
+    χ²(fit + rival)``, each model's least squares on its own columns — never negative — and not
+    the joint model with the base's columns projected out as well (review s11 H2)."""
+    rng = np.random.default_rng(7)
+    lin, nuis, gen = _setup(rng)
+    n = nuis.shape[0]
+    moved = nuis + 0.5 * rng.standard_normal(nuis.shape)       # the nuisance at the fit
+    d = rng.standard_normal(n)
+    y = 2.0 * d + 1.5 * gen[:, 0] + 0.1 * rng.standard_normal(n)
+    r0 = _ls_residual(nuis, y)
+    A = np.hstack([moved, d[:, None]])
+    r1 = _ls_residual(A, y)
+    t = rival_test(_problem(), lin, float(r0 @ r0), r0, float(r1 @ r1), r1, A, 1, 6.63)
+    expected = []
+    for j in range(gen.shape[1]):
+        alone = _ls_residual(np.hstack([nuis, gen[:, j:j + 1]]), y)
+        both = _ls_residual(np.hstack([A, gen[:, j:j + 1]]), y)
+        expected.append(float(alone @ alone - both @ both))
+    j = int(np.argmin(expected))
+    assert t.rival == f"g{j}"
+    assert t.statistic == pytest.approx(expected[j], rel=1e-8)
+    assert min(expected) > 0
+    both = _ls_residual(np.hstack([A, gen[:, j:j + 1]]), y)
+    assert t.rival_adds == pytest.approx(float(r1 @ r1 - both @ both), rel=1e-8)
