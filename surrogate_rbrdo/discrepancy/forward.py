@@ -10,21 +10,22 @@ recalibrated; :mod:`.impedance`), and everything a batch row changes is coupled 
 where ``Z`` is block diagonal: each bearing's dynamic stiffness (housing stage condensed in) on
 its node's x, y DOFs, each recalibrated disk's change of mass and inertia on its node's four
 DOFs, and for a row with a joint (a tool interface: a zero-length joint splitting the rotor)
-the joint's change from a reference stiffness on its two nodes' eight DOFs. The condensed rotor
-depends on the rotor only, so it is computed once per rotor (cached) and every batch row — a
-bearing stiffness factor θ, a damping factor, a disk mass factor, a candidate effect's
-parameters — costs one small solve per point.
+the joint's change of stiffness on the relative displacement of its two nodes (four DOFs). The
+condensed rotor depends on the rotor only, so it is computed once per rotor (cached) and every
+batch row — a bearing stiffness factor θ, a damping factor, a disk mass factor, a candidate
+effect's parameters — costs one small solve per point.
 
-A joint's rows share the rotor with the joint at a reference stiffness: each of the row's
-``k_t``, ``k_r`` rounded to half a decade (:data:`JOINT_STEPS_PER_DECADE`), so the rows of a fit
-and of its finite differences share one condensation. The update is exact whatever the
-reference (the joint couples its two retained nodes only), but its round-off grows with
-``|k − k_ref| / k``: a fixed stiff reference would leave ``I + Z H_PP`` nearly singular for a
-soft joint, a fixed soft one would subtract nearly equal receptances for a stiff joint; within
-``10^(±1/4)`` the responses agree with a condensation at the row's own stiffness to round-off.
-Other rotor-acting effects (gyroscopics: a change of the whole rotor) and rows with two joints
-are condensed per distinct rotor. Nothing is approximated: the tests compare with the dense
-solve of :meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
+Rows with a joint share the rotor with the joint at a fixed reference stiffness
+(:data:`JOINT_REFERENCE`, the middle of a tool interface's plausible range), both of its nodes
+retained. The joint element ``[[D, −D], [−D, D]] = V D Vᵀ`` (``V = [I; −I]``) changes by
+``V ΔD Vᵀ``, so ``P`` here is ``Vᵀ`` (the relative displacement) and ``Z = (1 + iωβ) ΔD``: the
+joint's stiffness enters only on that diagonal. Unlike a condensation at the row's own
+stiffness — where a near-rigid joint (the candidates keep an "off" partner stiffness at 1e18)
+is subtracted from itself and loses ``k / k_structure`` of the digits — the responses then
+agree with an exact solve to round-off at any ``k`` (as ``Z → ∞`` the update tends to the rigid
+constraint). Other rotor-acting effects (gyroscopics: a change of the whole rotor) and rows
+with two joints are condensed per distinct rotor. Nothing is approximated: the tests compare
+with the dense solve of :meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
 
 Loads are unit loads: a unit unbalance (1 kg m) in each plane for the 1x sweep (force
 ``Ω² [1, −i]``, :func:`~surrogate_rbrdo.spindle.harmonic.unbalance_load`), a unit force for an
@@ -34,7 +35,6 @@ impact test, so the response to any unbalance is ``G u`` (linear in the plane ph
 from __future__ import annotations
 
 import hashlib
-import math
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -165,8 +165,8 @@ class ForwardModel:
     def layout(self, model: SpindleModel, sweep: Sweep, joint_mm: float | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Retained DOFs (global), the channels' and coupled DOFs' positions among them (bearing
-        x, y, then four per recalibrated disk, then with ``joint_mm`` the four of each of the
-        two nodes of the model's joint there), and the sweep's unit loads ``(X, r, L)``."""
+        x, y, then four per recalibrated disk), and the sweep's unit loads ``(X, r, L)``; with
+        ``joint_mm`` the two nodes of the model's joint there are retained too."""
         joint = [] if joint_mm is None else _joint_nodes(model, self.node(model, joint_mm))
         nodes = sorted({self.node(model, p) for p in self._positions}
                        | {self.node(model, c.position_mm) for c in sweep.excitations}
@@ -178,7 +178,6 @@ class ForwardModel:
         cpl = [[at[int(n)], at[int(n)] + 1] for n in model.bearing_nodes]
         cpl += [list(range(at[self.node(model, d.position_mm)],
                            at[self.node(model, d.position_mm)] + 4)) for d in self._disks]
-        cpl += [list(range(at[n], at[n] + 4)) for n in joint]
         r = dofs.size
         if sweep.kind == "unbalance_1x":
             F = np.zeros((sweep.freq_rad_s.size, r, len(self.planes_mm)), dtype=complex)
@@ -231,20 +230,28 @@ class ForwardModel:
                ) -> _Condensed:
         """The condensed rotor at the sweep's points (memoised per rotor, sweep and coupled
         joint: ``joint_mm`` couples the model's joint there, :meth:`layout`)."""
+        joint = () if joint_mm is None else (joint_mm,)
+
         def make() -> _Condensed:
             dofs, out, cpl, F = self.layout(model, sweep, joint_mm)
             S = self._schur(model, sweep, dofs)
-            rhs = np.concatenate([F, np.broadcast_to(np.eye(dofs.size)[:, cpl],
-                                                     S.shape[:1] + (dofs.size, cpl.size))], -1)
+            E = np.eye(dofs.size)[:, cpl]
+            if joint_mm is not None:                     # the joint's relative displacement
+                left = 4 * self.node(model, joint_mm) + np.arange(4)
+                jl = np.searchsorted(dofs, left)
+                jr = np.searchsorted(dofs, left + 4)
+                E = np.concatenate([E, np.eye(dofs.size)[:, jl] - np.eye(dofs.size)[:, jr]], 1)
+            rhs = np.concatenate([F, np.broadcast_to(E, S.shape[:1] + E.shape)], -1)
             try:
                 H = np.linalg.solve(S, rhs)              # one factorisation for both
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
+            rows = ((lambda X: X[:, cpl]) if joint_mm is None else
+                    (lambda X: np.concatenate([X[:, cpl], X[:, jl] - X[:, jr]], 1)))
             return _Condensed(*(np.ascontiguousarray(a) for a in (
-                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])), system=self._key(
-                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes()))
-        joint = () if joint_mm is None else (joint_mm,)
+                HF[:, out], HP[:, out], rows(HP), rows(HF))), system=self._key(
+                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes(), *joint))
         return _lru(self._condensed, self._key(model, sweep, sweep.kind, sweep.excitations,
                                                *joint), make, self.cache_size)
 
@@ -504,11 +511,11 @@ COUPLE_BLOCK_BYTES = 2**25
 def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None,
             Zj: np.ndarray | None = None) -> np.ndarray:
     """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2),
-    disk changes ``Zd`` (B, X, nd, 4, 4) and a joint's change ``Zj`` (B, X, 8, 8), in blocks of
+    disk changes ``Zd`` (B, X, nd, 4, 4) and a joint's change ``Zj`` (B, X, 4, 4), in blocks of
     rows of at most :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the
     same whatever the block)."""
     B, X, nb = Z.shape[:3]
-    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2]) + (0 if Zj is None else 8)
+    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2]) + (0 if Zj is None else 4)
     per_row = 16 * X * n * (3 * n + 2 * c.H_PF.shape[-1])
     step = max(1, COUPLE_BLOCK_BYTES // max(per_row, 1))
     if B <= step:
@@ -545,9 +552,12 @@ def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None,
     return c.H_OF[None] - c.H_OP[None] @ U
 
 
-#: a coupled joint's reference stiffnesses are its own rounded to this many steps per decade
-#: (:func:`_reference_stiffness`)
-JOINT_STEPS_PER_DECADE = 2
+#: the reference joint's ``(k_t, k_r)`` (N/m, N m/rad) a coupled joint's change is measured
+#: from: the middle of a tool interface's plausible range (``spindle.effects.ToolInterface``),
+#: near the shaft's own stiffness across the joint, so neither the reference rotor nor the
+#: relative displacement's receptance is dominated by the joint (responses at any row
+#: stiffness, 1e6 to 1e18, agree with an exact solve to ~1e-12 of their scale)
+JOINT_REFERENCE = (1e8, 1e6)
 
 
 @dataclass(frozen=True)
@@ -566,24 +576,14 @@ class _ReferenceJoint(Effect):
         return Joint(self.position_mm, self.k_t_N_per_m, self.k_r_Nm_per_rad)
 
 
-def _reference_stiffness(k: float) -> float:
-    """``k`` rounded to the nearest of :data:`JOINT_STEPS_PER_DECADE` steps per decade (within
-    a factor ``10^(1/4)`` with two): the reference a joint's change is measured from.
-
-    >>> _reference_stiffness(1.2e8), _reference_stiffness(2.943e9) == 10 ** 9.5
-    (100000000.0, True)
-    """
-    return 10.0 ** (round(math.log10(k) * JOINT_STEPS_PER_DECADE) / JOINT_STEPS_PER_DECADE)
-
-
 def _rotor_and_joint(extra: tuple[Effect, ...]) -> tuple[tuple[Effect, ...], Joint | None]:
     """A row's rotor-acting effects, and its joint if it is coupled low-rank.
 
     It is when exactly one of those effects has a joint, finite and positive, and acts on the
     rotor through it alone (a tool interface): that effect is replaced by a
-    :class:`_ReferenceJoint` at its position with the reference stiffnesses
-    (:func:`_reference_stiffness`), so rows whose joints round alike share one condensed rotor,
-    and the row's own joint is returned. Otherwise the effects as they are and None.
+    :class:`_ReferenceJoint` at its position with the stiffnesses :data:`JOINT_REFERENCE`, so
+    all such rows share one condensed rotor, and the row's own joint is returned. Otherwise
+    the effects as they are and None.
     """
     rotor = tuple(x for x in extra if acts_on_rotor(x))
     found = [(k, j) for k, x in enumerate(rotor) if (j := x.joint()) is not None]
@@ -593,24 +593,21 @@ def _rotor_and_joint(extra: tuple[Effect, ...]) -> tuple[tuple[Effect, ...], Joi
     ks = (j.k_t_N_per_m, j.k_r_Nm_per_rad)
     if rotor_hooks(rotor[k]) != {"joint"} or not all(0 < v < np.inf for v in ks):
         return rotor, None
-    ref = _ReferenceJoint(position_mm=j.position_mm,
-                          k_t_N_per_m=_reference_stiffness(ks[0]),
-                          k_r_Nm_per_rad=_reference_stiffness(ks[1]))
+    ref = _ReferenceJoint(position_mm=j.position_mm, k_t_N_per_m=JOINT_REFERENCE[0],
+                          k_r_Nm_per_rad=JOINT_REFERENCE[1])
     return rotor[:k] + (ref,) + rotor[k + 1:], j
 
 
 def _joint_impedance(freq: np.ndarray, beta: float, joints: Sequence[Joint], ref: Joint
                      ) -> np.ndarray:
-    """Each row's joint minus the reference as a dynamic stiffness ``(B, X, 8, 8)`` on the
-    DOFs ``[x, y, a, b]`` of its two nodes: ``(1 + iωβ) [[ΔD, −ΔD], [−ΔD, ΔD]]``,
-    ``ΔD = diag(Δk_t, Δk_t, Δk_r, Δk_r)`` — the assembled joint element's change
-    (``spindle.assembly``), with the rotor's stiffness-proportional damping ``β`` it carries.
-    """
+    """Each row's joint minus the reference as a dynamic stiffness ``(B, X, 4, 4)`` on the
+    joint's relative displacement ``u_left − u_right`` (``[x, y, a, b]``):
+    ``(1 + iωβ) ΔD``, ``ΔD = diag(Δk_t, Δk_t, Δk_r, Δk_r)``. The assembled joint element
+    (``spindle.assembly``) is ``[[D, −D], [−D, D]] = V D Vᵀ`` with ``V = [I; −I]``, so its
+    change is rank four; it carries the rotor's stiffness-proportional damping ``β``."""
     dk = np.array([[j.k_t_N_per_m - ref.k_t_N_per_m] * 2
                    + [j.k_r_Nm_per_rad - ref.k_r_Nm_per_rad] * 2 for j in joints])
-    D = dk[:, :, None] * np.eye(4)                                      # (B, 4, 4)
-    blk = np.concatenate([np.concatenate([D, -D], 2), np.concatenate([-D, D], 2)], 1)
-    return (1 + 1j * freq * beta)[None, :, None, None] * blk[:, None]
+    return (1 + 1j * freq * beta)[None, :, None, None] * (dk[:, :, None] * np.eye(4))[:, None]
 
 
 def _joint_nodes(model: SpindleModel, left: int) -> list[int]:
