@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -45,6 +45,7 @@ import numpy as np
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.discrepancy.impedance import (
     BearingParts,
+    acts_on_bearings,
     acts_on_rotor,
     bearing_dynamic_stiffness,
     bearing_parts,
@@ -235,22 +236,16 @@ class ForwardModel:
         def make() -> _Condensed:
             dofs, out, cpl, F = self.layout(model, sweep, joint_mm)
             S = self._schur(model, sweep, dofs)
-            E = np.eye(dofs.size)[:, cpl]
-            if joint_mm is not None:                     # the joint's relative displacement
-                left = 4 * self.node(model, joint_mm) + np.arange(4)
-                jl = np.searchsorted(dofs, left)
-                jr = np.searchsorted(dofs, left + 4)
-                E = np.concatenate([E, np.eye(dofs.size)[:, jl] - np.eye(dofs.size)[:, jr]], 1)
+            E, pick = _coupling(dofs.size, cpl, None if joint_mm is None else np.searchsorted(
+                dofs, 4 * self.node(model, joint_mm) + np.arange(8)))
             rhs = np.concatenate([F, np.broadcast_to(E, S.shape[:1] + E.shape)], -1)
             try:
                 H = np.linalg.solve(S, rhs)              # one factorisation for both
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
-            rows = ((lambda X: X[:, cpl]) if joint_mm is None else
-                    (lambda X: np.concatenate([X[:, cpl], X[:, jl] - X[:, jr]], 1)))
             return _Condensed(*(np.ascontiguousarray(a) for a in (
-                HF[:, out], HP[:, out], rows(HP), rows(HF))), system=self._key(
+                HF[:, out], HP[:, out], pick(HP), pick(HF))), system=self._key(
                 model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes(), *joint))
         return _lru(self._condensed, self._key(model, sweep, sweep.kind, sweep.excitations,
                                                *joint), make, self.cache_size)
@@ -355,9 +350,12 @@ class ForwardModel:
             model = self.model(rotor)
             plan = self._plan(model, sweeps, n_load, joint_mm)
             Z = np.zeros((len(rows), spin.size, self.n_bearings, 2, 2), dtype=complex)
+            # rows whose effects on the bearings agree share their bearing parts (a tool
+            # interface, gyroscopics or an unbalance error leave them as they are)
             groups: dict[tuple[Effect, ...], list[int]] = {}
             for j, i in enumerate(rows):
-                groups.setdefault(extras[i], []).append(j)
+                groups.setdefault(tuple(x for x in extras[i] if acts_on_bearings(x)),
+                                  []).append(j)
             for ks in kinds.values():
                 pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
                 self._bearings_into(Z, pts, groups, np.asarray(rows), spin[pts], freq[pts],
@@ -417,9 +415,9 @@ class ForwardModel:
     def _bearings_into(self, Z: np.ndarray, pts: np.ndarray, groups: dict, rows: np.ndarray,
                        spin: np.ndarray, freq: np.ndarray, theta: np.ndarray, ds: np.ndarray
                        ) -> None:
-        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: extra effects →
-        positions ``sub`` among ``rows``), all groups in one call: their θ-free stiffness
-        stacked row by row, then each row's housing stages condensed in
+        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: the extra effects
+        acting on bearings → positions ``sub`` among ``rows``), all groups in one call: their
+        θ-free stiffness stacked row by row, then each row's housing stages condensed in
         (:func:`~.impedance.with_supports`) — the same elementwise arithmetic and 2 × 2 solves
         as one call per group (a linearisation has thousands of one-row groups)."""
         items = [(sub, self.bearing_parts(extra, spin)) for extra, sub in groups.items()]
@@ -608,6 +606,20 @@ def _joint_impedance(freq: np.ndarray, beta: float, joints: Sequence[Joint], ref
     dk = np.array([[j.k_t_N_per_m - ref.k_t_N_per_m] * 2
                    + [j.k_r_Nm_per_rad - ref.k_r_Nm_per_rad] * 2 for j in joints])
     return (1 + 1j * freq * beta)[None, :, None, None] * (dk[:, :, None] * np.eye(4))[:, None]
+
+
+def _coupling(r: int, cpl: np.ndarray, joint: np.ndarray | None
+              ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+    """How the coupled DOFs ``P`` sit among ``r`` retained ones: ``E`` (r, nP), the unit loads
+    on them (``H E`` is ``H_·P``), and ``pick``, their displacements from retained ones
+    (``Eᵀ X`` along axis 1). Unit vectors at ``cpl``, then with ``joint`` (its two nodes'
+    eight positions, left node first) the relative displacement ``u_left − u_right``."""
+    E = np.eye(r)[:, cpl]
+    if joint is None:
+        return E, lambda X: X[:, cpl]
+    jl, jr = joint[:4], joint[4:]
+    E = np.concatenate([E, np.eye(r)[:, jl] - np.eye(r)[:, jr]], 1)
+    return E, lambda X: np.concatenate([X[:, cpl], X[:, jl] - X[:, jr]], 1)
 
 
 def _joint_nodes(model: SpindleModel, left: int) -> list[int]:

@@ -315,8 +315,10 @@ def test_joint_rows_equal_per_row_condensation(spindle, monkeypatch):
     monkeypatch.setattr(forward, "condensed_dynamic_stiffness", counted)
     fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0))
     got = fm.responses(sweeps, [th, th], ds, extras)
-    # one reference rotor, two sweeps
+    # one reference rotor, two sweeps; the bearing parts once per bearing effect (the sweeps
+    # share one stiffness array: one evaluation over both sweeps' speeds)
     assert len(calls) == 2
+    assert len(fm._parts) == 2
     monkeypatch.setattr(forward, "_rotor_and_joint", _per_row_path)
     old = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0)).responses(
         sweeps, [th, th], ds, extras)
