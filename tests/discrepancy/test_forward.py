@@ -297,12 +297,12 @@ def test_joint_rows_equal_dense_solve(spindle):
 @pytest.mark.known_answer
 def test_joint_rows_equal_per_row_condensation(spindle, monkeypatch):
     """The joint rows coupled low-rank equal the rotor re-condensed at each row's own joint
-    (the path every row took before) to round-off, and all of them share one condensation per
-    sweep."""
+    (the path every row took before) to round-off, with and without gyroscopics, and the
+    rows of one rotor share one condensation per sweep."""
     sp, g = spindle
     sweeps = [Sweep.unbalance(np.linspace(1000.0, 24000.0, 12)),
               Sweep.impact(np.linspace(20.0, 4000.0, 30), (CHANNELS[0],), 9000.0)]
-    extras = _joint_rows(EXTRA[:1]) + _joint_rows(EXTRA[1:2])
+    extras = _joint_rows(EXTRA[:1]) + _joint_rows(EXTRA[1:2]) + _joint_rows(EXTRA[2:])
     B = len(extras)
     rng = np.random.default_rng(8)
     th, ds = 0.8 + 0.4 * rng.random((B, 2)), 0.7 + 0.6 * rng.random((B, 2))
@@ -315,14 +315,15 @@ def test_joint_rows_equal_per_row_condensation(spindle, monkeypatch):
     monkeypatch.setattr(forward, "condensed_dynamic_stiffness", counted)
     fm = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0))
     got = fm.responses(sweeps, [th, th], ds, extras)
-    # one reference rotor, two sweeps; the bearing parts once per bearing effect (the sweeps
-    # share one stiffness array: one evaluation over both sweeps' speeds)
-    assert len(calls) == 2
-    assert len(fm._parts) == 2
+    # two reference rotors (with and without gyroscopics), two sweeps; the bearing parts once
+    # per bearing effects (housing, cross-coupling, none; the sweeps share one stiffness
+    # array: one evaluation over both sweeps' speeds)
+    assert len(calls) == 2 * 2
+    assert len(fm._parts) == 3
     monkeypatch.setattr(forward, "_rotor_and_joint", _per_row_path)
     old = ForwardModel(g, sp.effects, CHANNELS, (0.0, 350.0)).responses(
         sweeps, [th, th], ds, extras)
-    assert len(calls) == 2 + 4 * 2
+    assert len(calls) == 4 + 8 * 2
     for a, b in zip(got, old, strict=True):
         for r in range(B):
             np.testing.assert_allclose(a[r], b[r], rtol=0, atol=1e-9 * np.abs(b[r]).max())
