@@ -8,12 +8,24 @@ recalibrated; :mod:`.impedance`), and everything a batch row changes is coupled 
     q_O = H_OF − H_OP (I + Z H_PP)⁻¹ Z H_PF,
 
 where ``Z`` is block diagonal: each bearing's dynamic stiffness (housing stage condensed in) on
-its node's x, y DOFs, and each recalibrated disk's change of mass and inertia on its node's four
-DOFs. The condensed rotor depends on the rotor only, so it is computed once per rotor (cached)
-and every batch row — a bearing stiffness factor θ, a damping factor, a disk mass factor, a
-candidate effect's parameters — costs one small solve per point. Nothing is approximated: the
-tests compare with the dense solve of
-:meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
+its node's x, y DOFs, each recalibrated disk's change of mass and inertia on its node's four
+DOFs, and for a row with a joint (a tool interface: a zero-length joint splitting the rotor)
+the joint's change of stiffness on the relative displacement of its two nodes (four DOFs). The
+condensed rotor depends on the rotor only, so it is computed once per rotor (cached) and every
+batch row — a bearing stiffness factor θ, a damping factor, a disk mass factor, a candidate
+effect's parameters — costs one small solve per point.
+
+Rows with a joint share the rotor with the joint at a fixed reference stiffness
+(:data:`JOINT_REFERENCE`, the middle of a tool interface's plausible range), both of its nodes
+retained. The joint element ``[[D, −D], [−D, D]] = V D Vᵀ`` (``V = [I; −I]``) changes by
+``V ΔD Vᵀ``, so ``P`` here is ``Vᵀ`` (the relative displacement) and ``Z = (1 + iωβ) ΔD``: the
+joint's stiffness enters only on that diagonal. Unlike a condensation at the row's own
+stiffness — where a near-rigid joint (the candidates keep an "off" partner stiffness at 1e18)
+is subtracted from itself and loses ``k / k_structure`` of the digits — the responses then
+agree with an exact solve to round-off at any ``k`` (as ``Z → ∞`` the update tends to the rigid
+constraint). Other rotor-acting effects (gyroscopics: a change of the whole rotor) and rows
+with two joints are condensed per distinct rotor. Nothing is approximated: the tests compare
+with the dense solve of :meth:`~surrogate_rbrdo.spindle.assembly.SpindleModel.system_matrices`.
 
 Loads are unit loads: a unit unbalance (1 kg m) in each plane for the 1x sweep (force
 ``Ω² [1, −i]``, :func:`~surrogate_rbrdo.spindle.harmonic.unbalance_load`), a unit force for an
@@ -24,23 +36,26 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from surrogate_rbrdo.core.errors import ModelError
 from surrogate_rbrdo.discrepancy.impedance import (
     BearingParts,
+    acts_on_bearings,
     acts_on_rotor,
     bearing_dynamic_stiffness,
     bearing_parts,
     condensed_dynamic_stiffness,
+    rotor_hooks,
     with_supports,
 )
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep, with_nodes_at
 from surrogate_rbrdo.spindle.assembly import SpindleModel, build_model
-from surrogate_rbrdo.spindle.effects import Effect
+from surrogate_rbrdo.spindle.effects import Effect, Joint
 from surrogate_rbrdo.spindle.geometry import SpindleGeometry
 
 
@@ -148,13 +163,15 @@ class ForwardModel:
         """The mesh node at ``position_mm``."""
         return int(np.argmin(np.abs(model.z - position_mm * 1e-3)))
 
-    def layout(self, model: SpindleModel, sweep: Sweep
+    def layout(self, model: SpindleModel, sweep: Sweep, joint_mm: float | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Retained DOFs (global), the channels' and coupled DOFs' positions among them (bearing
-        x, y, then four per recalibrated disk), and the sweep's unit loads ``(X, r, L)``."""
+        x, y, then four per recalibrated disk), and the sweep's unit loads ``(X, r, L)``; with
+        ``joint_mm`` the two nodes of the model's joint there are retained too."""
+        joint = [] if joint_mm is None else _joint_nodes(model, self.node(model, joint_mm))
         nodes = sorted({self.node(model, p) for p in self._positions}
                        | {self.node(model, c.position_mm) for c in sweep.excitations}
-                       | set(map(int, model.bearing_nodes)))
+                       | set(map(int, model.bearing_nodes)) | set(joint))
         dofs = (4 * np.asarray(nodes)[:, None] + np.arange(4)).ravel()
         at = {n: 4 * i for i, n in enumerate(nodes)}
         out = np.array([at[self.node(model, c.position_mm)] + c.dof_offset
@@ -210,22 +227,28 @@ class ForwardModel:
                                                         sweep.freq_rad_s, dofs),
                     self.cache_size)
 
-    def _rotor(self, model: SpindleModel, sweep: Sweep) -> _Condensed:
+    def _rotor(self, model: SpindleModel, sweep: Sweep, joint_mm: float | None = None
+               ) -> _Condensed:
+        """The condensed rotor at the sweep's points (memoised per rotor, sweep and coupled
+        joint: ``joint_mm`` couples the model's joint there, :meth:`layout`)."""
+        joint = () if joint_mm is None else (joint_mm,)
+
         def make() -> _Condensed:
-            dofs, out, cpl, F = self.layout(model, sweep)
+            dofs, out, cpl, F = self.layout(model, sweep, joint_mm)
             S = self._schur(model, sweep, dofs)
-            rhs = np.concatenate([F, np.broadcast_to(np.eye(dofs.size)[:, cpl],
-                                                     S.shape[:1] + (dofs.size, cpl.size))], -1)
+            E, pick = _coupling(dofs.size, cpl, None if joint_mm is None else np.searchsorted(
+                dofs, 4 * self.node(model, joint_mm) + np.arange(8)))
+            rhs = np.concatenate([F, np.broadcast_to(E, S.shape[:1] + E.shape)], -1)
             try:
                 H = np.linalg.solve(S, rhs)              # one factorisation for both
             except np.linalg.LinAlgError as exc:
                 raise ModelError("ForwardModel: singular condensed rotor") from exc
             HF, HP = H[..., :F.shape[-1]], H[..., F.shape[-1]:]
             return _Condensed(*(np.ascontiguousarray(a) for a in (
-                HF[:, out], HP[:, out], HP[:, cpl], HF[:, cpl])), system=self._key(
-                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes()))
-        return _lru(self._condensed, self._key(model, sweep, sweep.kind, sweep.excitations),
-                    make, self.cache_size)
+                HF[:, out], HP[:, out], pick(HP), pick(HF))), system=self._key(
+                model, sweep, dofs.tobytes(), out.tobytes(), cpl.tobytes(), *joint))
+        return _lru(self._condensed, self._key(model, sweep, sweep.kind, sweep.excitations,
+                                               *joint), make, self.cache_size)
 
     @property
     def disks(self) -> tuple:
@@ -315,23 +338,35 @@ class ForwardModel:
                   for s in sweeps]
         out = [np.zeros((B, n, len(self.channels), nl), dtype=complex)
                for n, nl in zip(sizes, n_load, strict=True)]
-        rotors: dict[tuple[Effect, ...], list[int]] = {}
+        # rows sharing a rotor (a joint at its reference stiffness standing for theirs)
+        rotors: dict[tuple[tuple[Effect, ...], float | None], list[int]] = {}
+        joints: list[Joint | None] = []
         for i, e in enumerate(extras):
-            rotors.setdefault(tuple(x for x in e if acts_on_rotor(x)), []).append(i)
-        for rotor, rows in rotors.items():
+            rotor, joint = _rotor_and_joint(e)
+            joints.append(joint)
+            rotors.setdefault((rotor, None if joint is None else joint.position_mm),
+                              []).append(i)
+        for (rotor, joint_mm), rows in rotors.items():
             model = self.model(rotor)
-            plan = self._plan(model, sweeps, n_load)
+            plan = self._plan(model, sweeps, n_load, joint_mm)
             Z = np.zeros((len(rows), spin.size, self.n_bearings, 2, 2), dtype=complex)
+            # rows whose effects on the bearings agree share their bearing parts (a tool
+            # interface, gyroscopics or an unbalance error leave them as they are)
             groups: dict[tuple[Effect, ...], list[int]] = {}
             for j, i in enumerate(rows):
-                groups.setdefault(extras[i], []).append(j)
+                groups.setdefault(tuple(x for x in extras[i] if acts_on_bearings(x)),
+                                  []).append(j)
             for ks in kinds.values():
                 pts = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in ks])
                 self._bearings_into(Z, pts, groups, np.asarray(rows), spin[pts], freq[pts],
                                     theta[ks[0]], ds)
             Zd = self._disk_impedance(spin, freq, mass[rows], model) if self._disks else None
+            Zj = None if joint_mm is None else _joint_impedance(
+                freq, model.beta, [joints[i] for i in rows],
+                next(x for x in rotor if isinstance(x, _ReferenceJoint)).joint())
             for sel, pts, cond, at in plan:
-                q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts])
+                q = _couple(cond, Z[:, pts], None if Zd is None else Zd[:, pts],
+                            None if Zj is None else Zj[:, pts])
                 for j, ks in enumerate(sel):
                     c0 = 0
                     for k in ks:
@@ -341,22 +376,23 @@ class ForwardModel:
             raise ModelError("ForwardModel.response: non-finite response")
         return out
 
-    def _plan(self, model: SpindleModel, sweeps: Sequence[Sweep], n_load: list[int]) -> list:
-        """How the sweeps' points are coupled for one rotor (memoised per model and sweep
-        objects): per number of loads, the sweeps solved together, their points, their
-        condensed rotors stacked and the points' offsets.
+    def _plan(self, model: SpindleModel, sweeps: Sequence[Sweep], n_load: list[int],
+              joint_mm: float | None = None) -> list:
+        """How the sweeps' points are coupled for one rotor (memoised per model, sweep objects
+        and coupled joint): per number of loads, the sweeps solved together, their points,
+        their condensed rotors stacked and the points' offsets.
 
         Sweeps with the same coupled system (hits in x and in y at one speed) share its
         factorisation: their loads are solved together; then one coupled solve per number of
         loads (padding loads with zero columns would change the BLAS kernels, hence the last
         digits)."""
-        key = (id(model), tuple(id(s) for s in sweeps))
+        key = (id(model), tuple(id(s) for s in sweeps), joint_mm)
         hit = self._plans.get(key)
         if hit is not None and hit[0] is model and all(
                 a is b for a, b in zip(hit[1], sweeps, strict=True)):
             self._plans.move_to_end(key)
             return hit[2]
-        conds = [self._rotor(model, s) for s in sweeps]
+        conds = [self._rotor(model, s, joint_mm) for s in sweeps]
         sizes = [s.freq_rad_s.size for s in sweeps]
         starts = np.concatenate([[0], np.cumsum(sizes)])
         systems: dict[str, list[int]] = {}
@@ -379,9 +415,9 @@ class ForwardModel:
     def _bearings_into(self, Z: np.ndarray, pts: np.ndarray, groups: dict, rows: np.ndarray,
                        spin: np.ndarray, freq: np.ndarray, theta: np.ndarray, ds: np.ndarray
                        ) -> None:
-        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: extra effects →
-        positions ``sub`` among ``rows``), all groups in one call: their θ-free stiffness
-        stacked row by row, then each row's housing stages condensed in
+        """Each group's bearing impedance into ``Z[sub, pts]`` (``groups``: the extra effects
+        acting on bearings → positions ``sub`` among ``rows``), all groups in one call: their
+        θ-free stiffness stacked row by row, then each row's housing stages condensed in
         (:func:`~.impedance.with_supports`) — the same elementwise arithmetic and 2 × 2 solves
         as one call per group (a linearisation has thousands of one-row groups)."""
         items = [(sub, self.bearing_parts(extra, spin)) for extra, sub in groups.items()]
@@ -470,30 +506,35 @@ def _loads_together(conds: list[_Condensed]) -> _Condensed:
 COUPLE_BLOCK_BYTES = 2**25
 
 
-def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
-    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2)
-    and disk changes ``Zd`` (B, X, nd, 4, 4), in blocks of rows of at most
-    :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the same whatever the
-    block)."""
+def _couple(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None,
+            Zj: np.ndarray | None = None) -> np.ndarray:
+    """Woodbury coupling of the condensed rotor with bearing impedances ``Z`` (B, X, nb, 2, 2),
+    disk changes ``Zd`` (B, X, nd, 4, 4) and a joint's change ``Zj`` (B, X, 4, 4), in blocks of
+    rows of at most :data:`COUPLE_BLOCK_BYTES` of work arrays (each row's arithmetic is the
+    same whatever the block)."""
     B, X, nb = Z.shape[:3]
-    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2])
+    n = 2 * nb + (0 if Zd is None else 4 * Zd.shape[2]) + (0 if Zj is None else 4)
     per_row = 16 * X * n * (3 * n + 2 * c.H_PF.shape[-1])
     step = max(1, COUPLE_BLOCK_BYTES // max(per_row, 1))
     if B <= step:
-        return _couple_block(c, Z, Zd)
+        return _couple_block(c, Z, Zd, Zj)
     out = np.empty((B, X) + c.H_OF.shape[1:], dtype=complex)
     for i in range(0, B, step):
         out[i:i + step] = _couple_block(c, Z[i:i + step],
-                                        None if Zd is None else Zd[i:i + step])
+                                        None if Zd is None else Zd[i:i + step],
+                                        None if Zj is None else Zj[i:i + step])
     return out
 
 
-def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.ndarray:
+def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None,
+                  Zj: np.ndarray | None = None) -> np.ndarray:
     """:func:`_couple` of one block of rows."""
     B, X, nb = Z.shape[:3]
     blocks = [Z[:, :, j] for j in range(nb)]
     if Zd is not None:
         blocks += [Zd[:, :, k] for k in range(Zd.shape[2])]
+    if Zj is not None:
+        blocks.append(Zj)
     n = sum(b.shape[-1] for b in blocks)
     Zf = np.zeros((B, X, n, n), dtype=complex)
     k = 0
@@ -507,3 +548,82 @@ def _couple_block(c: _Condensed, Z: np.ndarray, Zd: np.ndarray | None) -> np.nda
     except np.linalg.LinAlgError as exc:
         raise ModelError("ForwardModel: singular coupled system") from exc
     return c.H_OF[None] - c.H_OP[None] @ U
+
+
+#: the reference joint's ``(k_t, k_r)`` (N/m, N m/rad) a coupled joint's change is measured
+#: from: the middle of a tool interface's plausible range (``spindle.effects.ToolInterface``),
+#: near the shaft's own stiffness across the joint, so neither the reference rotor nor the
+#: relative displacement's receptance is dominated by the joint (responses at any row
+#: stiffness, 1e6 to 1e18, agree with an exact solve to ~1e-12 of their scale)
+JOINT_REFERENCE = (1e8, 1e6)
+
+
+@dataclass(frozen=True)
+class _ReferenceJoint(Effect):
+    """The joint of the rotor a coupled joint's rows share: at ``position_mm`` with the
+    reference stiffnesses (built by :func:`_rotor_and_joint` only)."""
+
+    name: ClassVar[str] = "reference_joint"
+    off_params: ClassVar[dict[str, float]] = {"k_t_N_per_m": np.inf,
+                                              "k_r_Nm_per_rad": np.inf}
+    position_mm: float = 0.0
+    k_t_N_per_m: float = np.inf
+    k_r_Nm_per_rad: float = np.inf
+
+    def joint(self) -> Joint:
+        return Joint(self.position_mm, self.k_t_N_per_m, self.k_r_Nm_per_rad)
+
+
+def _rotor_and_joint(extra: tuple[Effect, ...]) -> tuple[tuple[Effect, ...], Joint | None]:
+    """A row's rotor-acting effects, and its joint if it is coupled low-rank.
+
+    It is when exactly one of those effects has a joint, finite and positive, and acts on the
+    rotor through it alone (a tool interface): that effect is replaced by a
+    :class:`_ReferenceJoint` at its position with the stiffnesses :data:`JOINT_REFERENCE`, so
+    all such rows share one condensed rotor, and the row's own joint is returned. Otherwise
+    the effects as they are and None.
+    """
+    rotor = tuple(x for x in extra if acts_on_rotor(x))
+    found = [(k, j) for k, x in enumerate(rotor) if (j := x.joint()) is not None]
+    if len(found) != 1:
+        return rotor, None
+    k, j = found[0]
+    ks = (j.k_t_N_per_m, j.k_r_Nm_per_rad)
+    if rotor_hooks(rotor[k]) != {"joint"} or not all(0 < v < np.inf for v in ks):
+        return rotor, None
+    ref = _ReferenceJoint(position_mm=j.position_mm, k_t_N_per_m=JOINT_REFERENCE[0],
+                          k_r_Nm_per_rad=JOINT_REFERENCE[1])
+    return rotor[:k] + (ref,) + rotor[k + 1:], j
+
+
+def _joint_impedance(freq: np.ndarray, beta: float, joints: Sequence[Joint], ref: Joint
+                     ) -> np.ndarray:
+    """Each row's joint minus the reference as a dynamic stiffness ``(B, X, 4, 4)`` on the
+    joint's relative displacement ``u_left − u_right`` (``[x, y, a, b]``):
+    ``(1 + iωβ) ΔD``, ``ΔD = diag(Δk_t, Δk_t, Δk_r, Δk_r)``. The assembled joint element
+    (``spindle.assembly``) is ``[[D, −D], [−D, D]] = V D Vᵀ`` with ``V = [I; −I]``, so its
+    change is rank four; it carries the rotor's stiffness-proportional damping ``β``."""
+    dk = np.array([[j.k_t_N_per_m - ref.k_t_N_per_m] * 2
+                   + [j.k_r_Nm_per_rad - ref.k_r_Nm_per_rad] * 2 for j in joints])
+    return (1 + 1j * freq * beta)[None, :, None, None] * (dk[:, :, None] * np.eye(4))[:, None]
+
+
+def _coupling(r: int, cpl: np.ndarray, joint: np.ndarray | None
+              ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
+    """How the coupled DOFs ``P`` sit among ``r`` retained ones: ``E`` (r, nP), the unit loads
+    on them (``H E`` is ``H_·P``), and ``pick``, their displacements from retained ones
+    (``Eᵀ X`` along axis 1). Unit vectors at ``cpl``, then with ``joint`` (its two nodes'
+    eight positions, left node first) the relative displacement ``u_left − u_right``."""
+    E = np.eye(r)[:, cpl]
+    if joint is None:
+        return E, lambda X: X[:, cpl]
+    jl, jr = joint[:4], joint[4:]
+    E = np.concatenate([E, np.eye(r)[:, jl] - np.eye(r)[:, jr]], 1)
+    return E, lambda X: np.concatenate([X[:, cpl], X[:, jl] - X[:, jr]], 1)
+
+
+def _joint_nodes(model: SpindleModel, left: int) -> list[int]:
+    """The two coincident nodes of the model's joint whose left node is ``left``."""
+    if left + 1 >= model.z.size or model.z[left + 1] != model.z[left]:
+        raise ModelError(f"ForwardModel: no joint at node {left} (z = {model.z[left]} m)")
+    return [left, left + 1]

@@ -47,17 +47,44 @@ def acts_on_rotor(effect: Effect | type[Effect]) -> bool:
     >>> acts_on_rotor(Gyroscopics)
     True
     """
-    return _class_acts_on_rotor(effect if isinstance(effect, type) else type(effect))
+    return bool(rotor_hooks(effect))
+
+
+def acts_on_bearings(effect: Effect | type[Effect]) -> bool:
+    """Whether ``effect`` (an effect or its class) overrides a hook a bearing's impedance goes
+    through (preload, bearing stiffness, housing stage); the others leave
+    :func:`bearing_parts` as they are (their hooks are the identity there).
+
+    >>> from surrogate_rbrdo.spindle.effects import HousingFlexibility, ToolInterface
+    >>> acts_on_bearings(HousingFlexibility(k_N_per_m=1e9)), acts_on_bearings(ToolInterface)
+    (True, False)
+    """
+    return _class_acts_on_bearings(effect if isinstance(effect, type) else type(effect))
 
 
 @cache
-def _class_acts_on_rotor(cls: type) -> bool:
-    for name in dir(Effect):
-        if name.startswith("_") or name in _NOT_HOOKS or name in BEARING_HOOKS:
-            continue
-        if callable(getattr(Effect, name)) and getattr(cls, name) is not getattr(Effect, name):
-            return True
-    return False
+def _class_acts_on_bearings(cls: type) -> bool:
+    return any(getattr(cls, n) is not getattr(Effect, n) for n in ("preload", "bearing",
+                                                                     "support"))
+
+
+def rotor_hooks(effect: Effect | type[Effect]) -> frozenset[str]:
+    """The hooks other than the bearing-level ones that ``effect`` (an effect or its class)
+    overrides (looked up once per class).
+
+    >>> from surrogate_rbrdo.spindle.effects import ToolInterface
+    >>> sorted(rotor_hooks(ToolInterface))
+    ['joint']
+    """
+    return _class_rotor_hooks(effect if isinstance(effect, type) else type(effect))
+
+
+@cache
+def _class_rotor_hooks(cls: type) -> frozenset[str]:
+    return frozenset(
+        name for name in dir(Effect)
+        if not (name.startswith("_") or name in _NOT_HOOKS or name in BEARING_HOOKS)
+        and callable(getattr(Effect, name)) and getattr(cls, name) is not getattr(Effect, name))
 
 
 def condensed_dynamic_stiffness(model: SpindleModel, spin: np.ndarray, freq: np.ndarray,
