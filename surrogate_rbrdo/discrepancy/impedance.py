@@ -33,7 +33,7 @@ from surrogate_rbrdo.spindle.substructure import chain_condensation
 #: effect hooks that leave the rotor's matrices alone (the loads here are unit loads, so the
 #: unbalance hook does not enter either)
 BEARING_HOOKS = frozenset({"preload", "bearing", "support", "unbalance"})
-_NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off"})
+_NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off", "warming"})
 
 
 def acts_on_rotor(effect: Effect | type[Effect]) -> bool:

@@ -21,9 +21,9 @@ The test (:func:`soak_test`), for a candidate fitted on the sweep:
 3. **A drift beyond the rival's?** Each run's slope of the phasors on ``θ`` (its own
    intercept: the run's cold response), pooled over the runs, minus ``Δ₀``, against the noise
    of the runs' residuals about their own lines: Hotelling's ``T²`` on the ``2C`` real
-   components with ``ν = R (K − 2)`` degrees of freedom (``F(2C, ν − 2C + 1)``; a diagonal
-   covariance and ``F(2C, ν)`` when ``ν`` is too small), so the channels' correlation within a
-   record (the keyphasor's phase error) is carried.
+   components with ``ν = R (K − 2)`` degrees of freedom (``F(2C, ν − 2C + 1)``; no verdict
+   when ``ν < 2C + 2``: a soak too small to estimate the channels' covariance), so the
+   channels' correlation within a record (the keyphasor's phase error) is carried.
 4. **The candidate's drift?** Each run's ``β_r = Re⟨Δ, s_r − Δ₀⟩_W / ⟨Δ, Δ⟩_W`` with
    ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance), averaged
    over the runs: Student's ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities
@@ -243,7 +243,7 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
                  ) -> tuple[float, tuple[int, int], float, list[float]]:
     """One block's drift test: Hotelling's F of the pooled slope on ``θ`` beyond ``Δ₀``
     against the runs' residual noise (each run's own slope and intercept removed: ``ν =
-    R (K − 2)`` degrees of freedom; a diagonal covariance when ``ν`` is too small for the
+    R (K − 2)`` degrees of freedom; p = 1 and no ``β_r`` when ``ν`` is too small for the
     ``2C`` real dimensions), its dofs and p-value, and every run's ``β_r``."""
     th = w.fraction - w.fraction.mean(axis=1, keepdims=True)                 # (R, K)
     Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)               # (R, K, C)
@@ -262,7 +262,9 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
         T2 = float(v @ np.linalg.solve(cov, v))
         F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
     else:
-        F, dof = float(np.sum(v ** 2 / np.diag(cov))) / p_dim, (p_dim, nu)
+        # too few residual dofs to estimate the channels' covariance: a diagonal one would not
+        # give F under correlated channels (the keyphasor's common phase error), so no verdict
+        return float("nan"), (p_dim, nu), 1.0, []
     p = float(fdist.sf(F, *dof))
     var = np.diag(S)[:C] + np.diag(S)[C:]
     wgt = 1.0 / np.where(var > 0, var, np.inf)

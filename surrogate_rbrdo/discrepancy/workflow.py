@@ -517,31 +517,33 @@ def _conclude(data, train, holdout, split, base, final, stages, named, confounde
 
 
 def _withheld_test(withheld: tuple[Assessment, ...], soak: tuple[SoakTest, ...]) -> dict:
-    """The ``test`` of a group withheld at the first stage: the soak's rejection of its drift
-    when the soak rejected it; else the encompassing test against its closest generic change;
-    else (the soak confirmed a drift whose member fails a naming check) the soak's test."""
+    """The ``test`` of a group withheld at the first stage: the soak's test when it confirmed
+    a member's drift (that member then fails a naming check: the soak separated it, the checks
+    did not pass it) or rejected it; else the encompassing test against the closest generic
+    change."""
     names = {a.name for a in withheld}
+    confirmed = [t for t in soak if t.outcome == "drift" and t.candidate in names]
     rejected = [t for t in soak if t.outcome == "no_drift" and t.candidate in names]
-    rivals = [a for a in withheld if a.rival is not None and not a.rival.passed]
+    if confirmed:
+        t = confirmed[0]
+        return {"statistic": t.beta, "p_value": t.p_drift, "threshold": t.level,
+                "kind": f"detected; the thermal soak confirms the drift of {t.candidate}, "
+                        "which fails a naming check", "soak": t.to_dict()}
     if rejected:
         t = rejected[0]
         return {"statistic": t.beta, "p_value": t.p_below, "threshold": t.level,
                 "kind": f"detected; the thermal soak rejects the drift {t.candidate} "
                         "predicts (statistic: the drift in units of the prediction)",
                 "soak": t.to_dict()}
-    if rivals:
-        rt = max((a.rival for a in rivals), key=lambda t: t.statistic)
-        carried = (withheld[0] if withheld[0].rival is not None else rivals[0]).rival
-        return {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
-                "kind": "detected, not separable from a generic local change "
-                        f"(encompassing test; closest: {rt.rival})",
-                # both ways, for the member the model would carry (the policy's): does its
-                # rival add to its fit (no: explained alike)
-                "rival_adds": carried.rival_adds, "mutual": carried.mutual}
-    t = next(t for t in soak if t.outcome == "drift" and t.candidate in names)
-    return {"statistic": t.beta, "p_value": t.p_drift, "threshold": t.level,
-            "kind": f"detected; the thermal soak confirms the drift of {t.candidate}, which "
-                    "fails a naming check", "soak": t.to_dict()}
+    rivals = [a for a in withheld if a.rival is not None]
+    rt = max((a.rival for a in rivals), key=lambda t: t.statistic)
+    carried = (withheld[0] if withheld[0].rival is not None else rivals[0]).rival
+    return {"statistic": rt.statistic, "p_value": rt.p_value, "threshold": rt.level,
+            "kind": "detected, not separable from a generic local change "
+                    f"(encompassing test; closest: {rt.rival})",
+            # both ways, for the member the model would carry (the policy's): does its rival
+            # add to its fit (no: explained alike)
+            "rival_adds": carried.rival_adds, "mutual": carried.mutual}
 
 
 def _drop_thin_impacts(data: MeasuredData, min_dof: int

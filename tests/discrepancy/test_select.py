@@ -152,3 +152,21 @@ def test_an_inconclusive_soak_or_none_changes_nothing(monkeypatch):
     hs = _drifting("housing", separable=True, drifts=False)
     sel, asked = _soak_run(monkeypatch, [[hs], []], {})
     assert sel.named == (hs,) and asked == []           # nothing drifts: no test
+
+
+def _soak_result(name: str, outcome: str) -> SoakTest:
+    return SoakTest(name, outcome, 50.0, (12, 13), 1e-6 if outcome == "drift" else 0.5,
+                    1.0 if outcome == "drift" else 0.0, 0.1, 3, 0.5, 1e-4, 0.1, 0.01, 4)
+
+
+@pytest.mark.parametrize("outcome, says", [("drift", "confirms the drift"),
+                                           ("no_drift", "rejects the drift"),
+                                           ("inconclusive", "not separable from a generic")])
+def test_a_withheld_groups_test_line_follows_the_soak(outcome, says):
+    """A member the soak confirmed but a naming check failed, one whose drift it rejected, or
+    an inconclusive soak (the encompassing test's line) — also for a member with a rival."""
+    tp = _drifting("thermal_preload", separable=False, drifts=True)
+    test = workflow._withheld_test((tp,), (_soak_result("thermal_preload", outcome),))
+    assert says in test["kind"]
+    assert ("soak" in test) is (outcome != "inconclusive")
+    assert "mutual" in test or outcome != "inconclusive"

@@ -155,3 +155,18 @@ def test_the_predicted_drift_is_the_forward_models_hot_minus_cold(spindle):
                                atol=1e-12 * np.abs(hot @ u_fit).max())
     np.testing.assert_allclose(u_fit, u, rtol=1e-3)
     assert np.abs(d).max() > 1e-3 * np.abs(hot @ u).max()      # a drift worth testing
+
+
+def test_a_soak_too_small_for_the_channels_covariance_gives_no_verdict():
+    """3 runs x 3 records: ν = 3 residual dofs for 6 real components — a drift is not
+    declared however large (a diagonal covariance would not give F under correlated
+    channels)."""
+    rng = np.random.default_rng(8)
+    d = np.array([3e-7 + 1e-7j, -2e-7j, 1e-7 + 0j])
+    t = np.tile([0.0, 900.0, 3600.0], (3, 1))
+    th = -np.expm1(-t / 900.0)
+    T = 293.0 + 12.0 * th + rng.normal(0, 0.01, t.shape)
+    Y = 1e-6 + th[..., None] * d + 1e-10 * rng.normal(size=(3, 3, 3))
+    blk = SoakBlock("soak", 22000.0, CH, t, T, Y)
+    res = drift_test("x", (blk,), (warmup(blk),), (np.zeros(3),), (d,), 0.1, 0.01)
+    assert res.p_drift == 1.0 and res.outcome == "inconclusive"
