@@ -48,7 +48,12 @@ from surrogate_rbrdo.rig.simulate import (
     steady_records,
 )
 from surrogate_rbrdo.rig.soak import soak_id, soak_jobs, soak_labels, soak_plan, soak_run
-from surrogate_rbrdo.rig.statespace import Reduction, first_order, growth_rates, reduction
+from surrogate_rbrdo.rig.statespace import (
+    Reduction,
+    first_order,
+    reduction,
+    require_stable,
+)
 from surrogate_rbrdo.rig.store import DatasetWriter, read_record
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, _child
@@ -318,12 +323,9 @@ def _precheck(st, o: CampaignOptions) -> Reduction:
 
 def _check_run(st, o: CampaignOptions, red: Reduction, b: int, tl: int, r: int) -> None:
     """Each run's own truth (its thermal draw) must be stable at the campaign's speeds."""
-    g = growth_rates(st.model(), st.theta, np.asarray(o.speeds_rpm), red)
-    if np.any(g >= 0):
-        s = np.asarray(o.speeds_rpm)[int(np.argmax(g))]
-        raise ModelError(f"the truth of build {b}, tool {tl}, run {r} is unstable at "
-                         f"{s:.6g} rpm (growth rate {g.max():.3g} 1/s): no steady state to "
-                         "measure (its thermal preload draw; cross-coupling too strong?)")
+    require_stable(st.model(), st.theta, o.speeds_rpm, red,
+                   f"the truth of build {b}, tool {tl}, run {r}",
+                   "its thermal preload draw; cross-coupling too strong?")
 
 
 def soak_speed(o: CampaignOptions) -> tuple[float, ...]:

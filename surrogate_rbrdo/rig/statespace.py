@@ -205,6 +205,19 @@ def decompose(A: np.ndarray, omega: float) -> Modes:
     return Modes(lam, V, W)
 
 
+def require_stable(model: SpindleModel, theta: np.ndarray | None, speeds_rpm, red: Reduction,
+                   what: str, hint: str = "") -> None:
+    """Raise :class:`~surrogate_rbrdo.core.errors.ModelError` naming ``what`` (e.g. "the truth
+    of build 0, tool 0, run 3"), the speed and ``hint`` (a likely cause, in brackets) if any
+    :func:`growth_rates` is ``>= 0``: no steady state to measure there."""
+    sp = np.asarray(speeds_rpm, float)
+    g = growth_rates(model, theta, sp, red)
+    if np.any(g >= 0):
+        raise ModelError(f"{what} is unstable at {sp[int(np.argmax(g))]:.6g} rpm (growth rate "
+                         f"{g.max():.3g} 1/s): no steady state to measure"
+                         + (f" ({hint})" if hint else ""))
+
+
 def growth_rates(model: SpindleModel, theta: np.ndarray | None, speeds_rpm: np.ndarray,
                  red: Reduction) -> np.ndarray:
     """Largest real part of the eigenvalues (1/s) at each speed, of the system projected on
