@@ -25,6 +25,7 @@ from surrogate_rbrdo.rig.impacts import ImpactPlan, expected_frfs, sample_frfs
 from surrogate_rbrdo.rig.phasors import expected_phasors, sample_phasors
 from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
+from surrogate_rbrdo.rig.soak import soak_plan, soak_run_index
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, Variability
 from surrogate_rbrdo.spindle.assembly import RPM
@@ -79,22 +80,23 @@ class RigSource:
                           ks.std(0, ddof=1) / np.sqrt(self.repeats), self.repeats - 1)
         blocks = (blk,) + self._impact_blocks(truth, ss, sensors, inst, chans, pos, rng)
         soaks = self._soaks(truth, ss, sensors, inst, chans, rng,
-                            np.abs(blk.mean).max(axis=1))
+                            np.abs(np.array(recs)).max(axis=2))
         return MeasuredData(blocks, ident, {"source": "virtual rig", "seed": seed}, soaks)
 
     def _soaks(self, truth, ss, sensors, inst, chans, rng, amplitude
                ) -> tuple[SoakBlock, ...]:
         """The soak's runs (after the impact run) at its speed (by default the sweep's largest
-        mean amplitude, ``amplitude`` per speed: ``SoakPlan.at``): at each time the run's state
+        mean amplitude as the rig's campaign takes it, ``rig.soak.soak_plan``; ``amplitude``
+        (runs, speeds): each run's largest channel amplitude): at each time the run's state
         warmed to the thermal model's fraction (``TruthState.warming``), a 1x phasor through
         the sensors, and the run's outer-ring temperature."""
         if self.soak is None:
             return ()
-        plan = self.soak.at(self.speeds_rpm, amplitude)
+        plan = soak_plan(self.soak, self.speeds_rpm, amplitude)
         t = np.asarray(plan.times_s)
         Y, T = [], []
         for j in range(plan.runs):
-            st = truth.state(ss, build=0, tool=0, run=self.repeats + 1 + j)
+            st = truth.state(ss, build=0, tool=0, run=soak_run_index(self.repeats, j))
             rows = []
             for f in truth.thermal.fraction(t):
                 w = st.warming(float(f))
