@@ -67,11 +67,11 @@ from scipy.stats import f as fdist
 from scipy.stats import t as student
 
 from surrogate_rbrdo.discrepancy.fit import Fit, _fd_rows
+from surrogate_rbrdo.discrepancy.nuisance import Rows
 from surrogate_rbrdo.discrepancy.observables import ComplexBlock, MeasuredData
 from surrogate_rbrdo.discrepancy.problem import Problem
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 
-OUTCOMES = ("drift", "no_drift", "inconclusive")
 #: a warm-up whose rise is not this many standard errors above zero is no warm-up
 MIN_RISE_Z = 10.0
 
@@ -206,7 +206,7 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
     predicted hot − cold drift ``Δ₀`` and the candidate's ``Δ₁`` (``(C,)`` each), and the
     relative standard deviation of the candidate's prediction. With several blocks the drift's
     p-value is the smallest times their number (Bonferroni)."""
-    betas, p_hot, F_hot, dofs = [], [], [], (0, 0)
+    betas, p_hot, F_hot, dofs = [], [], 0.0, (0, 0)
     for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
         if not w.measured:
             continue
@@ -218,7 +218,7 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
     n = len(betas)
     p_drift = min(1.0, min(p_hot, default=1.0) * max(len(p_hot), 1))
     if n < 3:
-        return SoakTest(candidate, "inconclusive", float(F_hot or 0.0), dofs, p_drift,
+        return SoakTest(candidate, "inconclusive", float(F_hot), dofs, p_drift,
                         float("nan"), float("nan"), max(n - 1, 0), 1.0, 1.0,
                         float(prediction_sd), level, n, *_warm_figures(warm))
     b = np.asarray(betas)
@@ -288,9 +288,6 @@ def drift_prediction(problem: Problem, fit: Fit, block: SoakBlock, *, jacobian: 
     fit's bounded covariance (first order; the unbalance held at its fit), else 0."""
     soak_problem = _soak_problem(problem, block)
     fm = problem.forward
-    cold_fm = None
-    if any(e.thermal_params for e in fm.effects):
-        cold_fm = dataclasses.replace(fm, effects=tuple(e.warming(0.0) for e in fm.effects))
     u = fit.evaluation.unbalance[0][0]
     X = fit.x[None]
     h = None
@@ -298,13 +295,20 @@ def drift_prediction(problem: Problem, fit: Fit, block: SoakBlock, *, jacobian: 
         lo, hi = fit.par.bounds()
         rows_fd, h = _fd_rows(fit.x, fit.par, lo, hi)
         X = np.vstack([X, rows_fd])
-    rows = fit.par.rows(X)
-    hot = soak_problem.responses(rows)[0][:, 0] @ u                    # (B, C)
-    cold_rows = dataclasses.replace(rows, extras=[tuple(e.warming(0.0) for e in ex)
-                                                  for ex in rows.extras])
-    cold_problem = soak_problem if cold_fm is None else _soak_problem(
-        Problem(cold_fm, problem.data, None, problem.nuisance), block)
-    cold = cold_problem.responses(cold_rows)[0][:, 0] @ u
+    n = X.shape[0]
+    if any(e.thermal_params for e in fm.effects):
+        # the model's own drifting effects cold too: a forward model of its own
+        cold_fm = dataclasses.replace(fm, effects=tuple(e.warming(0.0) for e in fm.effects))
+        hot = soak_problem.responses(fit.par.rows(X))[0][:, 0] @ u            # (B, C)
+        cold_rows = _cold(fit.par.rows(X))
+        cold = _soak_problem(Problem(cold_fm, problem.data, None, problem.nuisance),
+                             block).responses(cold_rows)[0][:, 0] @ u
+    else:
+        # hot and cold rows in one call: the second half with the extras cold
+        rows = fit.par.rows(np.vstack([X, X]))
+        rows = dataclasses.replace(rows, extras=rows.extras[:n] + _cold(rows).extras[n:])
+        both = soak_problem.responses(rows)[0][:, 0] @ u
+        hot, cold = both[:n], both[n:]
     D = hot - cold
     if not jacobian:
         return D[0], 0.0
@@ -315,6 +319,13 @@ def drift_prediction(problem: Problem, fit: Fit, block: SoakBlock, *, jacobian: 
     g = (np.conj(d)[None] * (D[1:] - d[None])).sum(axis=1).real / nrm / h
     cov = fit.covariance(bounded=True)
     return d, float(np.sqrt(max(g @ cov @ g, 0.0)))
+
+
+def _cold(rows: Rows) -> Rows:
+    """``rows`` with every extra effect at its cold state (:meth:`~surrogate_rbrdo.spindle.
+    effects.Effect.warming` 0)."""
+    return dataclasses.replace(rows, extras=[tuple(e.warming(0.0) for e in ex)
+                                             for ex in rows.extras])
 
 
 def _soak_problem(problem: Problem, block: SoakBlock) -> Problem:
