@@ -109,12 +109,8 @@ def dataset_phasor_rows(root: str | Path
         run = lab.get("run", lab.get("repeat", count.get(speed, 0)))
         count[speed] = count.get(speed, 0) + 1
         p = demodulate(rec)
+        pos.update(_positions(root, rec, p.channels))
         for j, ch in enumerate(p.channels):
-            c = rec.channel(ch).location
-            if not math.isfinite(c.position_mm) or c.direction not in ("x", "y"):
-                raise ValueError(f"{root}: record {rec.id!r}: channel {ch!r}: location needs "
-                                 "position_mm and direction x or y")
-            pos[ch] = (float(c.position_mm), c.direction)
             rows.append({"build": lab.get("build", 0), "tool": lab.get("tool", 0), "run": run,
                          "speed_rpm": speed, "channel": ch, "re_m": p.X[j, 0].real,
                          "im_m": p.X[j, 0].imag})
@@ -275,6 +271,19 @@ def soak_blocks(root: str | Path) -> tuple[SoakBlock, ...]:
     return tuple(_soak_block(root, s, runs) for s, runs in sorted(groups.items()))
 
 
+def _positions(root, rec, channels) -> dict[str, tuple[float, str]]:
+    """Each named displacement channel's (axial position in mm, direction) from ``rec``;
+    a channel without both raises, naming the record."""
+    pos = {}
+    for ch in channels:
+        c = rec.channel(ch).location
+        if not math.isfinite(c.position_mm) or c.direction not in ("x", "y"):
+            raise ValueError(f"{root}: record {rec.id!r}: channel {ch!r}: location needs "
+                             "position_mm and direction x or y")
+        pos[ch] = (float(c.position_mm), c.direction)
+    return pos
+
+
 def _soak_point(root, rec) -> tuple[dict[str, complex], dict[str, tuple[float, str]], float]:
     """One soak record's 1x phasor per displacement channel, their positions, temperature."""
     temp = rec.find("temperature")
@@ -282,14 +291,7 @@ def _soak_point(root, rec) -> tuple[dict[str, complex], dict[str, tuple[float, s
         raise ValueError(f"{root}: soak record {rec.id!r} has no temperature channel "
                          "(quantity 'temperature', K)")
     p = demodulate(rec)
-    pos = {}
-    for ch in p.channels:
-        c = rec.channel(ch).location
-        if not math.isfinite(c.position_mm) or c.direction not in ("x", "y"):
-            raise ValueError(f"{root}: record {rec.id!r}: channel {ch!r}: location needs "
-                             "position_mm and direction x or y")
-        pos[ch] = (float(c.position_mm), c.direction)
-    return dict(zip(p.channels, p.X[:, 0], strict=True)), pos, float(
+    return dict(zip(p.channels, p.X[:, 0], strict=True)), _positions(root, rec, p.channels), float(
         np.mean(rec.values(temp[0].name)))
 
 
