@@ -33,6 +33,8 @@ from surrogate_rbrdo.spindle.substructure import chain_condensation
 #: effect hooks that leave the rotor's matrices alone (the loads here are unit loads, so the
 #: unbalance hook does not enter either)
 BEARING_HOOKS = frozenset({"preload", "bearing", "support", "unbalance"})
+#: ... of which those a bearing's impedance goes through
+IMPEDANCE_HOOKS = BEARING_HOOKS - {"unbalance"}
 _NOT_HOOKS = frozenset({"applies_to", "off", "params", "is_off", "warming"})
 
 
@@ -64,8 +66,7 @@ def acts_on_bearings(effect: Effect | type[Effect]) -> bool:
 
 @cache
 def _class_acts_on_bearings(cls: type) -> bool:
-    return any(getattr(cls, n) is not getattr(Effect, n) for n in ("preload", "bearing",
-                                                                     "support"))
+    return any(getattr(cls, n) is not getattr(Effect, n) for n in IMPEDANCE_HOOKS)
 
 
 def rotor_hooks(effect: Effect | type[Effect]) -> frozenset[str]:

@@ -522,19 +522,15 @@ def _withheld_test(withheld: tuple[Assessment, ...], soak: tuple[SoakTest, ...])
     did not pass it) or rejected it; else the encompassing test against the closest generic
     change."""
     names = {a.name for a in withheld}
-    confirmed = [t for t in soak if t.outcome == "drift" and t.candidate in names]
-    rejected = [t for t in soak if t.outcome == "no_drift" and t.candidate in names]
-    if confirmed:
-        t = confirmed[0]
-        return {"statistic": t.beta, "p_value": t.p_drift, "threshold": t.level,
-                "kind": f"detected; the thermal soak confirms the drift of {t.candidate}, "
-                        "which fails a naming check", "soak": t.to_dict()}
-    if rejected:
-        t = rejected[0]
-        return {"statistic": t.beta, "p_value": t.p_below, "threshold": t.level,
-                "kind": f"detected; the thermal soak rejects the drift {t.candidate} "
-                        "predicts (statistic: the drift in units of the prediction)",
-                "soak": t.to_dict()}
+    for outcome, p_value, kind in (
+            ("drift", "p_drift", "the thermal soak confirms the drift of {}, which fails a "
+                                 "naming check"),
+            ("no_drift", "p_below", "the thermal soak rejects the drift {} predicts "
+                                    "(statistic: the drift in units of the prediction)")):
+        t = next((t for t in soak if t.outcome == outcome and t.candidate in names), None)
+        if t is not None:
+            return {"statistic": t.beta, "p_value": getattr(t, p_value), "threshold": t.level,
+                    "kind": "detected; " + kind.format(t.candidate), "soak": t.to_dict()}
     rivals = [a for a in withheld if a.rival is not None]
     rt = max((a.rival for a in rivals), key=lambda t: t.statistic)
     carried = (withheld[0] if withheld[0].rival is not None else rivals[0]).rival
