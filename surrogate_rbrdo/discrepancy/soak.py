@@ -78,7 +78,8 @@ MIN_RISE_Z = 10.0
 
 @dataclass(frozen=True)
 class SoakBlock:
-    """A thermal soak's 1x phasors: ``R`` runs (cold starts) × ``K`` records at one speed.
+    """A thermal soak's 1x phasors: ``R`` runs (cold starts) × ``K`` records at one speed
+    (``R`` ≥ 2: a soak at two speeds splits its runs).
 
     Attributes
     ----------
@@ -111,8 +112,8 @@ class SoakBlock:
         Y = np.asarray(self.phasors, dtype=complex)
         if not (self.speed_rpm > 0 and np.isfinite(self.speed_rpm)):
             raise ValueError(f"{where}: speed_rpm = {self.speed_rpm!r} is not allowed: > 0")
-        if t.ndim != 2 or t.shape[0] < 3 or t.shape[1] < 3:
-            raise ValueError(f"{where}: times_s has shape {t.shape}: need (runs >= 3, "
+        if t.ndim != 2 or t.shape[0] < 2 or t.shape[1] < 3:
+            raise ValueError(f"{where}: times_s has shape {t.shape}: need (runs >= 2, "
                              "records >= 3)")
         if T.shape != t.shape or Y.shape != (*t.shape, len(self.channels)):
             raise ValueError(f"{where}: temperature_K {T.shape} and phasors {Y.shape} must be "
@@ -201,22 +202,26 @@ class SoakTest:
 
 def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup, ...],
                rival: tuple[np.ndarray, ...], predicted: tuple[np.ndarray, ...],
-               prediction_sd: float, level: float) -> SoakTest:
+               prediction_sd: float, level: float, *, gain: bool = True) -> SoakTest:
     """The drift test (module doc, steps 3–4) given each block's warm-up, the rival's
     predicted hot − cold drift ``Δ₀`` and the candidate's ``Δ₁`` (``(C,)`` each), and the
-    relative standard deviation of the candidate's prediction. With several blocks the drift's
-    p-value is the smallest times their number (Bonferroni)."""
-    betas, p_hot, F_hot, dofs = [], [], 0.0, (0, 0)
+    relative standard deviation of the candidate's prediction. ``gain``: a drift of each
+    probe's gain with temperature is a nuisance (module doc, "A probe's gain drift"); False:
+    the test without it (any drift along the response counts). With several tests (blocks,
+    speed contrasts) the drift's p-value is the smallest times their number (Bonferroni)."""
+    betas, parts = [], []
     for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
         if not w.measured:
             continue
-        F, dof, p, b = _block_drift(blk, w, np.asarray(d0), np.asarray(d1))
-        betas += b
-        if p < min(p_hot, default=2.0):
-            F_hot, dofs = F, dof
-        p_hot.append(p)
+        part = _block_drift(blk, w, np.asarray(d0), np.asarray(d1), gain)
+        betas += part.betas
+        parts.append(part)
+    tests = [(p.F, p.dof, p.p) for p in parts]
+    if gain:
+        tests += [_contrast(parts[0], q) for q in parts[1:]]
+    F_hot, dofs, p_min = min(tests, key=lambda x: x[2], default=(0.0, (0, 0), 1.0))
+    p_drift = min(1.0, p_min * max(len(tests), 1))
     n = len(betas)
-    p_drift = min(1.0, min(p_hot, default=1.0) * max(len(p_hot), 1))
     if n < 3:
         return SoakTest(candidate, "inconclusive", float(F_hot), dofs, p_drift,
                         float("nan"), float("nan"), max(n - 1, 0), 1.0, 1.0,
@@ -239,12 +244,29 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
                     p_below, float(prediction_sd), level, n, *_warm_figures(warm))
 
 
-def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
-                 ) -> tuple[float, tuple[int, int], float, list[float]]:
+@dataclass(frozen=True)
+class _Part:
+    """One block's drift test and what a contrast between speeds needs: its in-phase drift
+    per kelvin ``x`` (``(C,)``, relative to the cold response) and its covariance, ``ν``."""
+
+    F: float
+    dof: tuple[int, int]
+    p: float
+    betas: list
+    x: np.ndarray
+    cov_x: np.ndarray
+    nu: int
+
+
+def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain: bool
+                 ) -> _Part:
     """One block's drift test: Hotelling's F of the pooled slope on ``θ`` beyond ``Δ₀``
     against the runs' residual noise (each run's own slope and intercept removed: ``ν =
     R (K − 2)`` degrees of freedom; p = 1 and no ``β_r`` when ``ν`` is too small for the
-    ``2C`` real dimensions), its dofs and p-value, and every run's ``β_r``."""
+    test's dimensions), its dofs and p-value, and every run's ``β_r``. With ``gain``, of the
+    slope's quadrature to each channel's cold response only (``C`` dimensions: a real gain
+    drift has none), ``β_r`` likewise, and the in-phase part per kelvin for :func:`_contrast`;
+    else of all ``2C`` real components."""
     th = w.fraction - w.fraction.mean(axis=1, keepdims=True)                 # (R, K)
     Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)               # (R, K, C)
     den = np.sum(th ** 2, axis=1)                                           # (R,)
@@ -255,24 +277,57 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
     E = np.concatenate([e.real, e.imag], axis=-1).reshape(-1, 2 * C)
     S = E.T @ E / nu                                                        # (2C, 2C)
     v = np.einsum("rk,rkc->c", th, Y) / den.sum() - d0
-    v = np.concatenate([v.real, v.imag])
-    cov = S / den.sum()
-    p_dim = 2 * C
-    if nu - p_dim + 1 >= 3:
-        T2 = float(v @ np.linalg.solve(cov, v))
-        F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
+    # each run's cold response (intercept at θ = 0), weighted as the pooled slope
+    cold = blk.phasors.mean(axis=1) - slope * w.fraction.mean(axis=1)[:, None]
+    a = np.einsum("r,rc->c", den, cold) / den.sum()
+    u = a / np.where(np.abs(a) > 0, np.abs(a), 1.0)
+    if gain:
+        # quadrature Im(ū v) = Re u Im v − Im u Re v, in-phase Re(ū v)/|a|/rise per kelvin
+        M = np.hstack([-np.diag(u.imag), np.diag(u.real)])                  # (C, 2C)
+        Mx = np.hstack([np.diag(u.real), np.diag(u.imag)]) / (
+            np.abs(a)[:, None] * max(w.rise_K, 1e-300))
     else:
+        M = np.eye(2 * C)
+        Mx = np.zeros((0, 2 * C))
+    vr = np.concatenate([v.real, v.imag])
+    q, cov = M @ vr, M @ S @ M.T / den.sum()
+    x, cov_x = Mx @ vr, Mx @ S @ Mx.T / den.sum()
+    p_dim = M.shape[0]
+    if nu - p_dim + 1 < 3:
         # too few residual dofs to estimate the channels' covariance: a diagonal one would not
         # give F under correlated channels (the keyphasor's common phase error), so no verdict
-        return float("nan"), (p_dim, nu), 1.0, []
-    p = float(fdist.sf(F, *dof))
-    var = np.diag(S)[:C] + np.diag(S)[C:]
+        return _Part(float("nan"), (p_dim, nu), 1.0, [], x, cov_x, nu)
+    F, dof, p = _hotelling(q, cov, nu)
+    var = np.diag(M @ S @ M.T)
     wgt = 1.0 / np.where(var > 0, var, np.inf)
     D = d1 - d0
-    norm = float(np.sum(wgt * np.abs(D) ** 2))
-    betas = ((np.sum(wgt * np.conj(D) * (slope - d0), axis=1).real / norm).tolist()
-             if norm > 0 else [])
-    return F, dof, p, betas
+    qD = M @ np.concatenate([D.real, D.imag])
+    qs = (M @ np.hstack([(slope - d0).real, (slope - d0).imag]).T).T       # (R, p_dim)
+    norm = float(np.sum(wgt * qD ** 2))
+    betas = (qs @ (wgt * qD) / norm).tolist() if norm > 0 else []
+    return _Part(F, dof, p, betas, x, cov_x, nu)
+
+
+def _hotelling(z: np.ndarray, cov: np.ndarray, nu: int) -> tuple[float, tuple[int, int], float]:
+    """Hotelling's ``T²`` of ``z`` (``p`` dims) with ``cov`` estimated on ``ν`` dofs, as
+    ``F(p, ν − p + 1)``: F, dofs, p-value."""
+    p_dim = z.size
+    T2 = float(z @ np.linalg.solve(cov, z))
+    F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
+    return F, dof, float(fdist.sf(F, *dof))
+
+
+def _contrast(a: _Part, b: _Part) -> tuple[float, tuple[int, int], float]:
+    """Two speeds' in-phase drifts per kelvin, relative to their cold responses, alike? A gain
+    drift gives each channel the same at both (``α`` per kelvin of the probes' rise, which is
+    the bearing's times a constant); a bearing that stiffens gives them opposite signs either
+    side of the resonance. Hotelling on the difference with the two blocks' covariances
+    summed, ``ν`` the smaller block's (conservative: a sum of Wisharts has at least it)."""
+    nu = min(a.nu, b.nu)
+    p_dim = a.x.size
+    if nu - p_dim + 1 < 3:
+        return float("nan"), (p_dim, nu), 1.0
+    return _hotelling(b.x - a.x, a.cov_x + b.cov_x, nu)
 
 
 def _warm_figures(warm: tuple[Warmup, ...]) -> tuple[float, float]:
@@ -339,11 +394,12 @@ def _soak_problem(problem: Problem, block: SoakBlock) -> Problem:
 
 
 def soak_test(problem: Problem, rival: Fit, fit: Fit, name: str,
-              soaks: tuple[SoakBlock, ...], level: float) -> SoakTest:
+              soaks: tuple[SoakBlock, ...], level: float, *, gain: bool = True) -> SoakTest:
     """The soak's verdict on candidate ``name`` fitted as ``fit`` against ``rival`` (the fit
-    of the model without it, whose drift is the no-drift hypothesis): module doc."""
+    of the model without it, whose drift is the no-drift hypothesis): module doc; ``gain``
+    as in :func:`drift_test`."""
     warm = tuple(warmup(b) for b in soaks)
     d0 = tuple(drift_prediction(problem, rival, b)[0] for b in soaks)
     pred = [drift_prediction(problem, fit, b, jacobian=True) for b in soaks]
     sd = max((p[1] for p in pred), default=0.0)
-    return drift_test(name, soaks, warm, d0, tuple(p[0] for p in pred), sd, level)
+    return drift_test(name, soaks, warm, d0, tuple(p[0] for p in pred), sd, level, gain=gain)

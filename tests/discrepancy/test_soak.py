@@ -111,7 +111,7 @@ def test_bad_soak_blocks_are_refused_naming_the_field():
     t = np.tile(TIMES[:3], (3, 1))
     Y = np.ones((3, 3, 3), dtype=complex)
     with pytest.raises(ValueError, match="times_s has shape"):
-        SoakBlock("s", 1000.0, CH, t[:2], t[:2], Y[:2])
+        SoakBlock("s", 1000.0, CH, t[:1], t[:1], Y[:1])
     with pytest.raises(ValueError, match="temperature_K"):
         SoakBlock("s", 1000.0, CH, t, t[:, :2], Y)
     with pytest.raises(ValueError, match="increase"):
@@ -158,9 +158,9 @@ def test_the_predicted_drift_is_the_forward_models_hot_minus_cold(spindle):
 
 
 def test_a_soak_too_small_for_the_channels_covariance_gives_no_verdict():
-    """3 runs x 3 records: ν = 3 residual dofs for 6 real components — a drift is not
-    declared however large (a diagonal covariance would not give F under correlated
-    channels)."""
+    """3 runs x 3 records: ν = 3 residual dofs for 6 real components (3 quadratures with the
+    gain nuisance) — a drift is not declared however large (a diagonal covariance would not
+    give F under correlated channels)."""
     rng = np.random.default_rng(8)
     d = np.array([3e-7 + 1e-7j, -2e-7j, 1e-7 + 0j])
     t = np.tile([0.0, 900.0, 3600.0], (3, 1))
@@ -168,5 +168,7 @@ def test_a_soak_too_small_for_the_channels_covariance_gives_no_verdict():
     T = 293.0 + 12.0 * th + rng.normal(0, 0.01, t.shape)
     Y = 1e-6 + th[..., None] * d + 1e-10 * rng.normal(size=(3, 3, 3))
     blk = SoakBlock("soak", 22000.0, CH, t, T, Y)
-    res = drift_test("x", (blk,), (warmup(blk),), (np.zeros(3),), (d,), 0.1, 0.01)
-    assert res.p_drift == 1.0 and res.outcome == "inconclusive"
+    for gain in (True, False):
+        res = drift_test("x", (blk,), (warmup(blk),), (np.zeros(3),), (d,), 0.1, 0.01,
+                         gain=gain)
+        assert res.p_drift == 1.0 and res.outcome == "inconclusive"

@@ -22,7 +22,7 @@ from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import _child, reference_truth
 
 TIMES = (0.0, 900.0, 3600.0)
-PLAN = SoakPlan(times_s=TIMES, runs=3)
+PLAN = SoakPlan(times_s=TIMES, runs=3, rule="resonance")   # the one-speed soak
 SPEEDS = (8000.0, 12000.0, 16000.0, 20000.0)
 REPEATS = 5                     # the reader's 1x block needs 5
 
@@ -73,9 +73,10 @@ def test_soak_records_have_their_kind_labels_channels_and_speed(soaked):
     assert [r["id"] for r in rows] == ids == list(soaked.soaks)
     assert json.loads((soaked.root / "summary.json").read_text())["soak"] == ids
     assert soaked.n_records == REPEATS * 4 + 9 == footprint(_opts()).n_records
+    held = rows[0]["speed_rpm"]
     assert [r["labels"] for r in rows] == [
-        {"build": 0, "tool": 0, "run": REPEATS + 1 + j, "soak": j, "time_s": t}
-        for j in range(3) for t in TIMES]
+        {"build": 0, "tool": 0, "run": REPEATS + 1 + j, "soak": j, "time_s": t,
+         "speed_rpm": held} for j in range(3) for t in TIMES]
     steady = ds.load(ds.select(kind="steady")[0])
     rec = ds.load(rows[0])
     assert rec.kind == "soak" and rec.channel_names == steady.channel_names + ("T_front",)
@@ -222,6 +223,11 @@ def test_soak_blocks_read_the_records_back(soaked, tmp_path):
     ({"times_s": [0.0, 600.0]}, "rig.campaign.soak.times_s"),
     ({"times_s": [0.0, 600.0, 300.0]}, "rig.campaign.soak.times_s"),
     ({"runs": 2}, "rig.campaign.soak.runs"),
+    ({"runs": 3}, "rig.campaign.soak.runs"),             # two speeds: 2 runs at each
+    ({"rule": "peak"}, "rig.campaign.soak.rule"),
+    ({"speeds_rpm": [9000.0, 9000.0]}, "rig.campaign.soak.speeds_rpm"),
+    ({"speeds_rpm": [9000.0, -1.0]}, "rig.campaign.soak.speeds_rpm"),
+    ({"speed_rpm": 9000.0, "speeds_rpm": [8000.0, 10000.0]}, "rig.campaign.soak.speed"),
     ({"runs": 3.5}, "rig.campaign.soak.runs"),
     ({"speed_rpm": -1.0}, "rig.campaign.soak.speed_rpm"),
     ({"speed_rpm": "top"}, "rig.campaign.soak.speed_rpm"),
@@ -251,8 +257,16 @@ def test_soak_plan_picks_the_resonance():
     r = speeds / wn
     amp = r**2 / np.abs(1 - r**2 + 2j * zeta * r)
     peak = wn / np.sqrt(1 - 2 * zeta**2)
-    assert SoakPlan().at(speeds, amp).speed_rpm == speeds[np.argmin(np.abs(speeds - peak))]
+    one = SoakPlan(rule="resonance")
+    i = int(np.argmin(np.abs(speeds - peak)))
+    assert one.at(speeds, amp).speed_rpm == speeds[i]
     assert SoakPlan(speed_rpm=5000.0).at(speeds, amp).speed_rpm == 5000.0
-    assert SoakPlan().at(speeds).speed_rpm == 24000.0
+    assert one.at(speeds).speed_rpm == 24000.0
     with pytest.raises(ValueError, match="one per speed"):
-        SoakPlan().at(speeds, amp[:-1])
+        one.at(speeds, amp[:-1])
+    # the default: the two grid speeds either side of it, the runs taken at them in turn
+    two = SoakPlan().at(speeds, amp)
+    assert two.speeds == (speeds[i - 1], speeds[i + 1]) and two.speeds[0] < peak < two.speeds[1]
+    assert [two.speed_of(j) for j in range(4)] == [speeds[i - 1], speeds[i + 1]] * 2
+    assert SoakPlan().at(speeds).speeds == (speeds[-2], speeds[-1])
+    assert SoakPlan(speeds_rpm=(9000.0, 7000.0)).at(speeds, amp).speeds == (9000.0, 7000.0)
