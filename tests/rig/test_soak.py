@@ -15,7 +15,7 @@ from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, run_campaig
 from surrogate_rbrdo.rig.config import RigTable, rig_plan
 from surrogate_rbrdo.rig.demod import demodulate
 from surrogate_rbrdo.rig.phasors import expected_phasors
-from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.sensors import DAQModel, KeyphasorModel, ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
 from surrogate_rbrdo.rig.store import open_dataset, read_record
 from surrogate_rbrdo.rig.thermal import SoakPlan
@@ -270,3 +270,51 @@ def test_soak_plan_picks_the_resonance():
     assert [two.speed_of(j) for j in range(4)] == [speeds[i - 1], speeds[i + 1]] * 2
     assert SoakPlan().at(speeds).speeds == (speeds[-2], speeds[-1])
     assert SoakPlan(speeds_rpm=(9000.0, 7000.0)).at(speeds, amp).speeds == (9000.0, 7000.0)
+
+
+def _tempco_sensors(sd):
+    """Sensors whose one random error is the probes' tempco (no noise, gain, bandwidth, skew
+    or gap scatter; float counts): records differ only through it."""
+    return SensorSet(probe=ProbeModel(gain_error_sd=0.0, noise_rms_m=0.0, bandwidth_sd=0.0,
+                                      gap_sd_m=0.0, tempco_sd_per_K=sd),
+                     daq=DAQModel(skew_sd_s=0.0), keyphasor=KeyphasorModel(noise_V=0.0),
+                     quantise=False)
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("sweep", [True, False])
+def test_the_probe_tempco_scales_the_phasors_by_one_plus_alpha_dT(tmp_path, sweep):
+    """Two campaigns alike but for the probes' tempco (same seed): each soak record's 1x is
+    the one without it times ``1 + α_c ΔT`` exactly, ``ΔT`` the outer ring's true rise
+    ``rise(Ω) (1 − e^{−t/τ})``; each steady record's times ``1 + α_c rise(Ω)`` (its speed's
+    equilibrium) with ``tempco_sweep``, else unchanged. Without the tempco the installation
+    writes what it wrote before the option (no ``tempco_per_K``)."""
+    truth = reference_truth()
+    plan = SoakPlan(times_s=TIMES, runs=4)
+    X, inst = {}, {}
+    for sd in (0.0, 2e-3):
+        s = _tempco_sensors(sd)
+        s = dataclasses.replace(s, probe=dataclasses.replace(s.probe, tempco_sweep=sweep))
+        res = run_campaign(truth, _opts(soak=plan, sensors=s, speeds=(12000.0, 20000.0)),
+                           tmp_path / str(sd), rng=np.random.default_rng(3))
+        ds = open_dataset(res.dataset)
+        X[sd] = {r["id"]: (r, demodulate(ds.load(r)).X[:, 0]) for r in ds.index}
+        inst[sd] = json.loads((res.dataset / "dataset.json").read_text())["installation"]
+    assert "tempco_per_K" not in inst[0.0]
+    alpha = np.array([inst[2e-3]["tempco_per_K"][c] for c in SensorSet().probe_channels])
+    assert np.all(alpha != 0) and {k: v for k, v in inst[2e-3].items()
+                                   if k != "tempco_per_K"} == inst[0.0]
+    n_soak = 0
+    for rid, (row, x0) in X[0.0].items():
+        speed = row["speed_rpm"]
+        if row["kind"] == "soak":
+            n_soak += 1
+            dT = truth.thermal.rise_K(speed) * truth.thermal.fraction(row["labels"]["time_s"])
+        elif row["kind"] == "steady":
+            dT = truth.thermal.rise_K(speed) if sweep else 0.0
+        else:
+            continue
+        np.testing.assert_allclose(X[2e-3][rid][1], x0 * (1 + alpha * dT), rtol=1e-9, atol=0)
+    assert n_soak == 4 * len(TIMES)
+    assert {r["speed_rpm"] for r, _ in X[0.0].values() if r["kind"] == "soak"} == {
+        12000.0, 20000.0}
