@@ -19,8 +19,9 @@ a thermal soak after them — 4 cold starts, each held for an hour, two at each 
 speeds either side of its resonance, with a 1x record and a bearing temperature every 5–15 min
 (``RigSource._soaks``), the separating test of an effect that drifts with temperature
 (``discrepancy.soak``); ``--soak resonance``: the 4 at the resonance; ``--soak none``:
-without. ``--tempco``: the probes' sensitivity tempco (default the data-sheet scale,
-``rig.sensors.PROBE_TEMPCO_SD_PER_K``), on the soak and (``--tempco-sweep yes``) the sweep.
+without. ``--tempco``: the probes' sensitivity tempco (default 0; the data-sheet scale is
+``rig.sensors.PROBE_TEMPCO_SD_PER_K``), on the soak and (``--tempco-sweep yes``, the default)
+the sweep too.
 ``synthetic`` — the phasor-level stand-in of ``discrepancy.synthetic`` (with impact FRFs).
 Noise levels scale the probe noise and the run-to-run thermal scatter (rig) or every noise
 component (synthetic) by 0.5, 1 and 3.
@@ -81,9 +82,10 @@ def main() -> None:
                     help="a thermal soak after the sweep (rig.thermal.SoakPlan: 4 cold starts "
                          "held for an hour, 2 at each of the sweep speeds either side of the "
                          "resonance), the same at the resonance alone, or none")
-    ap.add_argument("--tempco", type=float, default=PROBE_TEMPCO_SD_PER_K, metavar="SD_PER_K",
+    ap.add_argument("--tempco", type=float, default=0.0, metavar="SD_PER_K",
                     help="rig: SD of the probes' sensitivity tempco (1/K; rig.sensors."
-                         "ProbeModel.tempco_sd_per_K; default the data-sheet scale; 0: none)")
+                         "ProbeModel.tempco_sd_per_K; default 0: none; the data-sheet scale "
+                         f"is {PROBE_TEMPCO_SD_PER_K:g})")
     ap.add_argument("--tempco-sweep", choices=("yes", "no"), default="yes",
                     help="rig: the tempco acts on the sweep too (each speed's equilibrium "
                          "temperature rise), not only on the soak")

@@ -316,5 +316,8 @@ def test_the_probe_tempco_scales_the_phasors_by_one_plus_alpha_dT(tmp_path, swee
             continue
         np.testing.assert_allclose(X[2e-3][rid][1], x0 * (1 + alpha * dT), rtol=1e-9, atol=0)
     assert n_soak == 4 * len(TIMES)
-    assert {r["speed_rpm"] for r, _ in X[0.0].values() if r["kind"] == "soak"} == {
-        12000.0, 20000.0}
+    # the two-speed soak read back: a block per speed, its 2 runs (soak runs 0, 2 and 1, 3)
+    blocks = soak_blocks(tmp_path / "0.002" / "dataset")
+    assert [(b.speed_rpm, b.runs) for b in blocks] == [(12000.0, 2), (20000.0, 2)]
+    assert [b.meta["runs"] for b in blocks] == [[[0, 0, REPEATS + 1], [0, 0, REPEATS + 3]],
+                                                [[0, 0, REPEATS + 2], [0, 0, REPEATS + 4]]]
