@@ -209,16 +209,19 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
     probe's gain with temperature is a nuisance (module doc, "A probe's gain drift"); False:
     the test without it (any drift along the response counts). With several tests (blocks,
     speed contrasts) the drift's p-value is the smallest times their number (Bonferroni)."""
-    betas, parts = [], []
+    parts = []
     for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
         if not w.measured:
             continue
-        part = _block_drift(blk, w, np.asarray(d0), np.asarray(d1), gain)
-        betas += part.betas
-        parts.append(part)
+        parts.append(_block_drift(blk, w, np.asarray(d0), np.asarray(d1), gain))
     tests = [(p.F, p.dof, p.p) for p in parts]
     if gain:
         tests += [_contrast(parts[0], q) for q in parts[1:]]
+    usable = [p for p in parts if p.betas]
+    if gain and len(usable) > 1:
+        betas = _gain_free_betas(usable)
+    else:
+        betas = [b for p in usable for b in p.betas]
     F_hot, dofs, p_min = min(tests, key=lambda x: x[2], default=(0.0, (0, 0), 1.0))
     p_drift = min(1.0, p_min * max(len(tests), 1))
     n = len(betas)
@@ -247,7 +250,9 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
 @dataclass(frozen=True)
 class _Part:
     """One block's drift test and what a contrast between speeds needs: its in-phase drift
-    per kelvin ``x`` (``(C,)``, relative to the cold response) and its covariance, ``ν``."""
+    per kelvin ``x`` (``(C,)``, relative to the cold response) and its covariance, ``ν``; and
+    for :func:`_gain_free_betas` the runs' slopes beyond ``Δ₀`` and cold responses ``(R, C)``,
+    the channels' weights, the drift predicted beyond ``Δ₀`` and the rise."""
 
     F: float
     dof: tuple[int, int]
@@ -256,6 +261,11 @@ class _Part:
     x: np.ndarray
     cov_x: np.ndarray
     nu: int
+    slopes: np.ndarray
+    cold: np.ndarray
+    wgt: np.ndarray
+    D: np.ndarray
+    rise: float
 
 
 def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain: bool
@@ -293,10 +303,12 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain
     q, cov = M @ vr, M @ S @ M.T / den.sum()
     x, cov_x = Mx @ vr, Mx @ S @ Mx.T / den.sum()
     p_dim = M.shape[0]
+    var_c = np.diag(S)[:C] + np.diag(S)[C:]
+    rest = (slope - d0, cold, 1.0 / np.where(var_c > 0, var_c, np.inf), d1 - d0, w.rise_K)
     if nu - p_dim + 1 < 3:
         # too few residual dofs to estimate the channels' covariance: a diagonal one would not
         # give F under correlated channels (the keyphasor's common phase error), so no verdict
-        return _Part(float("nan"), (p_dim, nu), 1.0, [], x, cov_x, nu)
+        return _Part(float("nan"), (p_dim, nu), 1.0, [], x, cov_x, nu, *rest)
     F, dof, p = _hotelling(q, cov, nu)
     var = np.diag(M @ S @ M.T)
     wgt = 1.0 / np.where(var > 0, var, np.inf)
@@ -305,7 +317,35 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain
     qs = (M @ np.hstack([(slope - d0).real, (slope - d0).imag]).T).T       # (R, p_dim)
     norm = float(np.sum(wgt * qD ** 2))
     betas = (qs @ (wgt * qD) / norm).tolist() if norm > 0 else []
-    return _Part(F, dof, p, betas, x, cov_x, nu)
+    return _Part(F, dof, p, betas, x, cov_x, nu, *rest)
+
+
+def _gain_free_betas(parts: list[_Part]) -> list[float]:
+    """Every run's ``β_r`` at two or more speeds: the probes' drift per kelvin ``α`` (``(C,)``,
+    one at every speed) and a common ``β`` fitted to the runs' slopes by weighted least
+    squares (``s_r ≈ β Δ + α ΔT a_r``, each channel weighted by its inverse residual
+    variance), then each run's slope less its gain part ``α̂ ΔT a_r`` along the whole
+    prediction (both components: the in-phase parts, which the two speeds separate from a
+    gain, carry most of a preload's drift beside the resonance). ``α̂`` is common to the runs:
+    their spread leaves out its own small noise (from the pooled slopes)."""
+    C = parts[0].D.size
+    rows, rhs = [], []
+    for p in parts:
+        sw = np.sqrt(p.wgt)
+        for s, a in zip(p.slopes, p.cold, strict=True):
+            X = np.hstack([p.D[:, None], np.diag(p.rise * a)]) * sw[:, None]   # (C, 1 + C)
+            rows += [X.real, X.imag]
+            rhs += [(s * sw).real, (s * sw).imag]
+    coef = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+    alpha = coef[1:1 + C]
+    out = []
+    for p in parts:
+        norm = float(np.sum(p.wgt * np.abs(p.D) ** 2))
+        if not norm > 0:
+            continue
+        r = p.slopes - alpha[None] * p.rise * p.cold
+        out += (np.sum(p.wgt * np.conj(p.D) * r, axis=1).real / norm).tolist()
+    return out
 
 
 def _hotelling(z: np.ndarray, cov: np.ndarray, nu: int) -> tuple[float, tuple[int, int], float]:
