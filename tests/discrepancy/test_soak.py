@@ -257,3 +257,41 @@ def test_a_gain_drift_shaped_like_the_growth_fools_only_the_one_speed_test():
     quadrature are those of a gain: none)."""
     assert _verdicts(0.0, 0.0, "resonance", gain=False, mimic=True).count("drift") >= 1
     assert _verdicts(0.0, 0.0, mimic=True).count("drift") <= 1
+
+
+def _two_speed_soak(rng, beta, alpha, drifts, rises=(10.0, 14.0), noise=1e-12):
+    """Two speeds, 2 runs each: ``y = a_r (1 + α_c ΔT θ) + β θ Δ_s + e`` — each probe's gain
+    drifting by ``α_c`` per kelvin of the speed's rise ``ΔT`` (noise-free temperatures)."""
+    out = []
+    for s, (d, rise) in enumerate(zip(drifts, rises, strict=True)):
+        t = np.tile(TIMES, (2, 1))
+        th = -np.expm1(-t / 900.0)
+        T = 293.0 + rng.normal(0, 0.5, (2, 1)) + rise * th
+        a = 1e-6 * (1 + 0.2 * rng.normal(size=(2, 1, 3))) * np.exp(
+            1j * rng.uniform(0, 2 * np.pi, (2, 1, 3)))
+        y = a * (1 + alpha * rise * th[..., None]) + beta * th[..., None] * d
+        y = y + noise * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
+        out.append(SoakBlock(f"soak{s}", 20000.0 + 2000.0 * s, CH, t, T, y))
+    return tuple(out)
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("beta", [0.0, 0.5, 1.0])
+def test_two_speeds_take_the_gain_drift_out_of_beta(beta):
+    """Nearly noise-free soaks at two speeds with every probe's gain drifting (0.01–0.03 %/K)
+    and a drift ``β Δ_s``: the gain-free ``β_r`` are ``β`` to 1e-4 whatever the gains, the
+    verdict ``drift`` at β = 1, ``no_drift`` at β = 0 (a gain alone is no drift), and the
+    one-speed test without the nuisance takes the gain for a drift."""
+    rng = np.random.default_rng(11)
+    alpha = np.array([3e-4, -2e-4, 1e-4])
+    drifts = (np.array([4e-8 + 1e-8j, -2e-8j, 3e-8 + 0j]),
+              np.array([-3e-8 + 2e-8j, 1e-8 + 1e-8j, -2e-8 + 0j]))
+    soaks = _two_speed_soak(rng, beta, alpha, drifts)
+    warm = tuple(warmup(s) for s in soaks)
+    zero = (np.zeros(3), np.zeros(3))
+    res = drift_test("x", soaks, warm, zero, drifts, 0.0, 0.01)
+    assert res.runs == 4 and res.beta == pytest.approx(beta, abs=1e-4)
+    assert res.outcome == {0.0: "no_drift", 0.5: "inconclusive", 1.0: "drift"}[beta]
+    if beta == 0.0:
+        old = drift_test("x", soaks[:1], warm[:1], zero[:1], drifts[:1], 0.0, 0.01, gain=False)
+        assert old.p_drift < 1e-6
