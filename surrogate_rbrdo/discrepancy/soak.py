@@ -3,7 +3,8 @@
 A preload growth and a passive spring beside its bearing (or a centrifugal softening, or a
 housing stage) can explain a speed sweep alike — the sweep's steady records are each at their
 speed's thermal equilibrium, and the run-to-run thermal scatter of the preload hides the rest.
-A soak holds one speed from a cold start (``rig.thermal.SoakPlan``): an effect whose
+A soak holds a speed from a cold start (``rig.thermal.SoakPlan``; by default two runs at
+each of the two sweep speeds either side of the resonance, a block per speed): an effect whose
 parameters follow temperature (:attr:`~surrogate_rbrdo.spindle.effects.Effect.thermal_params`)
 changes the 1x response during the hold, in proportion to the normalised temperature rise
 ``θ`` (one time constant, ``rig.thermal``); a spring, a softening or a housing does not.
@@ -18,18 +19,28 @@ The test (:func:`soak_test`), for a candidate fitted on the sweep:
    candidate's fit (its nuisance, probe chain, unbalance) with and without the candidate:
    ``Δ₁`` and ``Δ₀`` (:func:`drift_prediction`; ``Δ₀ = 0`` unless the model itself has an
    effect that drifts).
-3. **A drift beyond the rival's?** Each run's slope of the phasors on ``θ`` (its own
-   intercept: the run's cold response), pooled over the runs, minus ``Δ₀``, against the noise
-   of the runs' residuals about their own lines: Hotelling's ``T²`` on the ``2C`` real
-   components with ``ν = R (K − 2)`` degrees of freedom (``F(2C, ν − 2C + 1)``; no verdict
-   when ``ν < 2C + 2``: a soak too small to estimate the channels' covariance), so the
-   channels' correlation within a record (the keyphasor's phase error) is carried.
+3. **A drift beyond the rival's and beyond the probes' gains?** Each run's slope of the
+   phasors on ``θ`` (its own intercept: the run's cold response), pooled over the runs, minus
+   ``Δ₀``, against the noise of the runs' residuals about their own lines (``ν = R (K − 2)``
+   degrees of freedom; the channels' correlation within a record, the keyphasor's phase
+   error, carried). **A probe's gain drift** (an eddy-current probe's sensitivity tempco; the
+   probes sit beside the warming bearings) adds to channel ``c`` a real multiple
+   ``α_c ΔT a_c`` of its cold response, one ``α_c`` at every speed; near the resonance a
+   preload's drift lies almost along the response, so it is the test's nuisance: per speed,
+   Hotelling's ``T²`` on the slope's ``C`` quadratures to the cold responses (``F(C, ν − C +
+   1)``; no verdict when ``ν < C + 2``), and between two speeds Hotelling's ``T²`` on the
+   difference of the in-phase parts per kelvin (relative to the cold responses; ``α`` at both
+   under a gain drift, of opposite signs either side of the resonance under a stiffening;
+   covariances summed, the smaller ``ν``); Bonferroni over the tests. ``gain=False``: the test
+   on all ``2C`` real components (``F(2C, ν − 2C + 1)``), as before the nuisance.
 4. **The candidate's drift?** Each run's ``β_r = Re⟨Δ, s_r − Δ₀⟩_W / ⟨Δ, Δ⟩_W`` with
-   ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance), averaged
-   over the runs: Student's ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities
-   differ with their thermal states; the runs are independent whatever the noise within one),
-   the prediction's own relative uncertainty from the fit's covariance added
-   (Welch–Satterthwaite degrees of freedom).
+   ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance) — at one
+   speed with the gain nuisance on the quadratures alone, at two or more on the slopes less
+   their gain part (``α`` fitted with a common ``β``) — averaged over the runs: Student's
+   ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities differ with their thermal
+   states; the runs are independent whatever the noise within one), the prediction's own
+   relative uncertainty from the fit's covariance added (Welch–Satterthwaite degrees of
+   freedom).
 5. **Verdict** at ``level``: ``"drift"`` when (3) rejects no drift, ``β̂ > 0`` and (4) does
    not reject ``β = 1``; ``"no_drift"`` when (3) does not reject and (4) rejects ``β = 1``
    one-sided (``β < 1``); else ``"inconclusive"`` (a drift unlike the prediction, or a soak
