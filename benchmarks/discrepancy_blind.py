@@ -15,9 +15,13 @@ and y, 20 hits each, all in one run after the 1x runs (its own thermal state), a
 lines 40–1 480 Hz every 40 Hz through the rig's sensors (probe and hammer gain, driver,
 skew, noise, quantisation; ``rig.impacts.sample_frfs``); ``--impacts none``: the 1x campaign
 alone (the data before this test plan). With ``--soak`` (the default, ``rig.thermal.SoakPlan``):
-a thermal soak after them — 4 cold starts, each held for an hour at the sweep's resonance with
-a 1x record and a bearing temperature every 5–15 min (``RigSource._soaks``), the separating test
-of an effect that drifts with temperature (``discrepancy.soak``); ``--soak none``: without.
+a thermal soak after them — 4 cold starts, each held for an hour, two at each of the sweep
+speeds either side of its resonance, with a 1x record and a bearing temperature every 5–15 min
+(``RigSource._soaks``), the separating test of an effect that drifts with temperature
+(``discrepancy.soak``); ``--soak resonance``: the 4 at the resonance; ``--soak none``:
+without. ``--tempco``: the probes' sensitivity tempco (default 0; the data-sheet scale is
+``rig.sensors.PROBE_TEMPCO_SD_PER_K``), on the soak and (``--tempco-sweep yes``, the default)
+the sweep too.
 ``synthetic`` — the phasor-level stand-in of ``discrepancy.synthetic`` (with impact FRFs).
 Noise levels scale the probe noise and the run-to-run thermal scatter (rig) or every noise
 component (synthetic) by 0.5, 1 and 3.
@@ -59,6 +63,7 @@ from surrogate_rbrdo.discrepancy.rig_source import FACTORS, RigSource
 from surrogate_rbrdo.discrepancy.synthetic import Campaign, NoiseLevel
 from surrogate_rbrdo.discrepancy.workflow import GENERIC_CONFOUND, DiscrepancyOptions
 from surrogate_rbrdo.rig.impacts import ImpactPlan
+from surrogate_rbrdo.rig.sensors import PROBE_TEMPCO_SD_PER_K
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.spindle.reference import reference_spindle
 
@@ -73,9 +78,17 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=400)
     ap.add_argument("--impacts", choices=("plan", "none"), default="plan",
                     help="impact tests at speed (rig.impacts.ImpactPlan) or the 1x data alone")
-    ap.add_argument("--soak", choices=("plan", "none"), default="plan",
+    ap.add_argument("--soak", choices=("plan", "resonance", "none"), default="plan",
                     help="a thermal soak after the sweep (rig.thermal.SoakPlan: 4 cold starts "
-                         "held at the sweep's resonance for an hour) or none")
+                         "held for an hour, 2 at each of the sweep speeds either side of the "
+                         "resonance), the same at the resonance alone, or none")
+    ap.add_argument("--tempco", type=float, default=0.0, metavar="SD_PER_K",
+                    help="rig: SD of the probes' sensitivity tempco (1/K; rig.sensors."
+                         "ProbeModel.tempco_sd_per_K; default 0: none; the data-sheet scale "
+                         f"is {PROBE_TEMPCO_SD_PER_K:g})")
+    ap.add_argument("--tempco-sweep", choices=("yes", "no"), default="yes",
+                    help="rig: the tempco acts on the sweep too (each speed's equilibrium "
+                         "temperature rise), not only on the soak")
     ap.add_argument("--calibrate-on", choices=("same", "none"), default="same",
                     help="strengths calibrated on the data the scenarios use (same) or on the "
                          "1x data alone (none: the 1x grid's physical sizes, measured with the "
@@ -119,7 +132,10 @@ def main() -> None:
     if args.source == "rig":
         source = RigSource(speeds, 20, FACTORS,
                            impacts=ImpactPlan() if args.impacts == "plan" else None,
-                           soak=SoakPlan() if args.soak == "plan" else None)
+                           soak=None if args.soak == "none" else SoakPlan(
+                               rule="flanks" if args.soak == "plan" else "resonance"),
+                           tempco_sd_per_K=args.tempco,
+                           tempco_sweep=args.tempco_sweep == "yes")
         nuis = NuisanceOptions.probe_chain()
     else:
         lv = NoiseLevel()

@@ -25,7 +25,7 @@ from surrogate_rbrdo.rig.impacts import ImpactPlan, expected_frfs, sample_frfs
 from surrogate_rbrdo.rig.phasors import expected_phasors, sample_phasors
 from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
-from surrogate_rbrdo.rig.soak import soak_plan, soak_run_index
+from surrogate_rbrdo.rig.soak import probe_rise, soak_plan, soak_run_index
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, Variability
 from surrogate_rbrdo.spindle.assembly import RPM
@@ -44,9 +44,13 @@ class RigSource:
     factor: dict[str, float]
     k_relative: float = 0.004
     impacts: ImpactPlan | None = None
-    #: a thermal soak after the impact run (``rig.thermal.SoakPlan``; its speed None: the top
-    #: of ``speeds_rpm``), each of its runs a cold start with its own thermal state
+    #: a thermal soak after the impact run (``rig.thermal.SoakPlan``; its speeds not given:
+    #: by its rule from the sweep), each of its runs a cold start with its own thermal state
     soak: SoakPlan | None = None
+    #: the probes' sensitivity tempco SD (1/K, ``rig.sensors.ProbeModel``; 0: none) and
+    #: whether it acts on the sweep (each speed's equilibrium rise) besides the soak
+    tempco_sd_per_K: float = 0.0
+    tempco_sweep: bool = True
 
     def parts(self, geometry, effects, noise):
         f = self.factor[noise]
@@ -54,7 +58,9 @@ class RigSource:
         tb = tuple(b.name for b in geometry.bearings if b.name != "magnetic_pull")
         tb += ("magnetic_pull",) if len(tb) < len(geometry.bearings) else ()
         truth = Truth(geometry, effects, (), var, tb)
-        return truth, SensorSet(probe=ProbeModel(noise_rms_m=50e-9 * f))
+        return truth, SensorSet(probe=ProbeModel(noise_rms_m=50e-9 * f,
+                                                 tempco_sd_per_K=self.tempco_sd_per_K,
+                                                 tempco_sweep=self.tempco_sweep))
 
     def measure(self, geometry, effects, noise, seed) -> MeasuredData:
         truth, sensors = self.parts(geometry, effects, noise)
@@ -62,11 +68,12 @@ class RigSource:
         rng = np.random.default_rng(ss.spawn(1)[0])
         inst = sensors.install(rng)
         sp = np.asarray(self.speeds_rpm)
+        warm = _sweep_gains(truth, sensors, inst, sp)
         recs, ks = [], []
         for r in range(self.repeats):
             st = truth.state(ss, build=0, tool=0, run=r)
             m = st.model()
-            recs.append(sample_phasors(m, st.theta, sp, sensors, inst, rng)[0])
+            recs.append(sample_phasors(m, st.theta, sp, sensors, inst, rng)[0] * warm)
             Z = m.bearing_impedance(sp[None] * RPM, st.theta)[0][:, :2]
             k = np.stack([Z[..., 0, 0].real, Z[..., 1, 1].real], axis=-1)
             ks.append(k * (1 + self.k_relative * rng.normal(size=k.shape)))
@@ -85,28 +92,33 @@ class RigSource:
 
     def _soaks(self, truth, ss, sensors, inst, chans, rng, amplitude
                ) -> tuple[SoakBlock, ...]:
-        """The soak's runs (after the impact run) at its speed (by default the sweep's largest
-        mean amplitude as the rig's campaign takes it, ``rig.soak.soak_plan``; ``amplitude``
-        (runs, speeds): each run's largest channel amplitude): at each time the run's state
-        warmed to the thermal model's fraction (``TruthState.warming``), a 1x phasor through
-        the sensors, and the run's outer-ring temperature."""
+        """The soak's runs (after the impact run) at its speeds (by default by its rule from
+        the sweep as the rig's campaign takes them, ``rig.soak.soak_plan``; ``amplitude``
+        (runs, speeds): each run's largest channel amplitude), run ``j`` at
+        ``plan.speed_of(j)``: at each time the run's state warmed to the thermal model's
+        fraction (``TruthState.warming``), a 1x phasor through the sensors (the probes' gains
+        at the outer ring's rise, ``rig.soak.probe_rise``), and the run's outer-ring
+        temperature; one block per speed."""
         if self.soak is None:
             return ()
         plan = soak_plan(self.soak, self.speeds_rpm, amplitude)
         t = np.asarray(plan.times_s)
-        Y, T = [], []
+        runs: dict[float, tuple[list, list]] = {s: ([], []) for s in plan.speeds}
         for j in range(plan.runs):
+            speed = plan.speed_of(j)
             st = truth.state(ss, build=0, tool=0, run=soak_run_index(self.repeats, j))
             rows = []
             for f in truth.thermal.fraction(t):
                 w = st.warming(float(f))
-                rows.append(sample_phasors(w.model(), w.theta, np.array([plan.speed_rpm]),
-                                           sensors, inst, rng)[0, 0])
-            Y.append(rows)
-            T.append(truth.thermal.temperature_K(plan.speed_rpm, t, rng))
-        return (SoakBlock(f"soak_{plan.speed_rpm:.0f}rpm", plan.speed_rpm, chans,
-                          np.tile(t, (plan.runs, 1)), np.array(T), np.array(Y),
-                          {"source": "virtual rig fast path (soak)"}),)
+                rows.append(sample_phasors(
+                    w.model(), w.theta, np.array([speed]), sensors,
+                    inst.warmed(probe_rise(truth, speed, float(f))), rng)[0, 0])
+            runs[speed][0].append(rows)
+            runs[speed][1].append(truth.thermal.temperature_K(speed, t, rng))
+        return tuple(SoakBlock(f"soak_{s:.0f}rpm", s, chans, np.tile(t, (len(Y), 1)),
+                               np.array(T), np.array(Y),
+                               {"source": "virtual rig fast path (soak)"})
+                     for s, (Y, T) in sorted(runs.items()))
 
     def _impact_blocks(self, truth, ss, sensors, inst, chans, pos, rng, expected=None,
                        noise=""):
@@ -161,6 +173,17 @@ class RigSource:
         imp = self._impact_blocks(truth, np.random.SeedSequence(0), ideal, inst, chans, pos,
                                   None, expected=st, noise=noise)
         return MeasuredData((blk,) + imp)
+
+
+def _sweep_gains(truth, sensors, inst, speeds_rpm) -> np.ndarray | float:
+    """Each probe's gain factor ``1 + α ΔT(Ω)`` at each steady speed's equilibrium rise
+    (``(S, C)``; 1.0 without tempcos or ``tempco_sweep``) — applied to the sampled phasors,
+    so their noise is scaled by it too (by < 1 % at the data-sheet tempco)."""
+    if not (sensors.probe.tempco_sweep and inst.tempco_per_K):
+        return 1.0
+    rise = np.array([truth.thermal.rise_K(float(s)) for s in speeds_rpm])
+    a = np.array([inst.tempco_per_K.get(c, 0.0) for c in sensors.probe_channels])
+    return 1.0 + rise[:, None] * a[None, :]
 
 
 _COV: dict = {}

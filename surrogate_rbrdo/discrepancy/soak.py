@@ -3,7 +3,8 @@
 A preload growth and a passive spring beside its bearing (or a centrifugal softening, or a
 housing stage) can explain a speed sweep alike — the sweep's steady records are each at their
 speed's thermal equilibrium, and the run-to-run thermal scatter of the preload hides the rest.
-A soak holds one speed from a cold start (``rig.thermal.SoakPlan``): an effect whose
+A soak holds a speed from a cold start (``rig.thermal.SoakPlan``; by default two runs at
+each of the two sweep speeds either side of the resonance, a block per speed): an effect whose
 parameters follow temperature (:attr:`~surrogate_rbrdo.spindle.effects.Effect.thermal_params`)
 changes the 1x response during the hold, in proportion to the normalised temperature rise
 ``θ`` (one time constant, ``rig.thermal``); a spring, a softening or a housing does not.
@@ -18,18 +19,28 @@ The test (:func:`soak_test`), for a candidate fitted on the sweep:
    candidate's fit (its nuisance, probe chain, unbalance) with and without the candidate:
    ``Δ₁`` and ``Δ₀`` (:func:`drift_prediction`; ``Δ₀ = 0`` unless the model itself has an
    effect that drifts).
-3. **A drift beyond the rival's?** Each run's slope of the phasors on ``θ`` (its own
-   intercept: the run's cold response), pooled over the runs, minus ``Δ₀``, against the noise
-   of the runs' residuals about their own lines: Hotelling's ``T²`` on the ``2C`` real
-   components with ``ν = R (K − 2)`` degrees of freedom (``F(2C, ν − 2C + 1)``; no verdict
-   when ``ν < 2C + 2``: a soak too small to estimate the channels' covariance), so the
-   channels' correlation within a record (the keyphasor's phase error) is carried.
+3. **A drift beyond the rival's and beyond the probes' gains?** Each run's slope of the
+   phasors on ``θ`` (its own intercept: the run's cold response), pooled over the runs, minus
+   ``Δ₀``, against the noise of the runs' residuals about their own lines (``ν = R (K − 2)``
+   degrees of freedom; the channels' correlation within a record, the keyphasor's phase
+   error, carried). **A probe's gain drift** (an eddy-current probe's sensitivity tempco; the
+   probes sit beside the warming bearings) adds to channel ``c`` a real multiple
+   ``α_c ΔT a_c`` of its cold response, one ``α_c`` at every speed; near the resonance a
+   preload's drift lies almost along the response, so it is the test's nuisance: per speed,
+   Hotelling's ``T²`` on the slope's ``C`` quadratures to the cold responses (``F(C, ν − C +
+   1)``; no verdict when ``ν < C + 2``), and between two speeds Hotelling's ``T²`` on the
+   difference of the in-phase parts per kelvin (relative to the cold responses; ``α`` at both
+   under a gain drift, of opposite signs either side of the resonance under a stiffening;
+   covariances summed, the smaller ``ν``); Bonferroni over the tests. ``gain=False``: the test
+   on all ``2C`` real components (``F(2C, ν − 2C + 1)``), as before the nuisance.
 4. **The candidate's drift?** Each run's ``β_r = Re⟨Δ, s_r − Δ₀⟩_W / ⟨Δ, Δ⟩_W`` with
-   ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance), averaged
-   over the runs: Student's ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities
-   differ with their thermal states; the runs are independent whatever the noise within one),
-   the prediction's own relative uncertainty from the fit's covariance added
-   (Welch–Satterthwaite degrees of freedom).
+   ``Δ = Δ₁ − Δ₀`` (1: as predicted; ``W`` each channel's inverse residual variance) — at one
+   speed with the gain nuisance on the quadratures alone, at two or more on the slopes less
+   their gain part (``α`` fitted with a common ``β``) — averaged over the runs: Student's
+   ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities differ with their thermal
+   states; the runs are independent whatever the noise within one), the prediction's own
+   relative uncertainty from the fit's covariance added (Welch–Satterthwaite degrees of
+   freedom).
 5. **Verdict** at ``level``: ``"drift"`` when (3) rejects no drift, ``β̂ > 0`` and (4) does
    not reject ``β = 1``; ``"no_drift"`` when (3) does not reject and (4) rejects ``β = 1``
    one-sided (``β < 1``); else ``"inconclusive"`` (a drift unlike the prediction, or a soak
@@ -78,7 +89,8 @@ MIN_RISE_Z = 10.0
 
 @dataclass(frozen=True)
 class SoakBlock:
-    """A thermal soak's 1x phasors: ``R`` runs (cold starts) × ``K`` records at one speed.
+    """A thermal soak's 1x phasors: ``R`` runs (cold starts) × ``K`` records at one speed
+    (``R`` ≥ 2: a soak at two speeds splits its runs).
 
     Attributes
     ----------
@@ -111,8 +123,8 @@ class SoakBlock:
         Y = np.asarray(self.phasors, dtype=complex)
         if not (self.speed_rpm > 0 and np.isfinite(self.speed_rpm)):
             raise ValueError(f"{where}: speed_rpm = {self.speed_rpm!r} is not allowed: > 0")
-        if t.ndim != 2 or t.shape[0] < 3 or t.shape[1] < 3:
-            raise ValueError(f"{where}: times_s has shape {t.shape}: need (runs >= 3, "
+        if t.ndim != 2 or t.shape[0] < 2 or t.shape[1] < 3:
+            raise ValueError(f"{where}: times_s has shape {t.shape}: need (runs >= 2, "
                              "records >= 3)")
         if T.shape != t.shape or Y.shape != (*t.shape, len(self.channels)):
             raise ValueError(f"{where}: temperature_K {T.shape} and phasors {Y.shape} must be "
@@ -201,22 +213,29 @@ class SoakTest:
 
 def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup, ...],
                rival: tuple[np.ndarray, ...], predicted: tuple[np.ndarray, ...],
-               prediction_sd: float, level: float) -> SoakTest:
+               prediction_sd: float, level: float, *, gain: bool = True) -> SoakTest:
     """The drift test (module doc, steps 3–4) given each block's warm-up, the rival's
     predicted hot − cold drift ``Δ₀`` and the candidate's ``Δ₁`` (``(C,)`` each), and the
-    relative standard deviation of the candidate's prediction. With several blocks the drift's
-    p-value is the smallest times their number (Bonferroni)."""
-    betas, p_hot, F_hot, dofs = [], [], 0.0, (0, 0)
+    relative standard deviation of the candidate's prediction. ``gain``: a drift of each
+    probe's gain with temperature is a nuisance (module doc, "A probe's gain drift"); False:
+    the test without it (any drift along the response counts). With several tests (blocks,
+    speed contrasts) the drift's p-value is the smallest times their number (Bonferroni)."""
+    parts = []
     for blk, w, d0, d1 in zip(blocks, warm, rival, predicted, strict=True):
         if not w.measured:
             continue
-        F, dof, p, b = _block_drift(blk, w, np.asarray(d0), np.asarray(d1))
-        betas += b
-        if p < min(p_hot, default=2.0):
-            F_hot, dofs = F, dof
-        p_hot.append(p)
+        parts.append(_block_drift(blk, w, np.asarray(d0), np.asarray(d1), gain))
+    tests = [(p.F, p.dof, p.p) for p in parts]
+    if gain:
+        tests += [_contrast(parts[0], q) for q in parts[1:]]
+    usable = [p for p in parts if p.betas]
+    if gain and len(usable) > 1:
+        betas = _gain_free_betas(usable)
+    else:
+        betas = [b for p in usable for b in p.betas]
+    F_hot, dofs, p_min = min(tests, key=lambda x: x[2], default=(0.0, (0, 0), 1.0))
+    p_drift = min(1.0, p_min * max(len(tests), 1))
     n = len(betas)
-    p_drift = min(1.0, min(p_hot, default=1.0) * max(len(p_hot), 1))
     if n < 3:
         return SoakTest(candidate, "inconclusive", float(F_hot), dofs, p_drift,
                         float("nan"), float("nan"), max(n - 1, 0), 1.0, 1.0,
@@ -239,12 +258,36 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
                     p_below, float(prediction_sd), level, n, *_warm_figures(warm))
 
 
-def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
-                 ) -> tuple[float, tuple[int, int], float, list[float]]:
+@dataclass(frozen=True)
+class _Part:
+    """One block's drift test and what a contrast between speeds needs: its in-phase drift
+    per kelvin ``x`` (``(C,)``, relative to the cold response) and its covariance, ``ν``; and
+    for :func:`_gain_free_betas` the runs' slopes beyond ``Δ₀`` and cold responses ``(R, C)``,
+    the channels' weights, the drift predicted beyond ``Δ₀`` and the rise."""
+
+    F: float
+    dof: tuple[int, int]
+    p: float
+    betas: list
+    x: np.ndarray
+    cov_x: np.ndarray
+    nu: int
+    slopes: np.ndarray
+    cold: np.ndarray
+    wgt: np.ndarray
+    D: np.ndarray
+    rise: float
+
+
+def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain: bool
+                 ) -> _Part:
     """One block's drift test: Hotelling's F of the pooled slope on ``θ`` beyond ``Δ₀``
     against the runs' residual noise (each run's own slope and intercept removed: ``ν =
     R (K − 2)`` degrees of freedom; p = 1 and no ``β_r`` when ``ν`` is too small for the
-    ``2C`` real dimensions), its dofs and p-value, and every run's ``β_r``."""
+    test's dimensions), its dofs and p-value, and every run's ``β_r``. With ``gain``, of the
+    slope's quadrature to each channel's cold response only (``C`` dimensions: a real gain
+    drift has none), ``β_r`` likewise, and the in-phase part per kelvin for :func:`_contrast`;
+    else of all ``2C`` real components."""
     th = w.fraction - w.fraction.mean(axis=1, keepdims=True)                 # (R, K)
     Y = blk.phasors - blk.phasors.mean(axis=1, keepdims=True)               # (R, K, C)
     den = np.sum(th ** 2, axis=1)                                           # (R,)
@@ -255,24 +298,87 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray
     E = np.concatenate([e.real, e.imag], axis=-1).reshape(-1, 2 * C)
     S = E.T @ E / nu                                                        # (2C, 2C)
     v = np.einsum("rk,rkc->c", th, Y) / den.sum() - d0
-    v = np.concatenate([v.real, v.imag])
-    cov = S / den.sum()
-    p_dim = 2 * C
-    if nu - p_dim + 1 >= 3:
-        T2 = float(v @ np.linalg.solve(cov, v))
-        F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
+    # each run's cold response (intercept at θ = 0), weighted as the pooled slope
+    cold = blk.phasors.mean(axis=1) - slope * w.fraction.mean(axis=1)[:, None]
+    a = np.einsum("r,rc->c", den, cold) / den.sum()
+    u = a / np.where(np.abs(a) > 0, np.abs(a), 1.0)
+    if gain:
+        # quadrature Im(ū v) = Re u Im v − Im u Re v, in-phase Re(ū v)/|a|/rise per kelvin
+        M = np.hstack([-np.diag(u.imag), np.diag(u.real)])                  # (C, 2C)
+        Mx = np.hstack([np.diag(u.real), np.diag(u.imag)]) / (
+            np.abs(a)[:, None] * max(w.rise_K, 1e-300))
     else:
+        M = np.eye(2 * C)
+        Mx = np.zeros((0, 2 * C))
+    vr = np.concatenate([v.real, v.imag])
+    q, cov = M @ vr, M @ S @ M.T / den.sum()
+    x, cov_x = Mx @ vr, Mx @ S @ Mx.T / den.sum()
+    p_dim = M.shape[0]
+    var_c = np.diag(S)[:C] + np.diag(S)[C:]
+    rest = (slope - d0, cold, 1.0 / np.where(var_c > 0, var_c, np.inf), d1 - d0, w.rise_K)
+    if nu - p_dim + 1 < 3:
         # too few residual dofs to estimate the channels' covariance: a diagonal one would not
         # give F under correlated channels (the keyphasor's common phase error), so no verdict
-        return float("nan"), (p_dim, nu), 1.0, []
-    p = float(fdist.sf(F, *dof))
-    var = np.diag(S)[:C] + np.diag(S)[C:]
+        return _Part(float("nan"), (p_dim, nu), 1.0, [], x, cov_x, nu, *rest)
+    F, dof, p = _hotelling(q, cov, nu)
+    var = np.diag(M @ S @ M.T)
     wgt = 1.0 / np.where(var > 0, var, np.inf)
     D = d1 - d0
-    norm = float(np.sum(wgt * np.abs(D) ** 2))
-    betas = ((np.sum(wgt * np.conj(D) * (slope - d0), axis=1).real / norm).tolist()
-             if norm > 0 else [])
-    return F, dof, p, betas
+    qD = M @ np.concatenate([D.real, D.imag])
+    qs = (M @ np.hstack([(slope - d0).real, (slope - d0).imag]).T).T       # (R, p_dim)
+    norm = float(np.sum(wgt * qD ** 2))
+    betas = (qs @ (wgt * qD) / norm).tolist() if norm > 0 else []
+    return _Part(F, dof, p, betas, x, cov_x, nu, *rest)
+
+
+def _gain_free_betas(parts: list[_Part]) -> list[float]:
+    """Every run's ``β_r`` at two or more speeds: the probes' drift per kelvin ``α`` (``(C,)``,
+    one at every speed) and a common ``β`` fitted to the runs' slopes by weighted least
+    squares (``s_r ≈ β Δ + α ΔT a_r``, each channel weighted by its inverse residual
+    variance), then each run's slope less its gain part ``α̂ ΔT a_r`` along the whole
+    prediction (both components: the in-phase parts, which the two speeds separate from a
+    gain, carry most of a preload's drift beside the resonance). ``α̂`` is common to the runs:
+    their spread leaves out its own small noise (from the pooled slopes)."""
+    C = parts[0].D.size
+    rows, rhs = [], []
+    for p in parts:
+        sw = np.sqrt(p.wgt)
+        for s, a in zip(p.slopes, p.cold, strict=True):
+            X = np.hstack([p.D[:, None], np.diag(p.rise * a)]) * sw[:, None]   # (C, 1 + C)
+            rows += [X.real, X.imag]
+            rhs += [(s * sw).real, (s * sw).imag]
+    coef = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+    alpha = coef[1:1 + C]
+    out = []
+    for p in parts:
+        norm = float(np.sum(p.wgt * np.abs(p.D) ** 2))
+        if not norm > 0:
+            continue
+        r = p.slopes - alpha[None] * p.rise * p.cold
+        out += (np.sum(p.wgt * np.conj(p.D) * r, axis=1).real / norm).tolist()
+    return out
+
+
+def _hotelling(z: np.ndarray, cov: np.ndarray, nu: int) -> tuple[float, tuple[int, int], float]:
+    """Hotelling's ``T²`` of ``z`` (``p`` dims) with ``cov`` estimated on ``ν`` dofs, as
+    ``F(p, ν − p + 1)``: F, dofs, p-value."""
+    p_dim = z.size
+    T2 = float(z @ np.linalg.solve(cov, z))
+    F, dof = T2 * (nu - p_dim + 1) / (p_dim * nu), (p_dim, nu - p_dim + 1)
+    return F, dof, float(fdist.sf(F, *dof))
+
+
+def _contrast(a: _Part, b: _Part) -> tuple[float, tuple[int, int], float]:
+    """Two speeds' in-phase drifts per kelvin, relative to their cold responses, alike? A gain
+    drift gives each channel the same at both (``α`` per kelvin of the probes' rise, which is
+    the bearing's times a constant); a bearing that stiffens gives them opposite signs either
+    side of the resonance. Hotelling on the difference with the two blocks' covariances
+    summed, ``ν`` the smaller block's (conservative: a sum of Wisharts has at least it)."""
+    nu = min(a.nu, b.nu)
+    p_dim = a.x.size
+    if nu - p_dim + 1 < 3:
+        return float("nan"), (p_dim, nu), 1.0
+    return _hotelling(b.x - a.x, a.cov_x + b.cov_x, nu)
 
 
 def _warm_figures(warm: tuple[Warmup, ...]) -> tuple[float, float]:
@@ -339,11 +445,12 @@ def _soak_problem(problem: Problem, block: SoakBlock) -> Problem:
 
 
 def soak_test(problem: Problem, rival: Fit, fit: Fit, name: str,
-              soaks: tuple[SoakBlock, ...], level: float) -> SoakTest:
+              soaks: tuple[SoakBlock, ...], level: float, *, gain: bool = True) -> SoakTest:
     """The soak's verdict on candidate ``name`` fitted as ``fit`` against ``rival`` (the fit
-    of the model without it, whose drift is the no-drift hypothesis): module doc."""
+    of the model without it, whose drift is the no-drift hypothesis): module doc; ``gain``
+    as in :func:`drift_test`."""
     warm = tuple(warmup(b) for b in soaks)
     d0 = tuple(drift_prediction(problem, rival, b)[0] for b in soaks)
     pred = [drift_prediction(problem, fit, b, jacobian=True) for b in soaks]
     sd = max((p[1] for p in pred), default=0.0)
-    return drift_test(name, soaks, warm, d0, tuple(p[0] for p in pred), sd, level)
+    return drift_test(name, soaks, warm, d0, tuple(p[0] for p in pred), sd, level, gain=gain)

@@ -4,7 +4,8 @@ The paper's campaign by default: 50 speeds uniformly in 1 000–24 000 rpm × 20
 steady-state records, a run-up and a run-down, and impact tests at the tool tip (x and y).
 Each repeat is one *run* (its own thermal state); builds and tool changes are nested around
 runs. With ``soak`` (a :class:`~.thermal.SoakPlan`) each tool ends with a thermal soak: runs of
-steady records at one speed as the spindle warms from a cold start (``rig.soak``). Records
+steady records at a speed held (by default two either side of the resonance, run by run) as
+the spindle warms from a cold start (``rig.soak``). Records
 stream to disk one run at a time (bounded memory); a campaign interrupted and started again
 with the same options and seed skips every record already written.
 
@@ -106,7 +107,8 @@ class CampaignOptions:
     label ``trial = 1``, the mass in the record's ``provenance["test_setup"]``): the
     difference isolates a known excitation (influence-coefficient practice, ISO 21940-13).
     ``soak``: a thermal soak after each tool's other records (:class:`~.thermal.SoakPlan`,
-    ``rig.soak``; its speed None: the resonance of that tool's sweep), or None for none.
+    ``rig.soak``; its speeds not given: by its rule from that tool's sweep), or None for
+    none.
     """
 
     speeds_rpm: tuple[float, ...] | SpeedGrid = field(default_factory=_default_speeds)
@@ -329,8 +331,8 @@ def _check_run(st, o: CampaignOptions, red: Reduction, b: int, tl: int, r: int) 
 
 
 def soak_speed(o: CampaignOptions) -> tuple[float, ...]:
-    """The soak's speed when given (else it is one of ``speeds_rpm``)."""
-    return () if o.soak is None or o.soak.speed_rpm is None else (o.soak.speed_rpm,)
+    """The soak's speeds when given (else they are among ``speeds_rpm``)."""
+    return () if o.soak is None else o.soak.speeds
 
 
 def stability_speeds(o: CampaignOptions) -> np.ndarray:
@@ -491,8 +493,18 @@ def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False
     prov = [{**base, "seed_key": [key, b, tl, r, i]} for i in todo]
     recs = steady_records(st.model(), st.theta, sp, options.sensors, inst, rngs,
                           duration_s=options.duration_s, ids=[ids[i] for i in todo],
-                          provenance=prov)
+                          provenance=prov, probe_rise_K=sweep_probe_rise(truth, options, sp))
     return {rec.id: rec for rec in recs}
+
+
+def sweep_probe_rise(truth, options, speeds_rpm) -> np.ndarray | None:
+    """The probes' temperature rise at each steady speed's thermal equilibrium (the front
+    bearing's outer ring's, ``truth.thermal``) when their tempcos apply to the sweep
+    (``ProbeModel.tempco_sweep`` and ``tempco_sd_per_K`` > 0), else None."""
+    p = options.sensors.probe
+    if not (p.tempco_sweep and p.tempco_sd_per_K > 0):
+        return None
+    return np.array([truth.thermal.rise_K(float(s)) for s in np.atleast_1d(speeds_rpm)])
 
 
 def _extras(truth, st, options, inst, root_ss, b, tl):

@@ -134,7 +134,8 @@ RIG_SPEED_FACTOR = 1.5
 def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
     """Refuse campaign speeds (steady, impact, soak and ramp) above :data:`RIG_SPEED_FACTOR` x
     the spindle's ``speed_max_rpm`` (``ValueError`` naming ``campaign.speeds_rpm[i]``,
-    ``campaign.impact_speeds_rpm[i]``, ``campaign.soak.speed_rpm`` or ``campaign.runup``)."""
+    ``campaign.impact_speeds_rpm[i]``, ``campaign.soak.speed_rpm``,
+    ``campaign.soak.speeds_rpm[i]`` or ``campaign.runup``)."""
     top = RIG_SPEED_FACTOR * speed_max_rpm
     why = (f"must be at most {top:g} rpm, {RIG_SPEED_FACTOR:g} x the spindle's speed_max_rpm "
            f"= {speed_max_rpm:g} (an overspeed test runs at 1.15 x)")
@@ -147,6 +148,9 @@ def check_rig_speeds(options: CampaignOptions, speed_max_rpm: float) -> None:
     soak = options.soak
     if soak is not None and soak.speed_rpm is not None and soak.speed_rpm > top:
         raise ValueError(f"campaign.soak.speed_rpm = {soak.speed_rpm:g} is not allowed: {why}")
+    for i, s in enumerate(() if soak is None else soak.speeds_rpm):
+        if s > top:
+            raise ValueError(f"campaign.soak.speeds_rpm[{i}] = {s:g} is not allowed: {why}")
     if options.runup is not None and options.runup[1] > top:
         raise ValueError(f"campaign.runup = {list(options.runup)} is not allowed: end_rpm {why}")
 

@@ -19,6 +19,7 @@ one: ``value = counts · lsb / S − g_nominal``.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -28,6 +29,13 @@ from surrogate_rbrdo.core.validate import check_choice, check_int, check_positiv
 from surrogate_rbrdo.rig.records import Calibration, ChannelSpec, SensorLocation
 
 PROBE_TARGETS = ("front", "rear", "tool")
+#: the scale of an eddy-current probe system's sensitivity temperature coefficient (1/K, one
+#: SD), 0.05 %/K (a 15 K warm-up: 0.75 %): below an inductive analog distance sensor's data
+#: sheet's "temperature drift ≤ ±0.15 %/K of full-scale value" (KJT NBB5-18GM60-I3, the one
+#: sheet figure found), and of the order of an API 670 8 mm system's scale-factor tolerance
+#: over its probe temperature range (about ±10 % over 155 K, ≤ 0.065 %/K; quoted from
+#: memory, not checked against the sheet) — docs/rig.md
+PROBE_TEMPCO_SD_PER_K = 5e-4
 
 
 @dataclass(frozen=True)
@@ -41,11 +49,21 @@ class ProbeModel:
     bandwidth_sd: float = 0.10                  # relative scatter of the bandwidth
     gap_m: float = 1.0e-3                       # nominal mean gap (DC, removed by calibration)
     gap_sd_m: float = 25e-6                     # install scatter of the gap
+    #: SD of each probe system's sensitivity temperature coefficient (1/K; drawn per channel
+    #: per installation, :data:`PROBE_TEMPCO_SD_PER_K` the data-sheet scale): the gain is
+    #: ``(1 + ε)(1 + α ΔT)`` at a probe temperature rise ``ΔT`` — the bearing's outer ring's
+    #: in the soak and, with ``tempco_sweep``, at each steady speed's thermal equilibrium
+    #: (``rig.thermal``). 0 (default): no drift, the rig's records as before the option.
+    tempco_sd_per_K: float = 0.0
+    tempco_sweep: bool = True
 
     def __post_init__(self) -> None:
         for n in ("sensitivity_V_per_m", "bandwidth_hz", "gap_m"):
             check_positive(f"probe.{n}", getattr(self, n))
-        for n in ("gain_error_sd", "noise_rms_m", "bandwidth_sd", "gap_sd_m"):
+        if not isinstance(self.tempco_sweep, bool):
+            raise ValueError(f"probe.tempco_sweep = {self.tempco_sweep!r} is not allowed: "
+                             "true or false")
+        for n in ("gain_error_sd", "noise_rms_m", "bandwidth_sd", "gap_sd_m", "tempco_sd_per_K"):
             check_positive(f"probe.{n}", getattr(self, n), allow_zero=True)
 
 
@@ -144,16 +162,33 @@ class AccelerometerModel:
 
 @dataclass(frozen=True)
 class Installation:
-    """The drawn (hidden) state of each channel: gain error, bandwidth, skew, gap."""
+    """The drawn (hidden) state of each channel: gain error, bandwidth, skew, gap, and the
+    probes' sensitivity temperature coefficients (1/K; empty: none)."""
 
     gain: dict[str, float]
     bandwidth_hz: dict[str, float]
     skew_s: dict[str, float]
     gap_m: dict[str, float]
+    tempco_per_K: dict[str, float] = field(default_factory=dict)
+
+    def warmed(self, rise_K: float) -> Installation:
+        """The installation with every probe ``rise_K`` warmer: each gain times
+        ``1 + α rise_K`` (itself without tempcos or at no rise).
+
+        >>> inst = Installation({"a": 1.01}, {"a": 1e4}, {"a": 0.0}, {"a": 1e-3}, {"a": 1e-3})
+        >>> round(inst.warmed(10.0).gain["a"], 6)
+        1.0201
+        """
+        if not self.tempco_per_K or rise_K == 0:
+            return self
+        gain = {n: g * (1.0 + self.tempco_per_K.get(n, 0.0) * rise_K)
+                for n, g in self.gain.items()}
+        return dataclasses.replace(self, gain=gain)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"gain": self.gain, "bandwidth_hz": self.bandwidth_hz, "skew_s": self.skew_s,
-                "gap_m": self.gap_m}
+        out = {"gain": self.gain, "bandwidth_hz": self.bandwidth_hz, "skew_s": self.skew_s,
+               "gap_m": self.gap_m}
+        return {**out, "tempco_per_K": self.tempco_per_K} if self.tempco_per_K else out
 
 
 @dataclass(frozen=True)
@@ -211,7 +246,9 @@ class SensorSet:
         return self.probe_channels + ("keyphasor",)
 
     def install(self, rng: np.random.Generator) -> Installation:
-        """Draw each channel's gain error, bandwidth, timing skew and gap."""
+        """Draw each channel's gain error, bandwidth, timing skew and gap, and (with
+        ``probe.tempco_sd_per_K`` > 0 and the noise on) each probe's tempco after them: an
+        installation without tempcos draws what it drew before the option."""
         p, d = self.probe, self.daq
         names = self.probe_channels + ("keyphasor", "hammer") + self.accel_channels
         on = 1.0 if self.noise else 0.0
@@ -221,7 +258,9 @@ class SensorSet:
         bw = {n: float(p.bandwidth_hz * (1 + on * rng.normal(0, p.bandwidth_sd))) for n in names}
         skew = {n: float(on * rng.normal(0, d.skew_sd_s)) for n in names}
         gap = {n: float(p.gap_m + on * rng.normal(0, p.gap_sd_m)) for n in names}
-        return Installation(gain, bw, skew, gap)
+        tempco = ({n: float(rng.normal(0, p.tempco_sd_per_K)) for n in self.probe_channels}
+                  if self.noise and p.tempco_sd_per_K > 0 else {})
+        return Installation(gain, bw, skew, gap, tempco)
 
     def channel_specs(self, kind: str, positions_mm: dict[str, float]) -> tuple[ChannelSpec, ...]:
         """Channel specs (nominal calibration, known delays) of a record of ``kind``."""

@@ -121,11 +121,13 @@ def _channel_delays(sensors: SensorSet, inst: Installation, kind: str) -> np.nda
 
 def steady_records(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarray,
                    sensors: SensorSet, inst: Installation, rngs: list[np.random.Generator],
-                   *, duration_s: float = 1.0, ids: list[str], provenance: list[dict[str, Any]]
-                   ) -> list[Record]:
+                   *, duration_s: float = 1.0, ids: list[str], provenance: list[dict[str, Any]],
+                   probe_rise_K: np.ndarray | None = None) -> list[Record]:
     """One steady-state record per speed (one run: one θ, one truth state).
 
-    ``rngs[i]`` draws record ``i``'s noise and initial shaft angle.
+    ``rngs[i]`` draws record ``i``'s noise and initial shaft angle. ``probe_rise_K[i]``: the
+    probes' temperature rise during record ``i`` (their gains through their tempcos,
+    :meth:`~.sensors.Installation.warmed`; None: none).
     """
     layout = ProbeLayout.of(model)
     sp = np.asarray(speeds_rpm, float)
@@ -145,7 +147,8 @@ def steady_records(model: SpindleModel, theta: np.ndarray, speeds_rpm: np.ndarra
         ang = phi0 + w * (t[None, :] + tau[:, None])            # (n_ch, n)
         Z = np.array([sensors.lowpass(c, inst, w / (2 * np.pi)) for c in names]) * X[i]
         x = np.abs(Z)[:, None] * np.cos(ang[:-1] + np.angle(Z)[:, None])   # Re(Z e^{iφ})
-        volts = _volts(sensors, inst, names, x, rng)
+        warm = inst if probe_rise_K is None else inst.warmed(float(probe_rise_K[i]))
+        volts = _volts(sensors, warm, names, x, rng)
         kp = keyphasor_channel(sensors, ang[-1], rng)
         k = np.arange(np.ceil(phi0 / (2 * np.pi)), np.ceil((phi0 + w * t[-1]) / (2 * np.pi)))
         events = keyphasor_events(sensors, inst, (2 * np.pi * k - phi0) / w,

@@ -1,24 +1,27 @@
-"""A thermal soak in a rig campaign: steady records at one speed as the spindle warms.
+"""A thermal soak in a rig campaign: steady records at a speed held as the spindle warms.
 
 After a tool's steady runs (and its ramps and impacts), :func:`~.campaign.run_campaign`
-with ``CampaignOptions.soak`` (a :class:`~.thermal.SoakPlan`) holds one speed — by default
-the resonance of the sweep just measured (:func:`soak_plan`) — for ``plan.runs`` cold starts.
+with ``CampaignOptions.soak`` (a :class:`~.thermal.SoakPlan`) holds a speed — by default the
+two speeds either side of the resonance of the sweep just measured (:func:`soak_plan`), soak
+run ``j`` at ``plan.speed_of(j)`` — for ``plan.runs`` cold starts.
 Soak run ``j`` is run ``repeats + 1 + j`` of its tool (its own thermal draw; run
 ``repeats`` stays free for an impact run), and at each of ``plan.times_s`` it takes a steady
 record (``simulate.steady_records``) of the run's state warmed to the thermal model's
 fraction (``TruthState.warming(truth.thermal.fraction(t))``), plus the front bearing's
 outer-ring temperature (:meth:`~.thermal.ThermalModel.temperature_K` of the run, one
-reading per record, held over the record): a record of kind ``"soak"`` with labels
-``build, tool, run, soak, time_s``. Record ``k`` of soak run ``j`` draws its noise from
-stream ``(7, build, tool, j, k)``; the run's temperature readings from ``(8, build, tool,
+reading per record, held over the record), the probes' gains through their tempcos at that
+ring's true rise (:func:`probe_rise`): a record of kind ``"soak"`` with labels
+``build, tool, run, soak, time_s, speed_rpm``. Record ``k`` of soak run ``j`` draws its noise
+from stream ``(7, build, tool, j, k)``; the run's temperature readings from ``(8, build, tool,
 j)``: any record can be made alone (resuming, worker processes).
 
 >>> from surrogate_rbrdo.rig.thermal import SoakPlan
 >>> amp = np.array([[1e-7, 3e-6, 1e-6], [2e-7, 2e-6, 1e-6]])     # (runs, speeds)
->>> soak_plan(SoakPlan(), (1000.0, 2000.0, 3000.0), amp).speed_rpm
+>>> soak_plan(SoakPlan(rule="resonance"), (1000.0, 2000.0, 3000.0), amp).speed_rpm
 2000.0
->>> soak_id(0, 1, 2, 3), soak_labels(SoakPlan(), 0, 1, 20, 2, 3)["run"]
-('b0_t1_soak2_k03', 23)
+>>> lab = soak_labels(SoakPlan(speeds_rpm=(21000.0, 22500.0)), 0, 1, 20, 2, 3)
+>>> soak_id(0, 1, 2, 3), lab["run"], lab["speed_rpm"]
+('b0_t1_soak2_k03', 23, 21000.0)
 """
 
 from __future__ import annotations
@@ -44,7 +47,7 @@ TEMPERATURE_SCALE_K, TEMPERATURE_OFFSET_K = 0.01, 273.15
 
 
 def soak_plan(plan: SoakPlan, speeds_rpm, amplitude: np.ndarray) -> SoakPlan:
-    """``plan`` with its speed resolved (:meth:`~.thermal.SoakPlan.at`) from the sweep just
+    """``plan`` with its speeds resolved (:meth:`~.thermal.SoakPlan.at`) from the sweep just
     measured: ``amplitude`` (runs, speeds), each run's largest channel 1x amplitude per speed,
     averaged over the runs."""
     return plan.at(speeds_rpm, np.asarray(amplitude, float).mean(axis=0))
@@ -58,9 +61,17 @@ def soak_id(b: int, tl: int, j: int, k: int) -> str:
 def soak_labels(plan: SoakPlan, b: int, tl: int, repeats: int, j: int, k: int
                 ) -> dict[str, Any]:
     """Index labels of a soak record: ``build, tool, run`` (``repeats + 1 + j``), ``soak``
-    (``j``) and ``time_s`` (after reaching speed)."""
+    (``j``), ``time_s`` (after reaching speed) and ``speed_rpm`` (the speed held)."""
     return {"build": b, "tool": tl, "run": soak_run_index(repeats, j), "soak": j,
-            "time_s": plan.times_s[k]}
+            "time_s": plan.times_s[k], "speed_rpm": plan.speed_of(j)}
+
+
+def probe_rise(truth, speed_rpm: float, fraction: float) -> float:
+    """The probes' temperature rise during a soak record: the front bearing's outer ring's
+    (``truth.thermal``: the steady rise at the speed held times the warm-up's fraction; the
+    probes sit in the housing beside the bearings). Their gains follow it through their
+    tempcos (:meth:`~.sensors.Installation.warmed`)."""
+    return float(truth.thermal.rise_K(speed_rpm) * fraction)
 
 
 def soak_run_index(repeats: int, j: int) -> int:
@@ -81,8 +92,9 @@ def soak_run(common: tuple, j: int, todo: tuple[int, ...]) -> dict[str, Record]:
     run = soak_run_index(options.repeats, j)
     st = truth.state(root_ss, build=b, tool=tl, run=run)
     t = np.asarray(plan.times_s)
+    speed = plan.speed_of(j)
     temps = truth.thermal.temperature_K(
-        plan.speed_rpm, t, np.random.default_rng(_child(root_ss, TEMPERATURE_KEY, b, tl, j)))
+        speed, t, np.random.default_rng(_child(root_ss, TEMPERATURE_KEY, b, tl, j)))
     base = provenance(st, run)
     models: dict[tuple, Any] = {}
     out = {}
@@ -91,7 +103,7 @@ def soak_run(common: tuple, j: int, todo: tuple[int, ...]) -> dict[str, Record]:
         w = st.warming(f)
         if w.effects not in models:
             models[w.effects] = w.model()
-            require_stable(models[w.effects], w.theta, [plan.speed_rpm], red,
+            require_stable(models[w.effects], w.theta, [speed], red,
                            f"the truth of build {b}, tool {tl}, soak run {j} (run {run}) "
                            f"after {t[k]:g} s")
         model = models[w.effects]
@@ -99,11 +111,12 @@ def soak_run(common: tuple, j: int, todo: tuple[int, ...]) -> dict[str, Record]:
         key = [RECORD_KEY, b, tl, j, k]
         prov = {**base, "seed_key": key, "soak": {
             "run": j, "time_s": float(t[k]), "thermal_fraction": f,
-            "speed_rpm": plan.speed_rpm, "effects_warmed": [e.name for e in w.effects
-                                                            if e.thermal_params]}}
-        rec = steady_records(model, w.theta, np.array([plan.speed_rpm]), options.sensors, inst,
+            "speed_rpm": speed, "effects_warmed": [e.name for e in w.effects
+                                                   if e.thermal_params]}}
+        rec = steady_records(model, w.theta, np.array([speed]), options.sensors, inst,
                              [np.random.default_rng(_child(root_ss, *key))],
-                             duration_s=options.duration_s, ids=[rid], provenance=[prov])[0]
+                             duration_s=options.duration_s, ids=[rid], provenance=[prov],
+                             probe_rise_K=np.array([probe_rise(truth, speed, f)]))[0]
         front = ProbeLayout.of(model).positions_mm["front"]
         out[rid] = with_temperature(rec, float(temps[k]), options.sensors, front)
     return out

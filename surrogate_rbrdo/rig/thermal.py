@@ -16,8 +16,9 @@ rise, and every parameter of an effect that follows temperature
 of its steady-state value at that speed. The steady effect (``F(Ω) = F₀(1 + b (Ω/Ω_ref)^q)``)
 is what the campaign's steady records see: each is taken at its speed's thermal equilibrium.
 
-A **thermal soak** (:class:`SoakPlan`) holds one speed from a cold start and takes a steady
-record at each of its times, in runs of their own (each with its run's thermal scatter, as any
+A **thermal soak** (:class:`SoakPlan`) holds a speed from a cold start (by default, run by
+run in turn, the two sweep speeds either side of the resonance) and takes a steady record at
+each of its times, in runs of their own (each with its run's thermal scatter, as any
 run), with the front bearing's outer-ring temperature (:meth:`ThermalModel.temperature_K`).
 An effect that drifts with temperature changes the 1x response during the hold; one that does
 not (a centrifugal softening, a seal, a housing) leaves it constant — the separating test of a
@@ -30,15 +31,17 @@ preload growth (``discrepancy.soak``).
 (15.0, 4.72)
 >>> SoakPlan(speed_rpm=24000.0).times_s[-1]
 3600.0
+>>> SoakPlan(speeds_rpm=(21000.0, 22500.0)).speed_of(1)
+22500.0
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from surrogate_rbrdo.core.validate import check_int, check_positive, check_range
+from surrogate_rbrdo.core.validate import check_choice, check_int, check_positive, check_range
 
 
 def _default_times() -> tuple[float, ...]:
@@ -105,18 +108,40 @@ class ThermalModel:
                 + self.sensor_noise_K * rng.normal(size=t.shape))
 
 
+#: how a soak's speeds are chosen from the sweep measured before it (:meth:`SoakPlan.at`)
+SOAK_RULES = ("flanks", "resonance")
+
+
 @dataclass(frozen=True)
 class SoakPlan:
-    """A thermal soak: ``runs`` cold starts, each holding ``speed_rpm`` and taking a steady
-    record at each of ``times_s`` (s after reaching speed; default every 5–15 min for an hour,
-    about 4 τ of :class:`ThermalModel`). ``speed_rpm`` None: chosen from the speed sweep
-    measured before it (:meth:`at`) — the speed of its largest mean 1x amplitude, the
-    resonance, where the response is most sensitive to a bearing's stiffness (and so to a
-    preload that drifts)."""
+    """A thermal soak: ``runs`` cold starts, each holding one speed and taking a steady record
+    at each of ``times_s`` (s after reaching speed; default every 5–15 min for an hour, about
+    4 τ of :class:`ThermalModel`).
+
+    The speeds: ``speeds_rpm`` (any number, the runs taken at them in turn: run ``j`` at
+    ``speeds_rpm[j % n]``), else ``speed_rpm`` (one), else chosen from the speed sweep measured
+    before it (:meth:`at`) by ``rule``:
+
+    * ``"flanks"`` (default): the two sweep speeds either side of its largest mean 1x
+      amplitude (the resonance), ``runs`` split between them. A bearing that stiffens moves the
+      resonance up: the amplitude below it falls and above it rises, while a drift of the
+      probes' gain with temperature (:class:`~.sensors.ProbeModel` ``tempco_sd_per_K``) scales
+      both speeds' responses alike — the soak test (``discrepancy.soak``) tells them apart.
+    * ``"resonance"``: the one speed of the largest amplitude, where the response is most
+      sensitive to a bearing's stiffness (the soak before the two-speed rule; its drift lies
+      almost along the response itself, so at one speed a gain drift removes most of it).
+
+    >>> SoakPlan().at([1000.0, 2000.0, 3000.0, 4000.0], [1e-7, 3e-6, 1e-6, 5e-7]).speeds
+    (1000.0, 3000.0)
+    >>> SoakPlan(rule="resonance").at([1000.0, 2000.0, 3000.0], [1e-7, 3e-6, 1e-6]).speeds
+    (2000.0,)
+    """
 
     speed_rpm: float | None = None
     times_s: tuple[float, ...] = field(default_factory=_default_times)
     runs: int = 4
+    rule: str = "flanks"
+    speeds_rpm: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if self.speed_rpm is not None:
@@ -127,22 +152,54 @@ class SoakPlan:
             raise ValueError(f"soak.times_s = {list(self.times_s)} is not allowed: at least 3 "
                              "increasing times >= 0 s after reaching speed")
         object.__setattr__(self, "times_s", tuple(t.tolist()))
-        check_int("soak.runs", self.runs, minimum=3)
+        check_choice("soak.rule", self.rule, SOAK_RULES)
+        sp = tuple(float(s) for s in np.atleast_1d(np.asarray(self.speeds_rpm, dtype=float)))
+        for s in sp:
+            check_positive("soak.speeds_rpm[]", s)
+        if len(set(sp)) != len(sp):
+            raise ValueError(f"soak.speeds_rpm = {list(sp)} is not allowed: distinct speeds")
+        if sp and self.speed_rpm is not None:
+            raise ValueError(f"soak.speed_rpm = {self.speed_rpm:g} and soak.speeds_rpm = "
+                             f"{list(sp)}: give one of them")
+        object.__setattr__(self, "speeds_rpm", sp)
+        n = len(sp) or (1 if self.speed_rpm is not None or self.rule == "resonance" else 2)
+        check_int("soak.runs", self.runs, minimum=3 if n == 1 else 2 * n)
+
+    @property
+    def speeds(self) -> tuple[float, ...]:
+        """The speeds held (``()`` until resolved by :meth:`at`)."""
+        return self.speeds_rpm or (() if self.speed_rpm is None else (self.speed_rpm,))
+
+    def speed_of(self, j: int) -> float:
+        """The speed of run ``j`` (the speeds in turn)."""
+        sp = self.speeds
+        if not sp:
+            raise ValueError("the soak's speed is not resolved: SoakPlan.at(sweep) first")
+        return sp[j % len(sp)]
 
     def at(self, speeds_rpm, amplitude=None) -> SoakPlan:
-        """The plan with its speed resolved: when None, the speed of ``speeds_rpm`` with the
-        largest ``amplitude`` (the sweep's mean 1x amplitude there, any channel), or the top
-        speed without amplitudes.
+        """The plan with its speeds resolved: when none is given, by ``rule`` from the sweep's
+        ``speeds_rpm`` and ``amplitude`` (its mean 1x amplitude there, any channel): the
+        largest amplitude's speed (``"resonance"``), or its two neighbours (``"flanks"``;
+        at the sweep's end, the end and its neighbour); without amplitudes the top speed (and
+        the one below it).
 
-        >>> SoakPlan().at([1000.0, 2000.0, 3000.0], [1e-7, 3e-6, 1e-6]).speed_rpm
+        >>> SoakPlan(rule="resonance").at([1000.0, 2000.0, 3000.0], [1e-7, 3e-6, 1e-6]).speed_rpm
         2000.0
         """
-        if self.speed_rpm is not None:
+        if self.speeds:
             return self
         sp = np.asarray(speeds_rpm, dtype=float)
-        if amplitude is None:
-            return SoakPlan(float(sp.max()), self.times_s, self.runs)
-        a = np.asarray(amplitude, dtype=float)
+        a = sp if amplitude is None else np.asarray(amplitude, dtype=float)
         if a.shape != sp.shape:
             raise ValueError(f"amplitude has shape {a.shape}: one per speed, {sp.shape}")
-        return SoakPlan(float(sp[int(np.argmax(a))]), self.times_s, self.runs)
+        i = int(np.argmax(a))
+        if self.rule == "resonance":
+            return replace(self, speed_rpm=float(sp[i]))
+        if sp.size < 2:
+            raise ValueError(f"soak.rule = 'flanks' needs a sweep of at least 2 speeds, got "
+                             f"{sp.size}")
+        order = np.argsort(sp)
+        k = int(np.flatnonzero(order == i)[0])
+        lo, hi = (k - 1, k + 1) if 0 < k < sp.size - 1 else ((0, 1) if k == 0 else (k - 1, k))
+        return replace(self, speeds_rpm=(float(sp[order[lo]]), float(sp[order[hi]])))

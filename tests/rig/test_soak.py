@@ -15,14 +15,14 @@ from surrogate_rbrdo.rig.campaign import CampaignOptions, footprint, run_campaig
 from surrogate_rbrdo.rig.config import RigTable, rig_plan
 from surrogate_rbrdo.rig.demod import demodulate
 from surrogate_rbrdo.rig.phasors import expected_phasors
-from surrogate_rbrdo.rig.sensors import SensorSet
+from surrogate_rbrdo.rig.sensors import DAQModel, KeyphasorModel, ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
 from surrogate_rbrdo.rig.store import open_dataset, read_record
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import _child, reference_truth
 
 TIMES = (0.0, 900.0, 3600.0)
-PLAN = SoakPlan(times_s=TIMES, runs=3)
+PLAN = SoakPlan(times_s=TIMES, runs=3, rule="resonance")   # the one-speed soak
 SPEEDS = (8000.0, 12000.0, 16000.0, 20000.0)
 REPEATS = 5                     # the reader's 1x block needs 5
 
@@ -73,9 +73,10 @@ def test_soak_records_have_their_kind_labels_channels_and_speed(soaked):
     assert [r["id"] for r in rows] == ids == list(soaked.soaks)
     assert json.loads((soaked.root / "summary.json").read_text())["soak"] == ids
     assert soaked.n_records == REPEATS * 4 + 9 == footprint(_opts()).n_records
+    held = rows[0]["speed_rpm"]
     assert [r["labels"] for r in rows] == [
-        {"build": 0, "tool": 0, "run": REPEATS + 1 + j, "soak": j, "time_s": t}
-        for j in range(3) for t in TIMES]
+        {"build": 0, "tool": 0, "run": REPEATS + 1 + j, "soak": j, "time_s": t,
+         "speed_rpm": held} for j in range(3) for t in TIMES]
     steady = ds.load(ds.select(kind="steady")[0])
     rec = ds.load(rows[0])
     assert rec.kind == "soak" and rec.channel_names == steady.channel_names + ("T_front",)
@@ -222,6 +223,11 @@ def test_soak_blocks_read_the_records_back(soaked, tmp_path):
     ({"times_s": [0.0, 600.0]}, "rig.campaign.soak.times_s"),
     ({"times_s": [0.0, 600.0, 300.0]}, "rig.campaign.soak.times_s"),
     ({"runs": 2}, "rig.campaign.soak.runs"),
+    ({"runs": 3}, "rig.campaign.soak.runs"),             # two speeds: 2 runs at each
+    ({"rule": "peak"}, "rig.campaign.soak.rule"),
+    ({"speeds_rpm": [9000.0, 9000.0]}, "rig.campaign.soak.speeds_rpm"),
+    ({"speeds_rpm": [9000.0, -1.0]}, "rig.campaign.soak.speeds_rpm"),
+    ({"speed_rpm": 9000.0, "speeds_rpm": [8000.0, 10000.0]}, "rig.campaign.soak.speed"),
     ({"runs": 3.5}, "rig.campaign.soak.runs"),
     ({"speed_rpm": -1.0}, "rig.campaign.soak.speed_rpm"),
     ({"speed_rpm": "top"}, "rig.campaign.soak.speed_rpm"),
@@ -251,8 +257,67 @@ def test_soak_plan_picks_the_resonance():
     r = speeds / wn
     amp = r**2 / np.abs(1 - r**2 + 2j * zeta * r)
     peak = wn / np.sqrt(1 - 2 * zeta**2)
-    assert SoakPlan().at(speeds, amp).speed_rpm == speeds[np.argmin(np.abs(speeds - peak))]
+    one = SoakPlan(rule="resonance")
+    i = int(np.argmin(np.abs(speeds - peak)))
+    assert one.at(speeds, amp).speed_rpm == speeds[i]
     assert SoakPlan(speed_rpm=5000.0).at(speeds, amp).speed_rpm == 5000.0
-    assert SoakPlan().at(speeds).speed_rpm == 24000.0
+    assert one.at(speeds).speed_rpm == 24000.0
     with pytest.raises(ValueError, match="one per speed"):
-        SoakPlan().at(speeds, amp[:-1])
+        one.at(speeds, amp[:-1])
+    # the default: the two grid speeds either side of it, the runs taken at them in turn
+    two = SoakPlan().at(speeds, amp)
+    assert two.speeds == (speeds[i - 1], speeds[i + 1]) and two.speeds[0] < peak < two.speeds[1]
+    assert [two.speed_of(j) for j in range(4)] == [speeds[i - 1], speeds[i + 1]] * 2
+    assert SoakPlan().at(speeds).speeds == (speeds[-2], speeds[-1])
+    assert SoakPlan(speeds_rpm=(9000.0, 7000.0)).at(speeds, amp).speeds == (9000.0, 7000.0)
+
+
+def _tempco_sensors(sd):
+    """Sensors whose one random error is the probes' tempco (no noise, gain, bandwidth, skew
+    or gap scatter; float counts): records differ only through it."""
+    return SensorSet(probe=ProbeModel(gain_error_sd=0.0, noise_rms_m=0.0, bandwidth_sd=0.0,
+                                      gap_sd_m=0.0, tempco_sd_per_K=sd),
+                     daq=DAQModel(skew_sd_s=0.0), keyphasor=KeyphasorModel(noise_V=0.0),
+                     quantise=False)
+
+
+@pytest.mark.known_answer
+@pytest.mark.parametrize("sweep", [True, False])
+def test_the_probe_tempco_scales_the_phasors_by_one_plus_alpha_dT(tmp_path, sweep):
+    """Two campaigns alike but for the probes' tempco (same seed): each soak record's 1x is
+    the one without it times ``1 + α_c ΔT`` exactly, ``ΔT`` the outer ring's true rise
+    ``rise(Ω) (1 − e^{−t/τ})``; each steady record's times ``1 + α_c rise(Ω)`` (its speed's
+    equilibrium) with ``tempco_sweep``, else unchanged. Without the tempco the installation
+    writes what it wrote before the option (no ``tempco_per_K``)."""
+    truth = reference_truth()
+    plan = SoakPlan(times_s=TIMES, runs=4)
+    X, inst = {}, {}
+    for sd in (0.0, 2e-3):
+        s = _tempco_sensors(sd)
+        s = dataclasses.replace(s, probe=dataclasses.replace(s.probe, tempco_sweep=sweep))
+        res = run_campaign(truth, _opts(soak=plan, sensors=s, speeds=(12000.0, 20000.0)),
+                           tmp_path / str(sd), rng=np.random.default_rng(3))
+        ds = open_dataset(res.dataset)
+        X[sd] = {r["id"]: (r, demodulate(ds.load(r)).X[:, 0]) for r in ds.index}
+        inst[sd] = json.loads((res.dataset / "dataset.json").read_text())["installation"]
+    assert "tempco_per_K" not in inst[0.0]
+    alpha = np.array([inst[2e-3]["tempco_per_K"][c] for c in SensorSet().probe_channels])
+    assert np.all(alpha != 0) and {k: v for k, v in inst[2e-3].items()
+                                   if k != "tempco_per_K"} == inst[0.0]
+    n_soak = 0
+    for rid, (row, x0) in X[0.0].items():
+        speed = row["speed_rpm"]
+        if row["kind"] == "soak":
+            n_soak += 1
+            dT = truth.thermal.rise_K(speed) * truth.thermal.fraction(row["labels"]["time_s"])
+        elif row["kind"] == "steady":
+            dT = truth.thermal.rise_K(speed) if sweep else 0.0
+        else:
+            continue
+        np.testing.assert_allclose(X[2e-3][rid][1], x0 * (1 + alpha * dT), rtol=1e-9, atol=0)
+    assert n_soak == 4 * len(TIMES)
+    # the two-speed soak read back: a block per speed, its 2 runs (soak runs 0, 2 and 1, 3)
+    blocks = soak_blocks(tmp_path / "0.002" / "dataset")
+    assert [(b.speed_rpm, b.runs) for b in blocks] == [(12000.0, 2), (20000.0, 2)]
+    assert [b.meta["runs"] for b in blocks] == [[[0, 0, REPEATS + 1], [0, 0, REPEATS + 3]],
+                                                [[0, 0, REPEATS + 2], [0, 0, REPEATS + 4]]]
