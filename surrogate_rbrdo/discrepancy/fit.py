@@ -16,13 +16,15 @@ from surrogate_rbrdo.discrepancy.problem import Evaluation, Problem
 
 #: relative finite-difference step (of a parameter's typical magnitude)
 FD_STEP = 1e-5
-#: the trust-region solver stops when a step lowers χ² by less than this fraction of it: at
-#: the χ² of a strong scenario's fits (≈ 2 500 on the rig's data) by less than 0.025, far
-#: below every margin a decision takes from two χ² (``confound_delta`` 6.63, the likelihood
-#: ratio's thresholds ≈ 10–20). The solver's default (1e-8), and the 1e-10 used before, spent
-#: about 40 % of a strong scenario's CPU on the last digits of χ² (benchmarks/
-#: discrepancy_blind.py; docs/discrepancy.md, "Where the rates stand")
-FTOL = 1e-5
+#: the trust-region solver stops when a step lowers χ² by less than ``CHI2_TOL`` (χ² units,
+#: as a fraction of the start's χ²; at most :data:`FTOL_MAX`, at least 1e-10): far below every
+#: margin a decision takes from two χ² (``confound_delta`` 6.63, the likelihood ratio's
+#: thresholds ≈ 10–20). The 1e-10 of the start's χ² used before spent about 40 % of a strong
+#: scenario's CPU on the last digits of χ²; a relative 1e-5 alone left a base fit of a large χ²
+#: (1e6–1e7: an effect outside the library) short by tens, which every candidate fitted on it
+#: then collected as Δχ² (review s13 M1)
+CHI2_TOL = 0.02
+FTOL_MAX = 1e-5
 #: a parameter this fraction of its range (or of its scale, beside an infinite bound) from a
 #: bound its χ² slope points to is put on the bound after the solver stops (:func:`fit`)
 SNAP = 1e-3
@@ -201,8 +203,10 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
         return jacs[key].copy(order="F")
 
     if x0.size:
+        ftol = float(np.clip(CHI2_TOL / max(float(evaluate(x0).chi2[0]), 1e-300), 1e-10,
+                             FTOL_MAX))
         sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac",
-                            max_nfev=max_nfev, xtol=1e-10, ftol=FTOL, gtol=1e-10)
+                            max_nfev=max_nfev, xtol=1e-10, ftol=ftol, gtol=1e-10)
         x = sol.x
     else:
         x = x0
@@ -219,15 +223,18 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
     if xs is not None:
         es = evaluate(xs)
         if es.chi2[0] <= ev.chi2[0]:
-            x, ev = xs, es
-            J, n = jacobian(problem, par, x, ev.residuals[0])
+            Js, n = jacobian(problem, par, xs, es.residuals[0])
             count[0] += n
+            # kept only if the bounds stay where χ² still falls outwards (a KKT point there)
+            if to_bounds(xs, Js.T @ es.residuals[0], lo, hi, par.scales(),
+                         moved=xs != x) is None:
+                x, ev, J = xs, es, Js
     return Fit(par, x, float(ev.chi2[0]), J, ev, problem.n_obs, x.size + problem.n_inner,
                count[0])
 
 
 def to_bounds(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-              scale: np.ndarray) -> np.ndarray | None:
+              scale: np.ndarray, moved: np.ndarray | None = None) -> np.ndarray | None:
     """``x`` with every parameter within :data:`SNAP` of its range (or of ``scale`` beside an
     infinite bound) from a bound that the χ² slope ``g = Jᵀr`` points to put on that bound;
     ``None`` when there is none.
@@ -235,17 +242,25 @@ def to_bounds(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     The trust-region solver keeps its iterates strictly inside the bounds (each step stops
     short of a bound, Branch, Coleman & Li 1999, *SIAM J. Sci. Comput.* 21:1), so a parameter
     the data push against a bound approaches it geometrically, and the solver stops, at
-    :data:`FTOL`, a little inside it. What is decided from a fit on a bound — a strength on
+    :data:`CHI2_TOL`, a little inside it. What is decided from a fit on a bound — a strength on
     its physical end (:func:`~.search.bound_score`), a shape pinned (``search.on_bound``), a
     recalibration stretched (``search.stretched``) — asks for the bound itself; :func:`fit`
-    takes the point on the bounds when its χ² is not larger.
+    takes the point on the bounds when its χ² is not larger and χ² does not fall inwards from
+    any bound it was put on (with ``moved``, the components put there: ``x`` itself if one
+    has χ² falling inwards, else ``None``).
 
     >>> lo, hi, s = np.zeros(3), np.ones(3), np.ones(3)
     >>> to_bounds(np.array([0.9995, 0.0004, 0.5]), np.array([-1.0, 1.0, 1.0]), lo, hi, s)
     array([1. , 0. , 0.5])
     >>> to_bounds(np.array([0.9995, 0.5, 0.5]), np.array([1.0, 1.0, 1.0]), lo, hi, s) is None
     True
+    >>> on = np.array([True, False, False])           # put on its upper bound: χ² falls inwards
+    >>> to_bounds(np.array([1.0, 0.5, 0.5]), np.array([1.0, 0.0, 0.0]), lo, hi, s, on) is None
+    False
     """
+    if moved is not None:             # put on a bound: does χ² fall inwards from it there?
+        inward = moved & (((x <= lo) & (g < 0)) | ((x >= hi) & (g > 0)))
+        return x if inward.any() else None
     width = np.where(np.isfinite(hi - lo), hi - lo, scale)
     down = (x > lo) & (x - lo <= SNAP * width) & (g > 0)       # χ² falls towards lo
     up = (x < hi) & (hi - x <= SNAP * width) & (g < 0)

@@ -193,11 +193,15 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
 
 
 def _explained(problem: Problem, lin: Linearisation, null: NullDistribution, fits) -> bool:
-    """Whether the best of ``fits`` (by χ²) leaves a residual that looks like noise: the
+    """Whether the best physical fit of ``fits`` (by χ²; a strength or shape on its bound
+    cannot be named, so it explains nothing) leaves a residual that looks like noise: the
     stage's three lack-of-fit statistics at its fit (the generic one with the base's
     linearisation) each with a p-value above :data:`QUIET_P`. The ``gof`` null is the base
     model's: the fit's few extra parameters lower its χ² by about their number (of ≈ 2 500 on
     the rig), so this errs towards "explained" by far less than the test's spread."""
+    fits = [cf for cf in fits if not cf.at_bound]
+    if not fits:
+        return False
     best = min(fits, key=lambda cf: cf.fit.chi2)
     r = best.fit.evaluation.residuals[0]
     return min(null.p_value("gof", best.fit.chi2),

@@ -27,7 +27,7 @@ draws the exact tail there is 4.8e-4 in the median, 1.5e-3 at worst; of 256, 6.8
 evidence against a p near the level (probability ``(1 − 0.0033)^800 ≈ 0.07``), and the fit is
 then made on twice the draws. Nothing changes — no draw is taken — when every p-value is
 settled by the first draws in the empirical range. The workflow
-refines the last stage's p-values only (``workflow._refined``): theirs give the verdict; an
+refines the last stage's p-values only (``selection.refined``): theirs give the verdict; an
 earlier stage's serve its screen (``naming.QUIET_P``, far from the level) and are left as
 they are.
 """

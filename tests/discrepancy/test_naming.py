@@ -47,19 +47,23 @@ def test_n_jobs_is_checked():
         DiscrepancyOptions(n_jobs=0)
 
 
-@pytest.mark.parametrize("base_p, fit_p, fitted", [
-    (0.5, 0.5, {"gyroscopics"}),                  # the base looks like noise: the old screen
-    (0.001, 0.5, {"gyroscopics"}),                # the live candidate's fit explains the data
-    (0.001, 0.01, {"gyroscopics", "anisotropy"}),  # it does not: every candidate is fitted
+@pytest.mark.parametrize("base_p, fit_p, lin, at_bound, fitted", [
+    (0.5, 0.5, 100.0, False, {"gyroscopics"}),      # the base looks like noise: the old screen
+    (0.001, 0.5, 100.0, False, {"gyroscopics"}),    # the live candidate's fit explains the data
+    (0.001, 0.01, 100.0, False, {"gyroscopics", "anisotropy"}),   # it does not: all fitted
+    (0.001, 0.5, 100.0, True, {"gyroscopics", "anisotropy"}),     # on a bound: explains nothing
+    (0.001, 0.5, 1.0, False, {"gyroscopics", "anisotropy"}),      # none above the fraction
+    (0.5, 0.5, 1.0, False, set()),                  # ... in a quiet stage: none fitted
 ])
 def test_a_candidate_far_below_its_threshold_is_fitted_only_while_the_data_are_unexplained(
-        monkeypatch, base_p, fit_p, fitted):
+        monkeypatch, base_p, fit_p, lin, at_bound, fitted):
     """Wiring of naming.run_stage's screen (everything else stubbed): a candidate whose
     first-order statistic is below REFIT_FRACTION of its threshold (anisotropy, 1 against 10)
     is not refitted when the base's residual looks like noise, nor when the best refitted
     candidate's residual does (its gof, structure and generic p-values above QUIET_P); it is
-    refitted when a lack-of-fit test fails at both. A candidate above the fraction
-    (gyroscopics, 100) is always refitted."""
+    refitted when a lack-of-fit test fails at both, when the best refitted fit is on a bound
+    (it cannot be named), and when no candidate is above the fraction. A candidate above the
+    fraction (gyroscopics, 100) is always refitted."""
     cands = tuple(candidate(n, ("front", "rear")) for n in ("gyroscopics", "anisotropy"))
     base = ns(chi2=100.0, evaluation=ns(residuals=np.zeros((1, 3))), par=ns(names=()))
 
@@ -67,7 +71,7 @@ def test_a_candidate_far_below_its_threshold_is_fitted_only_while_the_data_are_u
         ev = ns(residuals=np.ones((1, 3)))        # a fit's residual: statistics 3.0, base 0.0
         return CandidateFit(c.name, Slot(c, ()), ns(chi2=50.0, evaluation=ev, jac=None,
                                                       par=None, x=None),
-                            50.0, {}, {}, False, True)
+                            50.0, {}, {}, at_bound, True)
 
     tail = ns(isf=lambda p: 10.0, sf=lambda x: 0.5)
     null = ns(p_value=lambda k, v: base_p if v in (0.0, 100.0) else fit_p,
@@ -79,9 +83,10 @@ def test_a_candidate_far_below_its_threshold_is_fitted_only_while_the_data_are_u
             "gp_statistic": lambda r, *a: float(r.sum()),
             "generic_statistic": lambda p, lin, r: float(r.sum()),
             "damping_law_columns": lambda *a: None,
-            "linear_statistics": lambda *a: np.array([100.0, 1.0]),
+            "linear_statistics": lambda *a: np.array([lin, 1.0]),
             "warm_base": lambda *a, **k: None, "fit_candidate": fake_fit,
-            "rival_test": lambda *a, **k: RivalTest(0.0, 1.0, "none", 0.0)}.items():
+            "rival_test": lambda *a, **k: RivalTest(0.0, 1.0, "none", 0.0),
+            "interior": lambda p, b, cf, d, **k: cf}.items():
         monkeypatch.setattr(naming, name, value)
     stage = naming.run_stage(ns(series=lambda: None, unbalance_design=lambda *a: None), base,
                              cands, ns(chi2=lambda f, p: (0.0, 0.0)), alpha=0.05, n_draws=1,

@@ -1,4 +1,4 @@
-"""The forward selection's control flow (``workflow._select``) with the stages stubbed: what a
+"""The forward selection's control flow (``selection.select``) with the stages stubbed: what a
 group the encompassing test cannot separate from a generic change becomes under each
 ``generic_confound`` policy, and that the residual tests then run on the model carried."""
 
@@ -9,11 +9,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from surrogate_rbrdo.discrepancy import workflow
+from surrogate_rbrdo.discrepancy import selection, workflow
 from surrogate_rbrdo.discrepancy.naming import Assessment
 from surrogate_rbrdo.discrepancy.rivals import RivalTest
+from surrogate_rbrdo.discrepancy.selection import select
 from surrogate_rbrdo.discrepancy.soak import SoakTest
-from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions, _select
+from surrogate_rbrdo.discrepancy.workflow import DiscrepancyOptions
 
 SPRING = "grounded spring at node 4 beside bearing front"
 
@@ -27,7 +28,7 @@ def _assessment(name: str, *, separable: bool, rival_adds: float = 0.1) -> Asses
 
 
 def _run(monkeypatch, groups, policy="unnamed_residual", max_effects=2):
-    """``_select`` with ``decide`` answering ``groups`` stage by stage; returns the selection
+    """``select`` with ``decide`` answering ``groups`` stage by stage; returns the selection
     and the candidate names each stage was given."""
     given = []
 
@@ -35,12 +36,12 @@ def _run(monkeypatch, groups, policy="unnamed_residual", max_effects=2):
         given.append((current, tuple(c.name for c in cands)))
         return SimpleNamespace(index=len(given) - 1)
 
-    monkeypatch.setattr(workflow, "run_stage", run_stage)
-    monkeypatch.setattr(workflow, "decide", lambda st, delta: list(groups[st.index]))
+    monkeypatch.setattr(selection, "run_stage", run_stage)
+    monkeypatch.setattr(selection, "decide", lambda st, delta: list(groups[st.index]))
     cands = tuple(SimpleNamespace(name=n) for n in ("thermal_preload", "housing", "gyroscopics"))
     opts = DiscrepancyOptions(generic_confound=policy, max_effects=max_effects)
     base = SimpleNamespace(label="base")
-    sel = _select(None, base, cands, None, opts, np.random.default_rng(0))
+    sel = select(None, base, cands, None, opts, np.random.default_rng(0))
     return sel, given, base
 
 
@@ -86,7 +87,7 @@ def test_a_separable_group_is_named_and_the_last_stage_has_no_candidates(monkeyp
     assert sel.generic == () and sel.current is hs.fit.fit
 
 
-# ---- the thermal soak as the separating test (workflow._soaked) ---------------------------
+# ---- the thermal soak as the separating test (selection._soaked) ---------------------------
 
 def _drifting(name: str, *, separable: bool, drifts: bool) -> Assessment:
     """As :func:`_assessment`, with the candidate's effect class (drifting or not) and a slot."""
@@ -105,17 +106,17 @@ def _soak_run(monkeypatch, groups, outcomes, soaks=("soak",)):
         return SoakTest(name, outcomes[name], 1.0, (12, 13), 0.5, 1.0, 0.1, 3, 0.5, 0.5,
                         0.1, level, 4)
 
-    monkeypatch.setattr(workflow, "soak_test", soak_test)
+    monkeypatch.setattr(selection, "soak_test", soak_test)
     given = []
 
     def run_stage(train, current, cands, ho, **kw):
         given.append(tuple(c.name for c in cands))
         return SimpleNamespace(index=len(given) - 1)
 
-    monkeypatch.setattr(workflow, "run_stage", run_stage)
-    monkeypatch.setattr(workflow, "decide", lambda st, delta: list(groups[st.index]))
+    monkeypatch.setattr(selection, "run_stage", run_stage)
+    monkeypatch.setattr(selection, "decide", lambda st, delta: list(groups[st.index]))
     cands = tuple(SimpleNamespace(name=n) for n in ("thermal_preload", "housing", "gyroscopics"))
-    sel = _select(None, SimpleNamespace(label="base"), cands, None,
+    sel = select(None, SimpleNamespace(label="base"), cands, None,
                   DiscrepancyOptions(max_effects=1), np.random.default_rng(0), soaks)
     return sel, asked
 
