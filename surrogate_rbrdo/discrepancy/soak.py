@@ -38,7 +38,10 @@ The test (:func:`soak_test`), for a candidate fitted on the sweep:
    speed with the gain nuisance on the quadratures alone, at two or more on the slopes less
    their gain part (``α`` fitted with a common ``β``) — averaged over the runs: Student's
    ``t`` on ``R − 1`` degrees of freedom (the runs' sensitivities differ with their thermal
-   states; the runs are independent whatever the noise within one), the prediction's own
+   states; the runs are independent whatever the noise within one), the SE from the runs'
+   spread at one speed, at two or more from the leave-one-run-out jackknife of the whole
+   fit (``α`` and ``β`` refitted without each run: the fitted ``α``, shared by the runs, is
+   uncertain too, most when the drift lies near the response), the prediction's own
    relative uncertainty from the fit's covariance added (Welch–Satterthwaite degrees of
    freedom).
 5. **Verdict** at ``level``: ``"drift"`` when (3) rejects no drift, ``β̂ > 0`` and (4) does
@@ -230,19 +233,20 @@ def drift_test(candidate: str, blocks: tuple[SoakBlock, ...], warm: tuple[Warmup
         tests += [_contrast(parts[0], q) for q in parts[1:]]
     usable = [p for p in parts if p.betas]
     if gain and len(usable) > 1:
-        betas = _gain_free_betas(usable)
+        beta, se, n = _gain_free_beta(usable)
     else:
-        betas = [b for p in usable for b in p.betas]
+        b = np.asarray([b for p in usable for b in p.betas])
+        n = b.size
+        beta = float(b.mean()) if n else float("nan")
+        se = float(b.std(ddof=1) / np.sqrt(n)) if n > 1 else float("nan")
     F_hot, dofs, p_min = min(tests, key=lambda x: x[2], default=(0.0, (0, 0), 1.0))
     p_drift = min(1.0, p_min * max(len(tests), 1))
-    n = len(betas)
-    if n < 3:
+    if n < 3 or not np.isfinite(se):
         return SoakTest(candidate, "inconclusive", float(F_hot), dofs, p_drift,
                         float("nan"), float("nan"), max(n - 1, 0), 1.0, 1.0,
                         float(prediction_sd), level, n, *_warm_figures(warm))
-    b = np.asarray(betas)
-    beta, nu = float(b.mean()), n - 1
-    se = max(float(b.std(ddof=1) / np.sqrt(n)), 1e-300)
+    nu = n - 1
+    se = max(se, 1e-300)
     sd = float(np.hypot(se, prediction_sd))
     nu_eff = nu * (sd / se) ** 4                  # Welch–Satterthwaite, the fit's dof ∞
     z = (beta - 1.0) / sd
@@ -331,32 +335,60 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain
     return _Part(F, dof, p, betas, x, cov_x, nu, *rest)
 
 
-def _gain_free_betas(parts: list[_Part]) -> list[float]:
-    """Every run's ``β_r`` at two or more speeds: the probes' drift per kelvin ``α`` (``(C,)``,
-    one at every speed) and a common ``β`` fitted to the runs' slopes by weighted least
-    squares (``s_r ≈ β Δ + α ΔT a_r``, each channel weighted by its inverse residual
-    variance), then each run's slope less its gain part ``α̂ ΔT a_r`` along the whole
-    prediction (both components: the in-phase parts, which the two speeds separate from a
-    gain, carry most of a preload's drift beside the resonance). ``α̂`` is common to the runs:
-    their spread leaves out its own small noise (from the pooled slopes)."""
+def _gain_free_betas(parts: list[_Part], drop: tuple[int, int] | None = None) -> list[float]:
+    """Every run's ``β_r`` at two or more speeds (without run ``drop = (part, run)``): the
+    probes' drift per kelvin ``α`` (``(C,)``, one at every speed) and a common ``β`` fitted to
+    the runs' slopes by weighted least squares (``s_r ≈ β Δ + α ΔT a_r``, each channel
+    weighted by its inverse residual variance), then each run's slope less its gain part
+    ``α̂ ΔT a_r`` along the whole prediction (both components: the in-phase parts, which the
+    two speeds separate from a gain, carry most of a preload's drift beside the resonance).
+    ``α̂`` is common to the runs, so their spread leaves out its noise: the SE is
+    :func:`_gain_free_beta`'s jackknife."""
     C = parts[0].D.size
+    keep = [np.array([drop != (i, r) for r in range(p.slopes.shape[0])])
+            for i, p in enumerate(parts)]
     rows, rhs = [], []
-    for p in parts:
+    for p, k in zip(parts, keep, strict=True):
         sw = np.sqrt(p.wgt)
-        for s, a in zip(p.slopes, p.cold, strict=True):
+        for s, a in zip(p.slopes[k], p.cold[k], strict=True):
             X = np.hstack([p.D[:, None], np.diag(p.rise * a)]) * sw[:, None]   # (C, 1 + C)
             rows += [X.real, X.imag]
             rhs += [(s * sw).real, (s * sw).imag]
     coef = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
     alpha = coef[1:1 + C]
     out = []
-    for p in parts:
+    for p, k in zip(parts, keep, strict=True):
         norm = float(np.sum(p.wgt * np.abs(p.D) ** 2))
         if not norm > 0:
             continue
-        r = p.slopes - alpha[None] * p.rise * p.cold
+        r = p.slopes[k] - alpha[None] * p.rise * p.cold[k]
         out += (np.sum(p.wgt * np.conj(p.D) * r, axis=1).real / norm).tolist()
     return out
+
+
+def _gain_free_beta(parts: list[_Part]) -> tuple[float, float, int]:
+    """``β̂`` at two or more speeds (the mean of :func:`_gain_free_betas`), its standard error
+    and the number of runs ``R``. The SE is the leave-one-run-out jackknife of the whole fit
+    (``α`` and ``β`` refitted without each run in turn): ``√((R − 1)/R Σ (β̂₍ᵢ₎ − β̄)²)``, for
+    Student's ``t`` on ``R − 1`` dofs. The runs' spread about one ``α̂`` misses ``α̂``'s own
+    error, which every run shares; it is large when the predicted drift lies near the gain
+    direction (both speeds on one flank; review s13, H1: the spread's SE 1.5–7× too small).
+    NaN when a run left out leaves a single speed (``α`` and ``β`` not separable)."""
+    full = _gain_free_betas(parts)
+    R = sum(p.slopes.shape[0] for p in parts)
+    beta = float(np.mean(full)) if full else float("nan")
+    if len(full) < 3:
+        return beta, float("nan"), len(full)
+    jack = []
+    for i, p in enumerate(parts):
+        for r in range(p.slopes.shape[0]):
+            speeds = sum(q.slopes.shape[0] - (j == i) > 0 for j, q in enumerate(parts))
+            b = _gain_free_betas(parts, (i, r)) if speeds > 1 else []
+            if not b:
+                return beta, float("nan"), len(full)
+            jack.append(np.mean(b))
+    jk = np.asarray(jack)
+    return beta, float(np.sqrt((R - 1) / R * np.sum((jk - jk.mean()) ** 2))), len(full)
 
 
 def _hotelling(z: np.ndarray, cov: np.ndarray, nu: int) -> tuple[float, tuple[int, int], float]:

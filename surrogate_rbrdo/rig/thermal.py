@@ -37,6 +37,7 @@ preload growth (``discrepancy.soak``).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -122,14 +123,17 @@ class SoakPlan:
     ``speeds_rpm[j % n]``), else ``speed_rpm`` (one), else chosen from the speed sweep measured
     before it (:meth:`at`) by ``rule``:
 
-    * ``"flanks"`` (default): the two sweep speeds either side of its largest mean 1x
-      amplitude (the resonance), ``runs`` split between them. A bearing that stiffens moves the
-      resonance up: the amplitude below it falls and above it rises, while a drift of the
-      probes' gain with temperature (:class:`~.sensors.ProbeModel` ``tempco_sd_per_K``) scales
-      both speeds' responses alike — the soak test (``discrepancy.soak``) tells them apart.
+    * ``"flanks"`` (default; ``runs >= 4``): the two sweep speeds either side of its largest
+      mean 1x amplitude (the resonance), ``runs`` split between them (the one-speed
+      ``"resonance"`` soak, with a warning, when the largest is at an end of the sweep). A
+      bearing that stiffens moves the resonance up: the amplitude below it falls and above it
+      rises, while a drift of the probes' gain with temperature (:class:`~.sensors.ProbeModel`
+      ``tempco_sd_per_K``) scales both speeds' responses alike — the soak test
+      (``discrepancy.soak``) tells them apart.
     * ``"resonance"``: the one speed of the largest amplitude, where the response is most
       sensitive to a bearing's stiffness (the soak before the two-speed rule; its drift lies
-      almost along the response itself, so at one speed a gain drift removes most of it).
+      almost along the response itself, so at one speed a gain drift removes most of it;
+      ``runs >= 3``).
 
     >>> SoakPlan().at([1000.0, 2000.0, 3000.0, 4000.0], [1e-7, 3e-6, 1e-6, 5e-7]).speeds
     (1000.0, 3000.0)
@@ -163,7 +167,14 @@ class SoakPlan:
                              f"{list(sp)}: give one of them")
         object.__setattr__(self, "speeds_rpm", sp)
         n = len(sp) or (1 if self.speed_rpm is not None or self.rule == "resonance" else 2)
-        check_int("soak.runs", self.runs, minimum=3 if n == 1 else 2 * n)
+        check_int("soak.runs", self.runs, minimum=3)
+        if n > 1 and self.runs < 2 * n:
+            # before the two-speed rule (tenth session) 3 runs at the resonance were allowed
+            how = (f"{n} soak.speeds_rpm" if sp else
+                   "soak.rule = 'flanks' (the default since the tenth session: 2 speeds)")
+            raise ValueError(f"soak.runs = {self.runs} is not allowed with {how}: at least 2 "
+                             f"runs at each speed, runs >= {2 * n}; or rule = 'resonance' (or "
+                             "one speed_rpm) for the one-speed soak, runs >= 3")
 
     @property
     def speeds(self) -> tuple[float, ...]:
@@ -180,12 +191,19 @@ class SoakPlan:
     def at(self, speeds_rpm, amplitude=None) -> SoakPlan:
         """The plan with its speeds resolved: when none is given, by ``rule`` from the sweep's
         ``speeds_rpm`` and ``amplitude`` (its mean 1x amplitude there, any channel): the
-        largest amplitude's speed (``"resonance"``), or its two neighbours (``"flanks"``;
-        at the sweep's end, the end and its neighbour); without amplitudes the top speed (and
-        the one below it).
+        largest amplitude's speed (``"resonance"``), or its two neighbours (``"flanks"``).
+        Without amplitudes the top speed. When ``"flanks"`` cannot put a speed either side
+        (the largest amplitude at the sweep's first or last speed, or no amplitudes), a
+        ``UserWarning`` naming the speeds and the one-speed plan (``rule = "resonance"``).
 
         >>> SoakPlan(rule="resonance").at([1000.0, 2000.0, 3000.0], [1e-7, 3e-6, 1e-6]).speed_rpm
         2000.0
+        >>> import warnings
+        >>> with warnings.catch_warnings():
+        ...     warnings.simplefilter("ignore")
+        ...     end = SoakPlan().at([1000.0, 2000.0, 3000.0], [1e-7, 1e-6, 3e-6])
+        >>> end.rule, end.speeds
+        ('resonance', (3000.0,))
         """
         if self.speeds:
             return self
@@ -196,10 +214,19 @@ class SoakPlan:
         i = int(np.argmax(a))
         if self.rule == "resonance":
             return replace(self, speed_rpm=float(sp[i]))
-        if sp.size < 2:
-            raise ValueError(f"soak.rule = 'flanks' needs a sweep of at least 2 speeds, got "
-                             f"{sp.size}")
         order = np.argsort(sp)
         k = int(np.flatnonzero(order == i)[0])
-        lo, hi = (k - 1, k + 1) if 0 < k < sp.size - 1 else ((0, 1) if k == 0 else (k - 1, k))
-        return replace(self, speeds_rpm=(float(sp[order[lo]]), float(sp[order[hi]])))
+        if amplitude is None or not 0 < k < sp.size - 1:
+            # both speeds on one flank: their relative in-phase drifts nearly alike, so the
+            # contrast that tells a stiffening from a gain drift has almost no power (review
+            # s13, M3); the one-speed soak's quadratures are an honest, if weaker, test
+            why = ("no sweep amplitudes given" if amplitude is None else
+                   f"the largest 1x amplitude is at the sweep's "
+                   f"{'first' if k == 0 else 'last'} speed")
+            warnings.warn(f"soak.rule = 'flanks': {why} ({float(sp[i]):g} rpm of "
+                          f"{float(sp.min()):g}–{float(sp.max()):g} rpm), so no two speeds lie "
+                          "either side of a resonance; the one-speed soak at "
+                          f"{float(sp[i]):g} rpm instead (rule = 'resonance', all "
+                          f"{self.runs} runs)", UserWarning, stacklevel=2)
+            return replace(self, rule="resonance", speed_rpm=float(sp[i]))
+        return replace(self, speeds_rpm=(float(sp[order[k - 1]]), float(sp[order[k + 1]])))

@@ -268,8 +268,37 @@ def test_soak_plan_picks_the_resonance():
     two = SoakPlan().at(speeds, amp)
     assert two.speeds == (speeds[i - 1], speeds[i + 1]) and two.speeds[0] < peak < two.speeds[1]
     assert [two.speed_of(j) for j in range(4)] == [speeds[i - 1], speeds[i + 1]] * 2
-    assert SoakPlan().at(speeds).speeds == (speeds[-2], speeds[-1])
     assert SoakPlan(speeds_rpm=(9000.0, 7000.0)).at(speeds, amp).speeds == (9000.0, 7000.0)
+
+
+@pytest.mark.parametrize("amp, speed", [(None, 24000.0), ("rising", 24000.0),
+                                        ("falling", 1000.0)])
+def test_flanks_without_a_resonance_inside_the_sweep_fall_back_to_one_speed(amp, speed):
+    """No amplitudes, or the largest at the sweep's last or first speed: no two speeds lie
+    either side of a resonance (review s13, M3), so the one-speed soak at that speed, all
+    runs there, with a warning naming the speed and the rule."""
+    speeds = np.linspace(1000.0, 24000.0, 47)
+    a = {None: None, "rising": speeds**2, "falling": 1.0 / speeds}[amp]
+    with pytest.warns(UserWarning, match=rf"flanks.*{speed:g} rpm.*rule = 'resonance'"):
+        plan = SoakPlan(runs=4).at(speeds, a)
+    assert plan.rule == "resonance" and plan.speeds == (speed,)
+    assert [plan.speed_of(j) for j in range(4)] == [speed] * 4
+
+
+def test_three_runs_need_the_one_speed_soak():
+    """3 runs, valid before the two-speed default: refused with the default rule naming the
+    field, its value and both ways out; the one-speed soak takes them as before."""
+    for kw in ({}, {"rule": "flanks"}):
+        with pytest.raises(ValueError, match=r"soak\.runs = 3 .*flanks.*runs >= 4.*"
+                                             r"rule = 'resonance'.*runs >= 3"):
+            SoakPlan(runs=3, **kw)
+    with pytest.raises(ValueError, match=r"soak\.runs = 3 .*2 soak\.speeds_rpm.*runs >= 4"):
+        SoakPlan(runs=3, speeds_rpm=(9000.0, 10000.0))
+    assert SoakPlan(runs=3, rule="resonance").at([1000.0, 2000.0], [1.0, 2.0]).speeds == (
+        2000.0,)
+    assert SoakPlan(runs=3, speed_rpm=5000.0).speeds == (5000.0,)
+    with pytest.raises(ValueError, match=r"soak\.runs = 2 .*>= 3"):
+        SoakPlan(runs=2, rule="resonance")
 
 
 def _tempco_sensors(sd):
@@ -290,7 +319,8 @@ def test_the_probe_tempco_scales_the_phasors_by_one_plus_alpha_dT(tmp_path, swee
     equilibrium) with ``tempco_sweep``, else unchanged. Without the tempco the installation
     writes what it wrote before the option (no ``tempco_per_K``)."""
     truth = reference_truth()
-    plan = SoakPlan(times_s=TIMES, runs=4)
+    # the two speeds given: a 2-speed sweep has no speed either side of its largest amplitude
+    plan = SoakPlan(times_s=TIMES, runs=4, speeds_rpm=(12000.0, 20000.0))
     X, inst = {}, {}
     for sd in (0.0, 2e-3):
         s = _tempco_sensors(sd)
