@@ -17,33 +17,11 @@ import time
 
 import numpy as np
 
-from surrogate_rbrdo.discrepancy.soak import SoakBlock, drift_test, warmup
-from surrogate_rbrdo.discrepancy.sweeps import Channel
+from surrogate_rbrdo.discrepancy.soak import drift_test, warmup
+from surrogate_rbrdo.discrepancy.soak_synthetic import gain_drift_soaks
 
-TIMES = np.array([0.0, 300.0, 600.0, 900.0, 1200.0, 1800.0, 2700.0, 3600.0])
-CH = tuple(Channel(f"p{i}", 10.0 * i, "xy"[i % 2]) for i in range(3))
 CASES = {"opposite flanks": (0.02, -0.02), "one flank": (0.02, 0.015),
          "one flank, equal": (0.02, 0.02)}
-
-
-def soaks(rng: np.random.Generator, kappas, *, beta=1.0, noise=3e-9, runs=2,
-          rises=(10.0, 14.0)):
-    """One data set: the soak blocks and the predicted drifts ``Δ_s``."""
-    alpha = np.array([3e-4, -2e-4, 1e-4])
-    a0s = (1e-6 * np.exp(1j * np.array([0.3, 1.9, -2.2])) * np.array([1.0, 0.7, 1.3]),
-           1e-6 * np.exp(1j * np.array([-1.0, 0.4, 2.8])) * np.array([1.2, 0.9, 0.8]))
-    out, drifts = [], []
-    for s, (k, rise, a0) in enumerate(zip(kappas, rises, a0s, strict=True)):
-        d = k * a0 * (1 + 0.1j)
-        t = np.tile(TIMES, (runs, 1))
-        th = -np.expm1(-t / 900.0)
-        T = 293.0 + rng.normal(0, 0.5, (runs, 1)) + rise * th
-        a = a0 * (1 + 0.02 * rng.normal(size=(runs, 1, 3)))
-        y = a * (1 + alpha * rise * th[..., None]) + beta * th[..., None] * d
-        y = y + noise * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
-        out.append(SoakBlock(f"soak{s}", 20000.0 + 2000.0 * s, CH, t, T, y))
-        drifts.append(d)
-    return tuple(out), tuple(drifts)
 
 
 def main() -> None:
@@ -57,7 +35,7 @@ def main() -> None:
         t0 = time.perf_counter()
         rows = []
         for _ in range(args.n):
-            blocks, drifts = soaks(rng, kappas, runs=args.runs)
+            blocks, drifts = gain_drift_soaks(rng, kappas, runs=args.runs)
             r = drift_test("x", blocks, tuple(warmup(b) for b in blocks),
                            (np.zeros(3),) * 2, drifts, 0.0, 0.05)
             rows.append((r.beta, r.se, r.p_predicted < 0.05, r.outcome))

@@ -22,6 +22,7 @@ from surrogate_rbrdo.discrepancy.soak import (
     drift_test,
     warmup,
 )
+from surrogate_rbrdo.discrepancy.soak_synthetic import gain_drift_soaks
 from surrogate_rbrdo.discrepancy.sweeps import Channel, Sweep
 from surrogate_rbrdo.discrepancy.synthetic import default_channels
 from surrogate_rbrdo.rig.phasors import expected_phasors
@@ -297,29 +298,6 @@ def test_two_speeds_take_the_gain_drift_out_of_beta(beta):
         assert old.p_drift < 1e-6
 
 
-def _aligned_soaks(rng, kappas, *, beta=1.0, noise=3e-9, runs=2, rises=(10.0, 14.0)):
-    """Two speeds, ``runs`` each, with each probe's gain drifting and the predicted drift
-    close to the cold response, as a preload's is beside the resonance:
-    ``Δ_s = κ_s a_s (1 + 0.1i)`` (``κ`` of opposite signs on opposite flanks, alike on one);
-    the runs' cold responses 2 % apart, noise ``noise`` on a 1e-6 response. Returns the soaks
-    and the ``Δ_s``."""
-    alpha = np.array([3e-4, -2e-4, 1e-4])
-    a0s = (1e-6 * np.exp(1j * np.array([0.3, 1.9, -2.2])) * np.array([1.0, 0.7, 1.3]),
-           1e-6 * np.exp(1j * np.array([-1.0, 0.4, 2.8])) * np.array([1.2, 0.9, 0.8]))
-    out, drifts = [], []
-    for s, (k, rise, a0) in enumerate(zip(kappas, rises, a0s, strict=True)):
-        d = k * a0 * (1 + 0.1j)
-        t = np.tile(TIMES, (runs, 1))
-        th = -np.expm1(-t / 900.0)
-        T = 293.0 + rng.normal(0, 0.5, (runs, 1)) + rise * th
-        a = a0 * (1 + 0.02 * rng.normal(size=(runs, 1, 3)))
-        y = a * (1 + alpha * rise * th[..., None]) + beta * th[..., None] * d
-        y = y + noise * (rng.normal(size=y.shape) + 1j * rng.normal(size=y.shape))
-        out.append(SoakBlock(f"soak{s}", 20000.0 + 2000.0 * s, CH, t, T, y))
-        drifts.append(d)
-    return tuple(out), tuple(drifts)
-
-
 @pytest.mark.parametrize("kappas", [(0.02, -0.02), (0.02, 0.015)],
                          ids=["opposite-flanks", "one-flank"])
 def test_two_speed_beta_test_has_its_size_with_the_gain_fitted(kappas):
@@ -335,7 +313,7 @@ def test_two_speed_beta_test_has_its_size_with_the_gain_fitted(kappas):
     n = 300
     rej, beta, se = 0, [], []
     for _ in range(n):
-        soaks, drifts = _aligned_soaks(rng, kappas)
+        soaks, drifts = gain_drift_soaks(rng, kappas)
         res = drift_test("x", soaks, tuple(warmup(s) for s in soaks), (np.zeros(3),) * 2,
                          drifts, 0.0, 0.05)
         rej += res.p_predicted < 0.05
