@@ -225,16 +225,15 @@ def fit(problem: Problem, par: Parametrisation, x0: np.ndarray, *, max_nfev: int
         if es.chi2[0] <= ev.chi2[0]:
             Js, n = jacobian(problem, par, xs, es.residuals[0])
             count[0] += n
-            # kept only if the bounds stay where χ² still falls outwards (a KKT point there)
-            if to_bounds(xs, Js.T @ es.residuals[0], lo, hi, par.scales(),
-                         moved=xs != x) is None:
+            # kept only if χ² still falls outwards at the bounds it was put on (KKT there)
+            if not falls_inwards(xs, Js.T @ es.residuals[0], lo, hi, xs != x):
                 x, ev, J = xs, es, Js
     return Fit(par, x, float(ev.chi2[0]), J, ev, problem.n_obs, x.size + problem.n_inner,
                count[0])
 
 
 def to_bounds(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-              scale: np.ndarray, moved: np.ndarray | None = None) -> np.ndarray | None:
+              scale: np.ndarray) -> np.ndarray | None:
     """``x`` with every parameter within :data:`SNAP` of its range (or of ``scale`` beside an
     infinite bound) from a bound that the χ² slope ``g = Jᵀr`` points to put on that bound;
     ``None`` when there is none.
@@ -246,27 +245,35 @@ def to_bounds(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     its physical end (:func:`~.search.bound_score`), a shape pinned (``search.on_bound``), a
     recalibration stretched (``search.stretched``) — asks for the bound itself; :func:`fit`
     takes the point on the bounds when its χ² is not larger and χ² does not fall inwards from
-    any bound it was put on (with ``moved``, the components put there: ``x`` itself if one
-    has χ² falling inwards, else ``None``).
+    any bound it was put on (:func:`falls_inwards`).
 
     >>> lo, hi, s = np.zeros(3), np.ones(3), np.ones(3)
     >>> to_bounds(np.array([0.9995, 0.0004, 0.5]), np.array([-1.0, 1.0, 1.0]), lo, hi, s)
     array([1. , 0. , 0.5])
     >>> to_bounds(np.array([0.9995, 0.5, 0.5]), np.array([1.0, 1.0, 1.0]), lo, hi, s) is None
     True
-    >>> on = np.array([True, False, False])           # put on its upper bound: χ² falls inwards
-    >>> to_bounds(np.array([1.0, 0.5, 0.5]), np.array([1.0, 0.0, 0.0]), lo, hi, s, on) is None
-    False
     """
-    if moved is not None:             # put on a bound: does χ² fall inwards from it there?
-        inward = moved & (((x <= lo) & (g < 0)) | ((x >= hi) & (g > 0)))
-        return x if inward.any() else None
     width = np.where(np.isfinite(hi - lo), hi - lo, scale)
     down = (x > lo) & (x - lo <= SNAP * width) & (g > 0)       # χ² falls towards lo
     up = (x < hi) & (hi - x <= SNAP * width) & (g < 0)
     if not (down.any() or up.any()):
         return None
     return np.where(down, lo, np.where(up, hi, x))
+
+
+def falls_inwards(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                  moved: np.ndarray) -> bool:
+    """Whether χ² falls inwards (slope ``g = Jᵀr``) from a bound that a ``moved`` component
+    of ``x`` sits on: that component was not held there by the data.
+
+    >>> lo, hi = np.zeros(3), np.ones(3)
+    >>> on = np.array([True, False, False])           # put on its upper bound: χ² falls inwards
+    >>> falls_inwards(np.array([1.0, 0.5, 0.5]), np.array([1.0, 0.0, 0.0]), lo, hi, on)
+    True
+    >>> falls_inwards(np.array([1.0, 0.5, 0.5]), np.array([-1.0, 0.0, 0.0]), lo, hi, on)
+    False
+    """
+    return bool(np.any(moved & (((x <= lo) & (g < 0)) | ((x >= hi) & (g > 0)))))
 
 
 def fit_batch(problem: Problem, par: Parametrisation, X: np.ndarray, *, n_iter: int = 6

@@ -140,10 +140,7 @@ def run_stage(problem: Problem, base: Fit, candidates: tuple[Candidate, ...],
     lin = linearise(problem, base, candidates)
     null = simulate_null(problem, lin, n_draws=n_draws, rng=rng)
     r = base.evaluation.residuals[0]
-    struct = float(gp_statistic(r, problem.series()))
-    gen = generic_statistic(problem, lin, r)
-    gof_p, struct_p, gen_p = (null.p_value("gof", base.chi2), null.p_value("structure", struct),
-                              null.p_value("generic", gen))
+    (_, gof_p), (struct, struct_p), (gen, gen_p) = _lack_of_fit(problem, lin, null, base)
     # the first-order screen only where the residual looks like noise: a strong effect can be
     # far from its linearisation at the off state (a housing mode inside the speed range)
     quiet = min(gof_p, struct_p, gen_p) > QUIET_P
@@ -203,10 +200,18 @@ def _explained(problem: Problem, lin: Linearisation, null: NullDistribution, fit
     if not fits:
         return False
     best = min(fits, key=lambda cf: cf.fit.chi2)
-    r = best.fit.evaluation.residuals[0]
-    return min(null.p_value("gof", best.fit.chi2),
-               null.p_value("structure", float(gp_statistic(r, problem.series()))),
-               null.p_value("generic", generic_statistic(problem, lin, r))) > QUIET_P
+    return min(p for _, p in _lack_of_fit(problem, lin, null, best.fit)) > QUIET_P
+
+
+def _lack_of_fit(problem: Problem, lin: Linearisation, null: NullDistribution, f: Fit
+                 ) -> tuple[tuple[float, float], ...]:
+    """The three lack-of-fit statistics of fit ``f``'s residual and their p-values under the
+    stage's null: ``(gof, p), (structure, p), (generic, p)`` (the generic one with the
+    stage's linearisation)."""
+    r = f.evaluation.residuals[0]
+    stats = {"gof": f.chi2, "structure": float(gp_statistic(r, problem.series())),
+             "generic": generic_statistic(problem, lin, r)}
+    return tuple((v, null.p_value(k, v)) for k, v in stats.items())
 
 
 def fit_one(problem: Problem, base: Fit, c: Candidate, warm, *, max_nfev: int,
