@@ -25,7 +25,7 @@ from surrogate_rbrdo.rig.impacts import ImpactPlan, expected_frfs, sample_frfs
 from surrogate_rbrdo.rig.phasors import expected_phasors, sample_phasors
 from surrogate_rbrdo.rig.sensors import ProbeModel, SensorSet
 from surrogate_rbrdo.rig.simulate import ProbeLayout
-from surrogate_rbrdo.rig.soak import probe_rise, soak_plan, soak_run_index
+from surrogate_rbrdo.rig.soak import probe_rise, soak_plan, soak_run_index, sweep_probe_rise
 from surrogate_rbrdo.rig.thermal import SoakPlan
 from surrogate_rbrdo.rig.truth import Truth, Variability
 from surrogate_rbrdo.spindle.assembly import RPM
@@ -177,11 +177,12 @@ class RigSource:
 
 def _sweep_gains(truth, sensors, inst, speeds_rpm) -> np.ndarray | float:
     """Each probe's gain factor ``1 + α ΔT(Ω)`` at each steady speed's equilibrium rise
-    (``(S, C)``; 1.0 without tempcos or ``tempco_sweep``) — applied to the sampled phasors,
-    so their noise is scaled by it too (by < 1 % at the data-sheet tempco)."""
-    if not (sensors.probe.tempco_sweep and inst.tempco_per_K):
+    (``(S, C)``; 1.0 without tempcos or ``tempco_sweep``; ``rig.soak.sweep_probe_rise``) —
+    applied to the sampled phasors, so their noise is scaled by it too (by < 1 % at the
+    data-sheet tempco)."""
+    rise = sweep_probe_rise(truth, sensors.probe, speeds_rpm)
+    if rise is None or not inst.tempco_per_K:
         return 1.0
-    rise = np.array([truth.thermal.rise_K(float(s)) for s in speeds_rpm])
     a = np.array([inst.tempco_per_K.get(c, 0.0) for c in sensors.probe_channels])
     return 1.0 + rise[:, None] * a[None, :]
 

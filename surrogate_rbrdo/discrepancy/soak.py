@@ -315,19 +315,20 @@ def _block_drift(blk: SoakBlock, w: Warmup, d0: np.ndarray, d1: np.ndarray, gain
         M = np.eye(2 * C)
         Mx = np.zeros((0, 2 * C))
     vr = np.concatenate([v.real, v.imag])
-    q, cov = M @ vr, M @ S @ M.T / den.sum()
+    MSM = M @ S @ M.T
+    q, cov = M @ vr, MSM / den.sum()
     x, cov_x = Mx @ vr, Mx @ S @ Mx.T / den.sum()
     p_dim = M.shape[0]
     var_c = np.diag(S)[:C] + np.diag(S)[C:]
-    rest = (slope - d0, cold, 1.0 / np.where(var_c > 0, var_c, np.inf), d1 - d0, w.rise_K)
+    D = d1 - d0
+    rest = (slope - d0, cold, 1.0 / np.where(var_c > 0, var_c, np.inf), D, w.rise_K)
     if nu - p_dim + 1 < 3:
         # too few residual dofs to estimate the channels' covariance: a diagonal one would not
         # give F under correlated channels (the keyphasor's common phase error), so no verdict
         return _Part(float("nan"), (p_dim, nu), 1.0, [], x, cov_x, nu, *rest)
     F, dof, p = _hotelling(q, cov, nu)
-    var = np.diag(M @ S @ M.T)
+    var = np.diag(MSM)
     wgt = 1.0 / np.where(var > 0, var, np.inf)
-    D = d1 - d0
     qD = M @ np.concatenate([D.real, D.imag])
     qs = (M @ np.hstack([(slope - d0).real, (slope - d0).imag]).T).T       # (R, p_dim)
     norm = float(np.sum(wgt * qD ** 2))

@@ -48,7 +48,14 @@ from surrogate_rbrdo.rig.simulate import (
     runup_record,
     steady_records,
 )
-from surrogate_rbrdo.rig.soak import soak_id, soak_jobs, soak_labels, soak_plan, soak_run
+from surrogate_rbrdo.rig.soak import (
+    soak_id,
+    soak_jobs,
+    soak_labels,
+    soak_plan,
+    soak_run,
+    sweep_probe_rise,
+)
 from surrogate_rbrdo.rig.statespace import (
     Reduction,
     first_order,
@@ -491,20 +498,11 @@ def _steady(truth, st, options, inst, root_ss, ids, todo, b, tl, r, trial=False
         st = dataclasses.replace(st, geometry=dataclasses.replace(
             g, unbalances=g.unbalances + (Unbalance(pos, U, ph),)))
     prov = [{**base, "seed_key": [key, b, tl, r, i]} for i in todo]
+    rise = sweep_probe_rise(truth, options.sensors.probe, sp)
     recs = steady_records(st.model(), st.theta, sp, options.sensors, inst, rngs,
                           duration_s=options.duration_s, ids=[ids[i] for i in todo],
-                          provenance=prov, probe_rise_K=sweep_probe_rise(truth, options, sp))
+                          provenance=prov, probe_rise_K=rise)
     return {rec.id: rec for rec in recs}
-
-
-def sweep_probe_rise(truth, options, speeds_rpm) -> np.ndarray | None:
-    """The probes' temperature rise at each steady speed's thermal equilibrium (the front
-    bearing's outer ring's, ``truth.thermal``) when their tempcos apply to the sweep
-    (``ProbeModel.tempco_sweep`` and ``tempco_sd_per_K`` > 0), else None."""
-    p = options.sensors.probe
-    if not (p.tempco_sweep and p.tempco_sd_per_K > 0):
-        return None
-    return np.array([truth.thermal.rise_K(float(s)) for s in np.atleast_1d(speeds_rpm)])
 
 
 def _extras(truth, st, options, inst, root_ss, b, tl):

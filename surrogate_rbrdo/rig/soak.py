@@ -74,6 +74,16 @@ def probe_rise(truth, speed_rpm: float, fraction: float) -> float:
     return float(truth.thermal.rise_K(speed_rpm) * fraction)
 
 
+def sweep_probe_rise(truth, probe, speeds_rpm) -> np.ndarray | None:
+    """The probes' temperature rise at each steady speed's thermal equilibrium
+    (:func:`probe_rise` at a warm-up's end) when their tempcos apply to the sweep
+    (``probe``, a :class:`~.sensors.ProbeModel`: ``tempco_sweep`` and ``tempco_sd_per_K`` >
+    0), else None."""
+    if not (probe.tempco_sweep and probe.tempco_sd_per_K > 0):
+        return None
+    return np.array([probe_rise(truth, float(s), 1.0) for s in np.atleast_1d(speeds_rpm)])
+
+
 def soak_run_index(repeats: int, j: int) -> int:
     """The run index of soak run ``j`` after ``repeats`` steady runs (run ``repeats`` is left
     for an impact run): every soak run is a cold start with its own thermal draw."""
